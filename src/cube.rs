@@ -1,0 +1,319 @@
+//! Cube maps: six square faces in the OpenGL face-selection convention, their mip levels,
+//! direction <-> texel mapping (written once, here) and seamless sampling across face edges.
+
+use crate::error::{Error, Result};
+use crate::image::Image;
+use glam::{Vec3, Vec4};
+
+/// Faces in file and container order: +X -X +Y -Y +Z -Z.
+pub const FACE_NAMES: [&str; 6] = ["px", "nx", "py", "ny", "pz", "nz"];
+/// Long names some tools use for the same faces.
+pub const FACE_LONG_NAMES: [&str; 6] = ["posx", "negx", "posy", "negy", "posz", "negz"];
+
+/// The direction through face coordinates (s, t) (0..1, row 0 is t = 0). Values outside
+/// 0..1 continue the face's plane, which is how border texels find their neighbours.
+#[inline]
+pub fn face_dir(face: usize, s: f32, t: f32) -> Vec3 {
+    let sc = 2.0 * s - 1.0;
+    let tc = 2.0 * t - 1.0;
+    match face {
+        0 => Vec3::new(1.0, -tc, -sc),
+        1 => Vec3::new(-1.0, -tc, sc),
+        2 => Vec3::new(sc, 1.0, tc),
+        3 => Vec3::new(sc, -1.0, -tc),
+        4 => Vec3::new(sc, -tc, 1.0),
+        _ => Vec3::new(-sc, -tc, -1.0),
+    }
+}
+
+/// The face a direction selects (largest component; ties go to X, then Y) and its (s, t).
+#[inline]
+pub fn dir_face(d: Vec3) -> (usize, f32, f32) {
+    let a = d.abs();
+    let (face, sc, tc, ma) = if a.x >= a.y && a.x >= a.z {
+        if d.x >= 0.0 {
+            (0, -d.z, -d.y, a.x)
+        } else {
+            (1, d.z, -d.y, a.x)
+        }
+    } else if a.y >= a.z {
+        if d.y >= 0.0 {
+            (2, d.x, d.z, a.y)
+        } else {
+            (3, d.x, -d.z, a.y)
+        }
+    } else if d.z >= 0.0 {
+        (4, d.x, -d.y, a.z)
+    } else {
+        (5, -d.x, -d.y, a.z)
+    };
+    let inv = if ma > 0.0 { 0.5 / ma } else { 0.0 };
+    (face, sc * inv + 0.5, tc * inv + 0.5)
+}
+
+/// Solid angle of texel (x, y) on a face of edge `n` (exact, from the area of a projected
+/// rectangle), so averages over the sphere weight texels by the part of the sphere they cover.
+pub fn texel_solid_angle(n: usize, x: usize, y: usize) -> f32 {
+    fn area(x: f64, y: f64) -> f64 {
+        (x * y).atan2((x * x + y * y + 1.0).sqrt())
+    }
+    let inv = 2.0 / n as f64;
+    let x0 = x as f64 * inv - 1.0;
+    let y0 = y as f64 * inv - 1.0;
+    let (x1, y1) = (x0 + inv, y0 + inv);
+    (area(x0, y0) - area(x0, y1) - area(x1, y0) + area(x1, y1)) as f32
+}
+
+/// Six square faces of one size.
+pub type Faces = [Image; 6];
+
+/// A cube map with one or more mip levels (level 0 the largest).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CubeMap {
+    pub levels: Vec<Faces>,
+}
+
+impl CubeMap {
+    /// Checks that six faces are square and of one size.
+    pub fn from_faces(faces: Faces) -> std::result::Result<CubeMap, String> {
+        let n = faces[0].width;
+        for (i, f) in faces.iter().enumerate() {
+            if f.width != f.height {
+                return Err(format!(
+                    "face {} is {}x{}, not square",
+                    FACE_NAMES[i], f.width, f.height
+                ));
+            }
+            if f.width != n {
+                return Err(format!(
+                    "face {} is {}x{} but face px is {}x{}: all faces must be the same size",
+                    FACE_NAMES[i], f.width, f.height, n, n
+                ));
+            }
+        }
+        if n == 0 {
+            return Err("faces are empty".into());
+        }
+        Ok(CubeMap {
+            levels: vec![faces],
+        })
+    }
+
+    /// Edge of level 0's faces.
+    pub fn size(&self) -> usize {
+        self.levels[0][0].width
+    }
+
+    /// Fills every texel of a `size` cube with `f(direction of its centre)`.
+    pub fn from_fn(size: usize, f: impl Fn(Vec3) -> Vec4 + Sync) -> CubeMap {
+        let inv = 1.0 / size as f32;
+        let faces = std::array::from_fn(|face| {
+            Image::from_fn(size, size, |x, y| {
+                f(face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize())
+            })
+        });
+        CubeMap {
+            levels: vec![faces],
+        }
+    }
+
+    /// Number of levels in a full chain for a face edge: down to 1 x 1.
+    pub fn full_chain_len(size: usize) -> usize {
+        (usize::BITS - size.max(1).leading_zeros()) as usize
+    }
+
+    /// Keeps level 0 and rebuilds `count` levels (None: the full chain) as plain mipmaps,
+    /// each texel the solid-angle-weighted mean of the 2x2 texels above it.
+    pub fn with_box_mips(mut self, count: Option<usize>) -> CubeMap {
+        let full = Self::full_chain_len(self.size());
+        let count = count.unwrap_or(full).clamp(1, full);
+        self.levels.truncate(1);
+        while self.levels.len() < count {
+            let prev = self.levels.last().unwrap();
+            let n = prev[0].width;
+            let next = std::array::from_fn(|f| box_reduce_face(&prev[f], n));
+            self.levels.push(next);
+        }
+        self
+    }
+
+    /// Applies `f` to every texel of every level.
+    pub fn map_texels(&mut self, f: impl Fn(Vec4) -> Vec4 + Sync) {
+        use rayon::prelude::*;
+        for level in &mut self.levels {
+            for face in level.iter_mut() {
+                face.pixels.par_iter_mut().for_each(|p| *p = f(*p));
+            }
+        }
+    }
+}
+
+fn box_reduce_face(src: &Image, n: usize) -> Image {
+    let m = (n / 2).max(1);
+    if n == 1 {
+        return src.clone();
+    }
+    // Weights of the 2x2 children by solid angle keep the mean radiance over the sphere.
+    let weights: Vec<f32> = (0..n * n)
+        .map(|i| texel_solid_angle(n, i % n, i / n))
+        .collect();
+    Image::from_fn(m, m, |x, y| {
+        let mut acc = Vec4::ZERO;
+        let mut wsum = 0.0;
+        for dy in 0..2 {
+            for dx in 0..2 {
+                let (sx, sy) = (2 * x + dx, 2 * y + dy);
+                let w = weights[sy * n + sx];
+                acc += src.get(sx, sy) * w;
+                wsum += w;
+            }
+        }
+        acc / wsum
+    })
+}
+
+/// How a sample between texels is reconstructed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum Interp {
+    /// Bilinear: smooth, never rings.
+    #[default]
+    Bilinear,
+    /// Catmull-Rom bicubic, clamped to the local texel range so it never rings below zero.
+    Bicubic,
+}
+
+/// Anything that can be looked up by direction: a cube map, a panorama, a mirror ball, an
+/// analytic function. Conversions, filters and the preview all sample through this.
+pub trait Environment: Sync {
+    /// The value seen along unit direction `d`, from pyramid level `level` (0 = sharpest).
+    fn sample(&self, d: Vec3, level: usize, interp: Interp) -> Vec4;
+    /// Angle (radians) one texel of level 0 subtends, for choosing a level and a sample count.
+    fn texel_angle(&self) -> f32;
+    /// Number of pyramid levels available (each halves the resolution).
+    fn levels(&self) -> usize;
+}
+
+/// Border texels added around each face so bilinear and bicubic taps never leave the face.
+const BORDER: usize = 2;
+
+/// A cube map prepared for seamless lookups: each level's faces carry a border filled from
+/// their neighbours, so filtering across an edge reads the adjacent face.
+pub struct CubeSampler {
+    levels: Vec<(usize, [Image; 6])>,
+}
+
+impl CubeSampler {
+    /// Prepares every level of `cube` as it is.
+    pub fn new(cube: &CubeMap) -> CubeSampler {
+        let levels = cube
+            .levels
+            .iter()
+            .map(|faces| (faces[0].width, bordered(faces)))
+            .collect();
+        CubeSampler { levels }
+    }
+
+    /// Face edge of level 0.
+    pub fn size(&self) -> usize {
+        self.levels[0].0
+    }
+
+    /// Reads one texel of a level (no interpolation), for exact lookups.
+    pub fn texel(&self, level: usize, face: usize, x: usize, y: usize) -> Vec4 {
+        self.levels[level].1[face].get(x + BORDER, y + BORDER)
+    }
+
+    /// Trilinear lookup: bilinear in the two levels around fractional `lod`, blended.
+    pub fn sample_lod(&self, d: Vec3, lod: f32) -> Vec4 {
+        let max = (self.levels.len() - 1) as f32;
+        let lod = lod.clamp(0.0, max);
+        let l0 = lod.floor() as usize;
+        let frac = lod - l0 as f32;
+        let a = self.sample(d, l0, Interp::Bilinear);
+        if frac <= 0.0 || l0 + 1 >= self.levels.len() {
+            return a;
+        }
+        a.lerp(self.sample(d, l0 + 1, Interp::Bilinear), frac)
+    }
+}
+
+impl Environment for CubeSampler {
+    #[inline]
+    fn sample(&self, d: Vec3, level: usize, interp: Interp) -> Vec4 {
+        let (n, faces) = &self.levels[level.min(self.levels.len() - 1)];
+        let (face, s, t) = dir_face(d);
+        let x = s * *n as f32 + BORDER as f32;
+        let y = t * *n as f32 + BORDER as f32;
+        match interp {
+            Interp::Bilinear => faces[face].bilinear(x, y, false),
+            Interp::Bicubic => faces[face].bicubic(x, y, false),
+        }
+    }
+    fn texel_angle(&self) -> f32 {
+        std::f32::consts::FRAC_PI_2 / self.size() as f32
+    }
+    fn levels(&self) -> usize {
+        self.levels.len()
+    }
+}
+
+/// Copies each face into the middle of a larger image and fills the border from the faces
+/// the extended face plane runs into (bilinear there, so the continuation is smooth).
+fn bordered(faces: &Faces) -> [Image; 6] {
+    let n = faces[0].width;
+    let m = n + 2 * BORDER;
+    let inv = 1.0 / n as f32;
+    std::array::from_fn(|face| {
+        let mut out = Image::new(m, m);
+        out.paste(&faces[face], BORDER, BORDER);
+        for y in 0..m {
+            for x in 0..m {
+                let inside = (BORDER..BORDER + n).contains(&x) && (BORDER..BORDER + n).contains(&y);
+                if inside {
+                    continue;
+                }
+                let s = (x as f32 - BORDER as f32 + 0.5) * inv;
+                let t = (y as f32 - BORDER as f32 + 0.5) * inv;
+                let (f2, s2, t2) = dir_face(face_dir(face, s, t));
+                // Clamp half a texel inside so the tap stays on the neighbour face.
+                let px = (s2 * n as f32).clamp(0.5, n as f32 - 0.5);
+                let py = (t2 * n as f32).clamp(0.5, n as f32 - 0.5);
+                out.set(x, y, faces[f2].bilinear(px, py, false));
+            }
+        }
+        out
+    })
+}
+
+/// Reads a cube map from six same-size images, naming the file of a face that does not fit.
+pub fn faces_from_images(
+    images: Vec<Image>,
+    names: &[std::path::PathBuf],
+) -> Result<CubeMap> {
+    let n = images[0].width;
+    for (i, img) in images.iter().enumerate() {
+        if img.width != img.height {
+            return Err(Error::file(
+                &names[i],
+                format!("face is {}x{}, not square", img.width, img.height),
+            ));
+        }
+        if img.width != n {
+            return Err(Error::file(
+                &names[i],
+                format!(
+                    "face is {}x{} but {} is {}x{}: all six faces must be the same size",
+                    img.width,
+                    img.height,
+                    names[0].display(),
+                    n,
+                    n
+                ),
+            ));
+        }
+    }
+    let faces: Faces = images
+        .try_into()
+        .map_err(|_| Error::usage("a cube map needs exactly six faces"))?;
+    CubeMap::from_faces(faces).map_err(|e| Error::file(&names[0], e))
+}

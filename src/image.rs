@@ -1,0 +1,236 @@
+//! Linear-light RGBA f32 images: the one pixel type every layout, filter and writer shares.
+
+use glam::Vec4;
+
+/// How 8- and 16-bit values map to linear light. Float data is always linear.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ColorSpace {
+    /// Colour: decode sRGB on read, encode on write.
+    Srgb,
+    /// Data (masks, normals) or float images: values are stored as they are.
+    Linear,
+}
+
+/// A linear RGBA f32 image, rows top to bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<Vec4>,
+}
+
+impl Image {
+    pub fn new(width: usize, height: usize) -> Self {
+        Image {
+            width,
+            height,
+            pixels: vec![Vec4::ZERO; width * height],
+        }
+    }
+
+    pub fn filled(width: usize, height: usize, v: Vec4) -> Self {
+        Image {
+            width,
+            height,
+            pixels: vec![v; width * height],
+        }
+    }
+
+    /// Builds an image by calling `f(x, y)` for every pixel, rows in parallel.
+    pub fn from_fn(width: usize, height: usize, f: impl Fn(usize, usize) -> Vec4 + Sync) -> Self {
+        use rayon::prelude::*;
+        let mut img = Image::new(width, height);
+        if width > 0 {
+            img.pixels
+                .par_chunks_mut(width)
+                .enumerate()
+                .for_each(|(y, row)| {
+                    for (x, p) in row.iter_mut().enumerate() {
+                        *p = f(x, y);
+                    }
+                });
+        }
+        img
+    }
+
+    #[inline]
+    pub fn get(&self, x: usize, y: usize) -> Vec4 {
+        self.pixels[y * self.width + x]
+    }
+
+    #[inline]
+    pub fn set(&mut self, x: usize, y: usize, v: Vec4) {
+        self.pixels[y * self.width + x] = v;
+    }
+
+    /// Copies a `w` x `h` block starting at (x0, y0).
+    pub fn crop(&self, x0: usize, y0: usize, w: usize, h: usize) -> Image {
+        let mut out = Image::new(w, h);
+        for y in 0..h {
+            let src = (y0 + y) * self.width + x0;
+            out.pixels[y * w..(y + 1) * w].copy_from_slice(&self.pixels[src..src + w]);
+        }
+        out
+    }
+
+    /// Pastes `src` with its top-left corner at (x0, y0).
+    pub fn paste(&mut self, src: &Image, x0: usize, y0: usize) {
+        for y in 0..src.height {
+            let dst = (y0 + y) * self.width + x0;
+            self.pixels[dst..dst + src.width]
+                .copy_from_slice(&src.pixels[y * src.width..(y + 1) * src.width]);
+        }
+    }
+
+    /// Turned 180 degrees (the vertical cross stores -Z that way).
+    pub fn rotated_180(&self) -> Image {
+        let mut out = self.clone();
+        out.pixels.reverse();
+        out
+    }
+
+    /// Half the size in each dimension, each pixel the mean of the 2x2 block above it
+    /// (an odd last row or column is folded into its neighbour so nothing is dropped).
+    pub fn downsample_2x(&self) -> Image {
+        let w = (self.width / 2).max(1);
+        let h = (self.height / 2).max(1);
+        let sx = self.width as f32 / w as f32;
+        let sy = self.height as f32 / h as f32;
+        Image::from_fn(w, h, |x, y| {
+            let x0 = (x as f32 * sx) as usize;
+            let x1 = (((x + 1) as f32 * sx) as usize).min(self.width).max(x0 + 1);
+            let y0 = (y as f32 * sy) as usize;
+            let y1 = (((y + 1) as f32 * sy) as usize).min(self.height).max(y0 + 1);
+            let mut acc = Vec4::ZERO;
+            for yy in y0..y1 {
+                for xx in x0..x1 {
+                    acc += self.get(xx, yy);
+                }
+            }
+            acc / ((x1 - x0) * (y1 - y0)) as f32
+        })
+    }
+
+    /// Replaces NaN, infinite and negative values by 0 and returns how many were replaced.
+    pub fn sanitize(&mut self) -> usize {
+        let mut count = 0;
+        for p in &mut self.pixels {
+            for c in 0..4 {
+                let v = p[c];
+                if !v.is_finite() || v < 0.0 {
+                    p[c] = 0.0;
+                    count += 1;
+                }
+            }
+        }
+        count
+    }
+
+    /// Bilinear sample at continuous pixel coordinates (pixel centres at i + 0.5).
+    /// `wrap_x` repeats horizontally (panoramas); otherwise edges clamp.
+    #[inline]
+    pub fn bilinear(&self, x: f32, y: f32, wrap_x: bool) -> Vec4 {
+        let fx = x - 0.5;
+        let fy = y - 0.5;
+        let x0 = fx.floor();
+        let y0 = fy.floor();
+        let ax = fx - x0;
+        let ay = fy - y0;
+        let (xa, xb) = self.cols(x0 as isize, wrap_x);
+        let ya = clampi(y0 as isize, self.height);
+        let yb = clampi(y0 as isize + 1, self.height);
+        let r0 = self.pixels[ya * self.width + xa].lerp(self.pixels[ya * self.width + xb], ax);
+        let r1 = self.pixels[yb * self.width + xa].lerp(self.pixels[yb * self.width + xb], ax);
+        r0.lerp(r1, ay)
+    }
+
+    #[inline]
+    fn cols(&self, x0: isize, wrap_x: bool) -> (usize, usize) {
+        if wrap_x {
+            let w = self.width as isize;
+            (x0.rem_euclid(w) as usize, (x0 + 1).rem_euclid(w) as usize)
+        } else {
+            (clampi(x0, self.width), clampi(x0 + 1, self.width))
+        }
+    }
+
+    /// Catmull-Rom bicubic sample, clamped to the range of the 2x2 texels around the point so it
+    /// sharpens without ringing (never below zero, never past the local extremes).
+    pub fn bicubic(&self, x: f32, y: f32, wrap_x: bool) -> Vec4 {
+        let fx = x - 0.5;
+        let fy = y - 0.5;
+        let x0 = fx.floor();
+        let y0 = fy.floor();
+        let wx = catmull_rom(fx - x0);
+        let wy = catmull_rom(fy - y0);
+        let w = self.width as isize;
+        let mut acc = Vec4::ZERO;
+        let mut lo = Vec4::splat(f32::INFINITY);
+        let mut hi = Vec4::splat(f32::NEG_INFINITY);
+        for (j, wyj) in wy.iter().enumerate() {
+            let yy = clampi(y0 as isize - 1 + j as isize, self.height);
+            let mut row = Vec4::ZERO;
+            for (i, wxi) in wx.iter().enumerate() {
+                let xi = x0 as isize - 1 + i as isize;
+                let xx = if wrap_x {
+                    xi.rem_euclid(w) as usize
+                } else {
+                    clampi(xi, self.width)
+                };
+                let p = self.pixels[yy * self.width + xx];
+                if (1..=2).contains(&i) && (1..=2).contains(&j) {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
+                }
+                row += p * *wxi;
+            }
+            acc += row * *wyj;
+        }
+        acc.clamp(lo, hi)
+    }
+}
+
+#[inline]
+fn clampi(v: isize, n: usize) -> usize {
+    v.clamp(0, n as isize - 1) as usize
+}
+
+#[inline]
+fn catmull_rom(t: f32) -> [f32; 4] {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    [
+        0.5 * (-t3 + 2.0 * t2 - t),
+        0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
+        0.5 * (-3.0 * t3 + 4.0 * t2 + t),
+        0.5 * (t3 - t2),
+    ]
+}
+
+/// sRGB transfer function, decode (IEC 61966-2-1).
+#[inline]
+pub fn srgb_to_linear(v: f32) -> f32 {
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// sRGB transfer function, encode.
+#[inline]
+pub fn linear_to_srgb(v: f32) -> f32 {
+    let v = v.clamp(0.0, 1.0);
+    if v <= 0.003_130_8 {
+        v * 12.92
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Rec. 709 luminance of linear RGB.
+#[inline]
+pub fn luminance(p: Vec4) -> f32 {
+    0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z
+}

@@ -1,0 +1,398 @@
+//! Reading and writing files: codecs by content, size limits before allocation, and writes that
+//! land whole (temporary file, then rename) or not at all.
+
+pub mod dds;
+pub mod exr;
+pub mod ktx2;
+pub mod raster;
+
+use crate::cube::CubeMap;
+use crate::error::{Error, Result};
+use crate::image::{ColorSpace, Image};
+use std::path::{Path, PathBuf};
+
+/// Refuses images larger than this before any pixel memory is allocated.
+#[derive(Clone, Copy, Debug)]
+pub struct Limits {
+    pub max_pixels: u64,
+    pub max_dimension: u32,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_pixels: 32768 * 16384,
+            max_dimension: 65536,
+        }
+    }
+}
+
+impl Limits {
+    /// Checks a declared size (from a header) against the limit.
+    pub fn check(&self, path: &Path, w: u64, h: u64) -> Result<()> {
+        if w == 0 || h == 0 {
+            return Err(Error::file(path, format!("image is empty ({w}x{h})")));
+        }
+        if w > self.max_dimension as u64
+            || h > self.max_dimension as u64
+            || w.saturating_mul(h) > self.max_pixels
+        {
+            return Err(Error::file(
+                path,
+                format!(
+                    "image claims {w}x{h} pixels, over the limit of {} pixels ({} per side); raise it with --max-pixels if the file is genuine",
+                    self.max_pixels, self.max_dimension
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// File formats, told apart by their content (TGA, which has no signature, by its name).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FileFormat {
+    Png,
+    Jpeg,
+    Tga,
+    Hdr,
+    Exr,
+    Ktx2,
+    Dds,
+}
+
+impl FileFormat {
+    pub fn from_extension(path: &Path) -> Option<FileFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        Self::from_ext_str(&ext)
+    }
+
+    pub fn from_ext_str(ext: &str) -> Option<FileFormat> {
+        Some(match ext.trim_start_matches('.').to_ascii_lowercase().as_str() {
+            "png" => FileFormat::Png,
+            "jpg" | "jpeg" => FileFormat::Jpeg,
+            "tga" => FileFormat::Tga,
+            "hdr" | "rgbe" | "pic" => FileFormat::Hdr,
+            "exr" => FileFormat::Exr,
+            "ktx2" => FileFormat::Ktx2,
+            "dds" => FileFormat::Dds,
+            _ => return None,
+        })
+    }
+
+    pub fn from_magic(bytes: &[u8]) -> Option<FileFormat> {
+        let starts = |m: &[u8]| bytes.starts_with(m);
+        Some(if starts(b"\x89PNG\r\n\x1a\n") {
+            FileFormat::Png
+        } else if starts(&[0xFF, 0xD8, 0xFF]) {
+            FileFormat::Jpeg
+        } else if starts(&[0x76, 0x2F, 0x31, 0x01]) {
+            FileFormat::Exr
+        } else if starts(b"#?RADIANCE") || starts(b"#?RGBE") {
+            FileFormat::Hdr
+        } else if starts(&ktx2::IDENTIFIER) {
+            FileFormat::Ktx2
+        } else if starts(b"DDS ") {
+            FileFormat::Dds
+        } else {
+            return None;
+        })
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            FileFormat::Png => "PNG",
+            FileFormat::Jpeg => "JPEG",
+            FileFormat::Tga => "TGA",
+            FileFormat::Hdr => "Radiance HDR",
+            FileFormat::Exr => "OpenEXR",
+            FileFormat::Ktx2 => "KTX2",
+            FileFormat::Dds => "DDS",
+        }
+    }
+
+    pub fn is_container(self) -> bool {
+        matches!(self, FileFormat::Ktx2 | FileFormat::Dds)
+    }
+
+    /// Formats that hold values above 1 (written linear, unclamped).
+    pub fn is_float(self) -> bool {
+        matches!(
+            self,
+            FileFormat::Hdr | FileFormat::Exr | FileFormat::Ktx2 | FileFormat::Dds
+        )
+    }
+}
+
+/// Texel formats of GPU containers (KTX2, DDS).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum GpuFormat {
+    /// RGBA half float (the default: HDR, half the memory of f32).
+    #[default]
+    Rgba16f,
+    /// RGBA 32-bit float.
+    Rgba32f,
+    /// RGBA 8-bit, sRGB-encoded colour.
+    Rgba8Srgb,
+    /// RGBA 8-bit, linear (UNORM) data.
+    Rgba8,
+}
+
+impl GpuFormat {
+    pub fn bytes_per_texel(self) -> usize {
+        match self {
+            GpuFormat::Rgba16f => 8,
+            GpuFormat::Rgba32f => 16,
+            GpuFormat::Rgba8Srgb | GpuFormat::Rgba8 => 4,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            GpuFormat::Rgba16f => "RGBA16F",
+            GpuFormat::Rgba32f => "RGBA32F",
+            GpuFormat::Rgba8Srgb => "RGBA8 sRGB",
+            GpuFormat::Rgba8 => "RGBA8 UNORM",
+        }
+    }
+
+    /// Encodes linear texels into this format's bytes (little-endian), appending to `out`.
+    pub fn encode_into(self, pixels: &[glam::Vec4], out: &mut Vec<u8>) {
+        use crate::image::linear_to_srgb;
+        out.reserve(pixels.len() * self.bytes_per_texel());
+        for p in pixels {
+            let a = p.to_array();
+            match self {
+                GpuFormat::Rgba16f => {
+                    for v in a {
+                        out.extend_from_slice(&half::f16::from_f32(v).to_le_bytes());
+                    }
+                }
+                GpuFormat::Rgba32f => {
+                    for v in a {
+                        out.extend_from_slice(&v.to_le_bytes());
+                    }
+                }
+                GpuFormat::Rgba8Srgb => {
+                    for (i, v) in a.into_iter().enumerate() {
+                        let e = if i < 3 { linear_to_srgb(v) } else { v };
+                        out.push(unorm8(e));
+                    }
+                }
+                GpuFormat::Rgba8 => {
+                    for v in a {
+                        out.push(unorm8(v));
+                    }
+                }
+            }
+        }
+    }
+
+    /// Decodes `count` texels of this format from `bytes` into linear values.
+    pub fn decode(self, bytes: &[u8], count: usize) -> Vec<glam::Vec4> {
+        use crate::image::srgb_to_linear;
+        let bpt = self.bytes_per_texel();
+        bytes[..count * bpt]
+            .chunks_exact(bpt)
+            .map(|t| match self {
+                GpuFormat::Rgba16f => glam::Vec4::from_array(std::array::from_fn(|i| {
+                    half::f16::from_le_bytes([t[2 * i], t[2 * i + 1]]).to_f32()
+                })),
+                GpuFormat::Rgba32f => glam::Vec4::from_array(std::array::from_fn(|i| {
+                    f32::from_le_bytes([t[4 * i], t[4 * i + 1], t[4 * i + 2], t[4 * i + 3]])
+                })),
+                GpuFormat::Rgba8Srgb => glam::Vec4::new(
+                    srgb_to_linear(t[0] as f32 / 255.0),
+                    srgb_to_linear(t[1] as f32 / 255.0),
+                    srgb_to_linear(t[2] as f32 / 255.0),
+                    t[3] as f32 / 255.0,
+                ),
+                GpuFormat::Rgba8 => glam::Vec4::new(
+                    t[0] as f32 / 255.0,
+                    t[1] as f32 / 255.0,
+                    t[2] as f32 / 255.0,
+                    t[3] as f32 / 255.0,
+                ),
+            })
+            .collect()
+    }
+}
+
+#[inline]
+pub fn unorm8(v: f32) -> u8 {
+    (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+}
+
+/// What a reader found besides the pixels.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Meta {
+    pub file_format: FileFormat,
+    /// Stored pixel format, e.g. "RGB8", "RGBA16F".
+    pub pixel_format: String,
+    pub color_space: ColorSpace,
+    /// Holds values above 1 (float formats).
+    pub hdr: bool,
+    /// NaN, infinite or negative values replaced by 0 on read.
+    pub replaced_values: usize,
+}
+
+/// A decoded file: one image, or a cube map with its levels (from KTX2 or DDS).
+#[derive(Clone, Debug)]
+pub enum Decoded {
+    Image(Image),
+    Cube(CubeMap),
+}
+
+/// How to read.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ReadOptions {
+    pub limits: Limits,
+    /// Treat 8- and 16-bit values as data: no sRGB decode.
+    pub linear: bool,
+}
+
+/// Reads any supported file, by content, with the size limit checked from the header.
+pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
+    let bytes = std::fs::read(path).map_err(|e| Error::file(path, io_msg(&e)))?;
+    if bytes.is_empty() {
+        return Err(Error::file(path, "file is empty"));
+    }
+    let by_name = FileFormat::from_extension(path);
+    let format = match (FileFormat::from_magic(&bytes), by_name) {
+        (Some(m), Some(n)) if m != n && !(m == FileFormat::Jpeg && n == FileFormat::Jpeg) => {
+            return Err(Error::file(
+                path,
+                format!(
+                    "the file holds {} data but its name says {}: rename it or re-export it",
+                    m.name(),
+                    n.name()
+                ),
+            ))
+        }
+        (Some(m), _) => m,
+        (None, Some(FileFormat::Tga)) => FileFormat::Tga,
+        (None, Some(n)) => {
+            return Err(Error::file(
+                path,
+                format!("not a valid {} file (its signature is missing)", n.name()),
+            ))
+        }
+        (None, None) => {
+            return Err(Error::file(
+                path,
+                "not a recognised image file (cubeforge reads PNG, JPEG, TGA, HDR, EXR, KTX2 and DDS)",
+            ))
+        }
+    };
+    let (decoded, mut meta) = match format {
+        FileFormat::Exr => exr::decode(&bytes, path, &opts.limits)?,
+        FileFormat::Ktx2 => ktx2::decode(&bytes, path, &opts.limits)?,
+        FileFormat::Dds => dds::decode(&bytes, path, &opts.limits)?,
+        f => raster::decode(&bytes, f, path, opts)?,
+    };
+    let mut replaced = 0;
+    match &decoded {
+        Decoded::Image(_) | Decoded::Cube(_) => {}
+    }
+    let decoded = match decoded {
+        Decoded::Image(mut img) => {
+            replaced += img.sanitize();
+            Decoded::Image(img)
+        }
+        Decoded::Cube(mut cube) => {
+            for level in &mut cube.levels {
+                for f in level.iter_mut() {
+                    replaced += f.sanitize();
+                }
+            }
+            Decoded::Cube(cube)
+        }
+    };
+    meta.replaced_values = replaced;
+    Ok((decoded, meta))
+}
+
+/// How to write single images.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct WriteOptions {
+    /// Store 8- and 16-bit values as data: no sRGB encode.
+    pub linear: bool,
+    /// 16 bits per channel for PNG.
+    pub png16: bool,
+    /// Texel format of KTX2 and DDS.
+    pub gpu_format: GpuFormat,
+}
+
+/// Encodes an image in the format its name asks for.
+pub fn encode_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<Vec<u8>> {
+    let format = FileFormat::from_extension(path).ok_or_else(|| unknown_ext(path))?;
+    match format {
+        FileFormat::Exr => exr::encode(img).map_err(|e| Error::file(path, e)),
+        FileFormat::Ktx2 | FileFormat::Dds => Err(Error::file(
+            path,
+            "KTX2 and DDS hold cube maps: write them with --to ktx2 or --to dds",
+        )),
+        f => raster::encode(img, f, opts).map_err(|e| Error::file(path, e)),
+    }
+}
+
+/// Encodes a cube map (every level) as KTX2 or DDS, by the name's extension.
+pub fn encode_cube(path: &Path, cube: &CubeMap, format: GpuFormat) -> Result<Vec<u8>> {
+    match FileFormat::from_extension(path) {
+        Some(FileFormat::Ktx2) => Ok(ktx2::encode(cube, format)),
+        Some(FileFormat::Dds) => dds::encode(cube, format).map_err(|e| Error::file(path, e)),
+        _ => Err(Error::file(path, "a cube-map container must be named .ktx2 or .dds")),
+    }
+}
+
+pub fn unknown_ext(path: &Path) -> Error {
+    Error::file(
+        path,
+        "unknown output extension: use .png .jpg .tga .hdr .exr .ktx2 or .dds",
+    )
+}
+
+/// Writes several files so that either all of them land or none does: each goes to a
+/// temporary file beside its target, and only when every one is complete are they renamed.
+pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
+    let mut temps: Vec<(PathBuf, &Path)> = Vec::new();
+    let cleanup = |temps: &[(PathBuf, &Path)]| {
+        for (t, _) in temps {
+            let _ = std::fs::remove_file(t);
+        }
+    };
+    for (path, bytes) in files {
+        let dir = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let tmp = dir.join(format!(".{name}.cubeforge-{}.tmp", std::process::id()));
+        if let Err(e) = std::fs::write(&tmp, bytes) {
+            let _ = std::fs::remove_file(&tmp);
+            cleanup(&temps);
+            return Err(Error::file(path, io_msg(&e)));
+        }
+        temps.push((tmp, path));
+    }
+    for (i, (tmp, path)) in temps.iter().enumerate() {
+        if let Err(e) = std::fs::rename(tmp, path) {
+            cleanup(&temps[i..]);
+            return Err(Error::file(path, io_msg(&e)));
+        }
+    }
+    Ok(())
+}
+
+/// An I/O error as a short phrase ("No such file or directory").
+pub fn io_msg(e: &std::io::Error) -> String {
+    let s = e.to_string();
+    match s.find(" (os error") {
+        Some(i) => s[..i].to_string(),
+        None => s,
+    }
+}

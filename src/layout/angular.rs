@@ -1,0 +1,38 @@
+//! Angular maps (Debevec's light-probe format): centre -Z, rim +Z, the radius proportional to
+//! the angle from -Z, image right +X, up +Y.
+
+use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
+
+/// (s, t) of a unit direction, t pointing up (row 0 is t = 1).
+#[inline]
+pub fn dir_to_st(d: Vec3) -> Vec2 {
+    let a = (-d.z).clamp(-1.0, 1.0).acos();
+    let len = (d.x * d.x + d.y * d.y).sqrt();
+    if len <= 1e-12 {
+        // -Z (centre) or +Z (any rim point).
+        return if d.z < 0.0 {
+            Vec2::splat(0.5)
+        } else {
+            Vec2::new(1.0, 0.5)
+        };
+    }
+    let r = a / PI / len;
+    Vec2::new(0.5 + 0.5 * d.x * r, 0.5 + 0.5 * d.y * r)
+}
+
+/// The direction at (s, t), or None outside the disc.
+#[inline]
+pub fn st_to_dir(s: f32, t: f32) -> Option<Vec3> {
+    let x = 2.0 * s - 1.0;
+    let y = 2.0 * t - 1.0;
+    let rho = (x * x + y * y).sqrt();
+    if rho > 1.0 {
+        return None;
+    }
+    if rho <= 1e-12 {
+        return Some(Vec3::NEG_Z);
+    }
+    let (sa, ca) = (rho * PI).sin_cos();
+    Some(Vec3::new(sa * x / rho, sa * y / rho, -ca))
+}

@@ -1,0 +1,217 @@
+//! Layouts: each is a mapping between directions and image coordinates, written once and used
+//! both to read an input and to write an output.
+
+pub mod angular;
+pub mod cross;
+pub mod equirect;
+pub mod sphere;
+
+use crate::cube::{Environment, Interp};
+use crate::image::Image;
+use glam::{Vec2, Vec3, Vec4};
+
+/// Every kind of environment map cubeforge reads or writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kind {
+    /// Lat-long panorama, 2:1.
+    Equirect,
+    /// Six face images (px nx py ny pz nz).
+    Faces,
+    /// Horizontal cross, 4:3.
+    Hcross,
+    /// Vertical cross, 3:4 (-Z turned 180 degrees).
+    Vcross,
+    /// Horizontal strip, 6:1.
+    Hstrip,
+    /// Vertical strip, 1:6.
+    Vstrip,
+    /// Mirror ball (sphere map), square.
+    Sphere,
+    /// Angular map (light probe), square.
+    Angular,
+    /// KTX2 cube-map container.
+    Ktx2,
+    /// DDS cube-map container.
+    Dds,
+}
+
+impl Kind {
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Equirect => "equirect",
+            Kind::Faces => "faces",
+            Kind::Hcross => "hcross",
+            Kind::Vcross => "vcross",
+            Kind::Hstrip => "hstrip",
+            Kind::Vstrip => "vstrip",
+            Kind::Sphere => "sphere",
+            Kind::Angular => "angular",
+            Kind::Ktx2 => "ktx2",
+            Kind::Dds => "dds",
+        }
+    }
+
+    /// Crosses and strips: faces placed in cells.
+    pub fn is_cells(self) -> bool {
+        cross::cells(self).is_some()
+    }
+
+    /// The single-image layouts resampled by direction (not made of faces).
+    pub fn projection(self) -> Option<Projection> {
+        match self {
+            Kind::Equirect => Some(Projection::Equirect),
+            Kind::Sphere => Some(Projection::Sphere),
+            Kind::Angular => Some(Projection::Angular),
+            _ => None,
+        }
+    }
+
+    /// Whether a `w` x `h` image can hold this layout exactly.
+    pub fn fits(self, w: usize, h: usize) -> bool {
+        match self {
+            Kind::Equirect => w == 2 * h,
+            Kind::Sphere | Kind::Angular => w == h,
+            _ => match cross::cells(self) {
+                Some(((c, r), _)) => w % c == 0 && h % r == 0 && w / c == h / r,
+                None => false,
+            },
+        }
+    }
+
+    /// Output image size for a face edge `n`.
+    pub fn image_size(self, n: usize) -> (usize, usize) {
+        match self {
+            Kind::Equirect => (4 * n, 2 * n),
+            Kind::Sphere | Kind::Angular => (2 * n, 2 * n),
+            _ => match cross::cells(self) {
+                Some(((c, r), _)) => (c * n, r * n),
+                None => (n, n),
+            },
+        }
+    }
+
+    /// The face edge that keeps an input image's resolution.
+    pub fn face_size(self, w: usize, h: usize) -> usize {
+        match self {
+            Kind::Equirect => w / 4,
+            Kind::Sphere | Kind::Angular => w / 2,
+            _ => match cross::cells(self) {
+                Some(((c, _), _)) => w / c,
+                None => w.min(h),
+            },
+        }
+        .max(1)
+    }
+}
+
+/// Detects the layout of a single image from its aspect ratio; square images are ambiguous.
+pub fn detect(w: usize, h: usize) -> Result<Kind, String> {
+    for k in [Kind::Equirect, Kind::Hcross, Kind::Vcross, Kind::Hstrip, Kind::Vstrip] {
+        if k.fits(w, h) {
+            return Ok(k);
+        }
+    }
+    if w == h {
+        return Err(format!(
+            "a square {w}x{h} image may be a sphere map or an angular map: say which with --from sphere or --from angular"
+        ));
+    }
+    Err(format!(
+        "{w}x{h} has an aspect ratio no layout has (2:1 equirect, 4:3 hcross, 3:4 vcross, 6:1 hstrip, 1:6 vstrip, 1:1 sphere or angular)"
+    ))
+}
+
+/// The single-image layouts addressed by direction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Projection {
+    Equirect,
+    Sphere,
+    Angular,
+}
+
+impl Projection {
+    /// Normalised image coordinates (u right, v down, both 0..1) of a unit direction.
+    #[inline]
+    pub fn to_image(self, d: Vec3) -> Vec2 {
+        match self {
+            Projection::Equirect => equirect::dir_to_uv(d),
+            Projection::Sphere => flip(sphere::dir_to_st(d)),
+            Projection::Angular => flip(angular::dir_to_st(d)),
+        }
+    }
+
+    /// The unit direction at normalised image coordinates, None where the image shows nothing.
+    #[inline]
+    pub fn to_dir(self, u: f32, v: f32) -> Option<Vec3> {
+        match self {
+            Projection::Equirect => Some(equirect::uv_to_dir(u, v)),
+            Projection::Sphere => sphere::st_to_dir(u, 1.0 - v).map(|d| d.normalize()),
+            Projection::Angular => angular::st_to_dir(u, 1.0 - v),
+        }
+    }
+}
+
+#[inline]
+fn flip(st: Vec2) -> Vec2 {
+    Vec2::new(st.x, 1.0 - st.y)
+}
+
+/// A panorama, mirror ball or angular map prepared for lookups by direction, with a pyramid
+/// of 2x2-averaged levels so a coarse output can be antialiased cheaply.
+pub struct ImageEnv {
+    projection: Projection,
+    pyramid: Vec<Image>,
+}
+
+impl ImageEnv {
+    pub fn new(projection: Projection, image: Image) -> ImageEnv {
+        let mut pyramid = vec![image];
+        while pyramid.last().unwrap().height > 8 {
+            let next = pyramid.last().unwrap().downsample_2x();
+            pyramid.push(next);
+        }
+        ImageEnv {
+            projection,
+            pyramid,
+        }
+    }
+}
+
+impl Environment for ImageEnv {
+    #[inline]
+    fn sample(&self, d: Vec3, level: usize, interp: Interp) -> Vec4 {
+        let img = &self.pyramid[level.min(self.pyramid.len() - 1)];
+        let mut uv = self.projection.to_image(d);
+        let wrap = self.projection == Projection::Equirect;
+        if !wrap {
+            // Keep the taps half a texel inside the disc so its dark outside never bleeds in.
+            let c = uv * 2.0 - Vec2::ONE;
+            let max = 1.0 - 1.0 / img.width as f32;
+            let len = c.length();
+            if len > max {
+                uv = (c * (max / len) + Vec2::ONE) * 0.5;
+            }
+        }
+        let x = uv.x * img.width as f32;
+        let y = uv.y * img.height as f32;
+        match interp {
+            Interp::Bilinear => img.bilinear(x, y, wrap),
+            Interp::Bicubic => img.bicubic(x, y, wrap),
+        }
+    }
+
+    fn texel_angle(&self) -> f32 {
+        let img = &self.pyramid[0];
+        match self.projection {
+            Projection::Equirect => std::f32::consts::PI / img.height as f32,
+            // Angle per unit radius is 2 at the ball's centre, pi everywhere on an angular map.
+            Projection::Sphere => 4.0 / img.width as f32,
+            Projection::Angular => std::f32::consts::TAU / img.width as f32,
+        }
+    }
+
+    fn levels(&self) -> usize {
+        self.pyramid.len()
+    }
+}

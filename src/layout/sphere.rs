@@ -1,0 +1,30 @@
+//! Sphere maps (mirror balls): the ball photographed by a camera looking along +Z, image right
+//! +X, up +Y. The OpenGL sphere-map formula with the eye looking along +Z: the centre shows -Z,
+//! the rim +Z.
+
+use glam::{Vec2, Vec3};
+
+/// (s, t) of a unit direction, t pointing up (row 0 is t = 1).
+#[inline]
+pub fn dir_to_st(r: Vec3) -> Vec2 {
+    let m = 2.0 * (r.x * r.x + r.y * r.y + (1.0 - r.z) * (1.0 - r.z)).sqrt();
+    if m <= 1e-12 {
+        // Exactly +Z: the whole rim; any rim point will do.
+        return Vec2::new(1.0, 0.5);
+    }
+    Vec2::new(0.5 + r.x / m, 0.5 + r.y / m)
+}
+
+/// The reflected direction seen at (s, t), or None outside the ball.
+#[inline]
+pub fn st_to_dir(s: f32, t: f32) -> Option<Vec3> {
+    let x = 2.0 * s - 1.0;
+    let y = 2.0 * t - 1.0;
+    let rr = x * x + y * y;
+    if rr > 1.0 {
+        return None;
+    }
+    // Ball normal facing the camera, reflecting the view ray (0, 0, 1).
+    let nz = -(1.0 - rr).sqrt();
+    Some(Vec3::new(-2.0 * nz * x, -2.0 * nz * y, 1.0 - 2.0 * nz * nz))
+}

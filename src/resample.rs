@@ -1,0 +1,204 @@
+//! Every conversion: for each output texel, its direction; look the direction up in the input.
+//! Coarse outputs are antialiased by supersampling the texel's footprint on a pyramid level.
+
+use crate::cube::{dir_face, face_dir, CubeMap, Environment, Interp};
+use crate::image::Image;
+use crate::layout::Projection;
+use glam::{Mat3, Vec3, Vec4};
+
+/// A rotation of the environment (degrees) and an optional handedness flip.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Orientation {
+    pub yaw: f32,
+    pub pitch: f32,
+    pub roll: f32,
+    pub mirror: bool,
+}
+
+impl Orientation {
+    /// The matrix taking an output direction to the input direction that lands there.
+    /// The environment turns by yaw about +Y, then pitch about +X, then roll about +Z
+    /// (counter-clockwise looking down each axis); mirror negates X of the input.
+    pub fn lookup_matrix(&self) -> Mat3 {
+        let r = Mat3::from_rotation_y(self.yaw.to_radians())
+            * Mat3::from_rotation_x(self.pitch.to_radians())
+            * Mat3::from_rotation_z(self.roll.to_radians());
+        let m = r.transpose();
+        if self.mirror {
+            Mat3::from_diagonal(Vec3::new(-1.0, 1.0, 1.0)) * m
+        } else {
+            m
+        }
+    }
+
+    pub fn is_identity(&self) -> bool {
+        *self == Orientation::default()
+    }
+}
+
+/// How to resample: interpolation, antialiasing, orientation.
+#[derive(Clone, Copy, Debug)]
+pub struct Resampler {
+    pub interp: Interp,
+    /// Supersample texels whose footprint covers more than a source texel or so.
+    pub antialias: bool,
+    pub orientation: Orientation,
+}
+
+impl Default for Resampler {
+    fn default() -> Self {
+        Resampler {
+            interp: Interp::Bilinear,
+            antialias: true,
+            orientation: Orientation::default(),
+        }
+    }
+}
+
+/// Largest number of subsamples per axis of one output texel.
+const MAX_SUB: usize = 4;
+
+impl Resampler {
+    /// A cube map of face edge `size` from any environment.
+    pub fn to_cube(&self, env: &dyn Environment, size: usize) -> CubeMap {
+        let inv = 1.0 / size as f32;
+        let faces = std::array::from_fn(|face| {
+            self.render(
+                env,
+                size,
+                size,
+                |x, y| Some(face_dir(face, x * inv, y * inv)),
+                |x, y| {
+                    // Angle of one texel at (sc, tc) on the face plane, the larger axis.
+                    let sc = 2.0 * x * inv - 1.0;
+                    let tc = 2.0 * y * inv - 1.0;
+                    let q = 1.0 + sc * sc + tc * tc;
+                    2.0 * inv * (1.0 + sc.abs().max(tc.abs()).powi(2)).sqrt() / q
+                },
+            )
+        });
+        CubeMap {
+            levels: vec![faces],
+        }
+    }
+
+    /// A panorama, mirror ball or angular map of `w` x `h` from any environment.
+    pub fn to_projection(
+        &self,
+        env: &dyn Environment,
+        proj: Projection,
+        w: usize,
+        h: usize,
+    ) -> Image {
+        let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
+        let dir = move |x: f32, y: f32| proj.to_dir(x * iw, y * ih);
+        let footprint = move |x: f32, y: f32| match proj {
+            Projection::Equirect => std::f32::consts::PI * ih,
+            _ => {
+                // Measured: the angle between directions half a pixel either side.
+                let c = dir(x, y);
+                let span = |a: Option<Vec3>, b: Option<Vec3>| match (a, b) {
+                    (Some(a), Some(b)) => a.angle_between(b),
+                    _ => 0.0,
+                };
+                let sx = span(dir(x - 0.5, y), dir(x + 0.5, y));
+                let sy = span(dir(x, y - 0.5), dir(x, y + 0.5));
+                if c.is_none() {
+                    0.0
+                } else {
+                    sx.max(sy)
+                }
+            }
+        };
+        self.render(env, w, h, dir, footprint)
+    }
+
+    /// The shared loop: `dir(x, y)` gives the direction at continuous pixel coordinates
+    /// (None where the layout shows nothing), `footprint` the angle one texel spans there.
+    pub fn render(
+        &self,
+        env: &dyn Environment,
+        w: usize,
+        h: usize,
+        dir: impl Fn(f32, f32) -> Option<Vec3> + Sync,
+        footprint: impl Fn(f32, f32) -> f32 + Sync,
+    ) -> Image {
+        let m = self.orientation.lookup_matrix();
+        let rotate = !self.orientation.is_identity();
+        let src_angle = env.texel_angle();
+        let levels = env.levels();
+        let lookup = |d: Vec3, level: usize| {
+            let d = if rotate { m * d } else { d };
+            env.sample(d.normalize(), level, self.interp)
+        };
+        Image::from_fn(w, h, |x, y| {
+            let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
+            let ratio = if self.antialias {
+                footprint(cx, cy) / src_angle
+            } else {
+                0.0
+            };
+            if ratio <= 1.5 {
+                return dir(cx, cy).map_or(Vec4::ZERO, |d| lookup(d, 0));
+            }
+            // A pyramid level where the footprint spans at most ~4 texels, then up to
+            // MAX_SUB x MAX_SUB bilinear taps spread over the texel.
+            let level = ((ratio / 4.0).log2().ceil().max(0.0) as usize).min(levels - 1);
+            let rest = ratio / (1u32 << level) as f32;
+            let n = ((rest / 1.5).ceil() as usize).clamp(1, MAX_SUB);
+            let step = 1.0 / n as f32;
+            let mut acc = Vec4::ZERO;
+            let mut count = 0u32;
+            for j in 0..n {
+                for i in 0..n {
+                    let sx = x as f32 + (i as f32 + 0.5) * step;
+                    let sy = y as f32 + (j as f32 + 0.5) * step;
+                    if let Some(d) = dir(sx, sy) {
+                        acc += lookup(d, level);
+                        count += 1;
+                    }
+                }
+            }
+            if count == 0 {
+                Vec4::ZERO
+            } else {
+                acc / count as f32
+            }
+        })
+    }
+}
+
+/// An environment given by a function of direction: exact ground truth for tests and fixtures.
+pub struct FnEnv<F: Fn(Vec3) -> Vec4 + Sync>(pub F);
+
+impl<F: Fn(Vec3) -> Vec4 + Sync> Environment for FnEnv<F> {
+    fn sample(&self, d: Vec3, _level: usize, _interp: Interp) -> Vec4 {
+        (self.0)(d)
+    }
+    fn texel_angle(&self) -> f32 {
+        1e-6
+    }
+    fn levels(&self) -> usize {
+        1
+    }
+}
+
+/// A chiral test environment: colour from direction, so every axis and its sign is visible,
+/// plus a small bright marker off-centre on +Z's upper right that no mirroring can keep in place.
+pub fn marker_env(d: Vec3) -> Vec4 {
+    let base = (d * 0.5 + Vec3::splat(0.5)).extend(1.0);
+    let marker = Vec3::new(0.3, 0.3, 1.0).normalize();
+    if d.dot(marker) > 0.995 {
+        Vec4::new(4.0, 4.0, 4.0, 1.0)
+    } else {
+        base
+    }
+}
+
+/// Which face and texel a direction falls on, for tests and tools that need the exact cell.
+pub fn dir_texel(d: Vec3, size: usize) -> (usize, usize, usize) {
+    let (f, s, t) = dir_face(d);
+    let x = ((s * size as f32) as usize).min(size - 1);
+    let y = ((t * size as f32) as usize).min(size - 1);
+    (f, x, y)
+}
