@@ -1,1 +1,222 @@
-//! stub
+//! Conversion between layouts: load any input as a direction-addressed environment, then
+//! render the requested layout from it.
+
+use crate::cube::{
+    faces_from_images, CubeMap, CubeSampler, Environment, FACE_LONG_NAMES, FACE_NAMES,
+};
+use crate::error::{Error, Result};
+use crate::image::Image;
+use crate::io::{self, Decoded, FileFormat, Meta, ReadOptions};
+use crate::layout::{self, cross, ImageEnv, Kind};
+use crate::resample::Resampler;
+use std::path::{Path, PathBuf};
+
+/// A loaded input: a cube map (faces, cross, strip, container) or a single-image projection.
+pub enum Source {
+    Cube(CubeMap),
+    Projection(layout::Projection, Image),
+}
+
+/// An input with what was learned while reading it.
+pub struct Loaded {
+    pub source: Source,
+    pub kind: Kind,
+    /// Holds values above 1: float outputs are the natural default.
+    pub hdr: bool,
+    pub meta: Meta,
+    /// Every file read, so outputs can be checked against them.
+    pub files: Vec<PathBuf>,
+}
+
+impl Loaded {
+    /// The face edge that keeps the input's resolution.
+    pub fn face_size(&self) -> usize {
+        match &self.source {
+            Source::Cube(c) => c.size(),
+            Source::Projection(_, img) => self.kind.face_size(img.width, img.height),
+        }
+    }
+
+    /// Prepares the input for lookups by direction, with a pyramid for antialiasing.
+    pub fn environment(&self) -> Box<dyn Environment + '_> {
+        match &self.source {
+            Source::Cube(c) => {
+                // Box mips of level 0 (any stored levels may be prefiltered, not plain mips).
+                let base = CubeMap {
+                    levels: vec![c.levels[0].clone()],
+                };
+                Box::new(CubeSampler::new(&base.with_box_mips(None)))
+            }
+            Source::Projection(p, img) => Box::new(ImageEnv::new(*p, img.clone())),
+        }
+    }
+}
+
+/// Loads one image file (any layout), a folder of six faces, or six face files.
+pub fn load(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Result<Loaded> {
+    match inputs {
+        [] => Err(Error::usage("no input given")),
+        [dir] if dir.is_dir() => load_faces(&find_faces(dir)?, opts),
+        [file] => load_single(file, from, opts),
+        files if files.len() == 6 => load_faces(files, opts),
+        files => Err(Error::usage(format!(
+            "give one image, a folder of faces, or six face images in px nx py ny pz nz order ({} given)",
+            files.len()
+        ))),
+    }
+}
+
+/// Finds px/nx/... or posx/negx/... files (any supported extension) in a folder.
+pub fn find_faces(dir: &Path) -> Result<Vec<PathBuf>> {
+    let entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| Error::file(dir, io::io_msg(&e)))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| FileFormat::from_extension(p).is_some())
+        .collect();
+    let mut found = Vec::new();
+    for i in 0..6 {
+        let mut hits: Vec<&PathBuf> = entries
+            .iter()
+            .filter(|p| {
+                let stem = p
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().to_ascii_lowercase())
+                    .unwrap_or_default();
+                stem == FACE_NAMES[i] || stem == FACE_LONG_NAMES[i]
+            })
+            .collect();
+        hits.sort();
+        match hits.as_slice() {
+            [] => {
+                return Err(Error::file(
+                    dir,
+                    format!(
+                        "face {} is missing (expected {}.EXT or {}.EXT)",
+                        FACE_NAMES[i], FACE_NAMES[i], FACE_LONG_NAMES[i]
+                    ),
+                ))
+            }
+            [one] => found.push((*one).clone()),
+            many => {
+                return Err(Error::file(
+                    dir,
+                    format!(
+                        "face {} is ambiguous: {}",
+                        FACE_NAMES[i],
+                        many.iter()
+                            .map(|p| p.display().to_string())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ))
+            }
+        }
+    }
+    Ok(found)
+}
+
+fn load_faces(files: &[PathBuf], opts: &ReadOptions) -> Result<Loaded> {
+    let mut images = Vec::with_capacity(6);
+    let mut meta: Option<Meta> = None;
+    let mut replaced = 0;
+    for f in files {
+        let (decoded, m) = io::read(f, opts)?;
+        replaced += m.replaced_values;
+        match decoded {
+            Decoded::Image(img) => images.push(img),
+            Decoded::Cube(_) => {
+                return Err(Error::file(
+                    f,
+                    "a face must be a single image, not a cube map",
+                ))
+            }
+        }
+        meta.get_or_insert(m);
+    }
+    let mut meta = meta.expect("six faces were read");
+    meta.replaced_values = replaced;
+    let cube = faces_from_images(images, files)?;
+    Ok(Loaded {
+        source: Source::Cube(cube),
+        kind: Kind::Faces,
+        hdr: meta.hdr,
+        meta,
+        files: files.to_vec(),
+    })
+}
+
+fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Loaded> {
+    let (decoded, meta) = io::read(path, opts)?;
+    let files = vec![path.to_path_buf()];
+    let hdr = meta.hdr;
+    let (source, kind) = match decoded {
+        Decoded::Cube(cube) => {
+            let kind = if meta.file_format == FileFormat::Dds {
+                Kind::Dds
+            } else {
+                Kind::Ktx2
+            };
+            (Source::Cube(cube), kind)
+        }
+        Decoded::Image(img) => {
+            let (w, h) = (img.width, img.height);
+            let kind = match from {
+                Some(k @ (Kind::Faces | Kind::Ktx2 | Kind::Dds)) => {
+                    return Err(Error::file(
+                        path,
+                        format!("--from {} does not describe a single image", k.name()),
+                    ))
+                }
+                Some(k) if !k.fits(w, h) => {
+                    return Err(Error::file(
+                        path,
+                        format!("a {w}x{h} image cannot hold a {} layout", k.name()),
+                    ))
+                }
+                Some(k) => k,
+                None => layout::detect(w, h).map_err(|e| Error::file(path, e))?,
+            };
+            let source = match kind.projection() {
+                Some(p) => Source::Projection(p, img),
+                None => Source::Cube(
+                    CubeMap::from_faces(cross::extract(kind, &img))
+                        .map_err(|e| Error::file(path, e))?,
+                ),
+            };
+            (source, kind)
+        }
+    };
+    Ok(Loaded {
+        source,
+        kind,
+        hdr,
+        meta,
+        files,
+    })
+}
+
+/// What a conversion produces: one image, or a cube map (faces and containers).
+pub enum Output {
+    Image(Image),
+    Cube(CubeMap),
+}
+
+/// Renders `to` at face edge `size`. A cube input written as a cube of the same size and
+/// orientation is copied texel for texel, never resampled.
+pub fn convert(loaded: &Loaded, to: Kind, size: usize, resampler: &Resampler) -> Output {
+    let as_is = resampler.orientation.is_identity();
+    let cube = |size: usize| match &loaded.source {
+        Source::Cube(c) if as_is && c.size() == size => CubeMap {
+            levels: vec![c.levels[0].clone()],
+        },
+        _ => resampler.to_cube(loaded.environment().as_ref(), size),
+    };
+    match to.projection() {
+        Some(p) => {
+            let (w, h) = to.image_size(size);
+            Output::Image(resampler.to_projection(loaded.environment().as_ref(), p, w, h))
+        }
+        None if to.is_cells() => Output::Image(cross::assemble(to, &cube(size).levels[0])),
+        None => Output::Cube(cube(size)),
+    }
+}

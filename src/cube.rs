@@ -286,10 +286,7 @@ fn bordered(faces: &Faces) -> [Image; 6] {
 }
 
 /// Reads a cube map from six same-size images, naming the file of a face that does not fit.
-pub fn faces_from_images(
-    images: Vec<Image>,
-    names: &[std::path::PathBuf],
-) -> Result<CubeMap> {
+pub fn faces_from_images(images: Vec<Image>, names: &[std::path::PathBuf]) -> Result<CubeMap> {
     let n = images[0].width;
     for (i, img) in images.iter().enumerate() {
         if img.width != img.height {

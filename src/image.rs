@@ -101,7 +101,9 @@ impl Image {
             let x0 = (x as f32 * sx) as usize;
             let x1 = (((x + 1) as f32 * sx) as usize).min(self.width).max(x0 + 1);
             let y0 = (y as f32 * sy) as usize;
-            let y1 = (((y + 1) as f32 * sy) as usize).min(self.height).max(y0 + 1);
+            let y1 = (((y + 1) as f32 * sy) as usize)
+                .min(self.height)
+                .max(y0 + 1);
             let mut acc = Vec4::ZERO;
             for yy in y0..y1 {
                 for xx in x0..x1 {

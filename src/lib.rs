@@ -12,5 +12,6 @@ pub mod info;
 pub mod io;
 pub mod layout;
 pub mod resample;
+pub mod synthetic;
 
 pub use error::{Error, Result};

@@ -1,1 +1,7 @@
-fn main(){}
+//! The `cubeforge` command: parses arguments, calls the library, reports.
+
+mod cli;
+
+fn main() {
+    std::process::exit(cli::run());
+}

@@ -183,18 +183,6 @@ impl<F: Fn(Vec3) -> Vec4 + Sync> Environment for FnEnv<F> {
     }
 }
 
-/// A chiral test environment: colour from direction, so every axis and its sign is visible,
-/// plus a small bright marker off-centre on +Z's upper right that no mirroring can keep in place.
-pub fn marker_env(d: Vec3) -> Vec4 {
-    let base = (d * 0.5 + Vec3::splat(0.5)).extend(1.0);
-    let marker = Vec3::new(0.3, 0.3, 1.0).normalize();
-    if d.dot(marker) > 0.995 {
-        Vec4::new(4.0, 4.0, 4.0, 1.0)
-    } else {
-        base
-    }
-}
-
 /// Which face and texel a direction falls on, for tests and tools that need the exact cell.
 pub fn dir_texel(d: Vec3, size: usize) -> (usize, usize, usize) {
     let (f, s, t) = dir_face(d);

@@ -69,16 +69,18 @@ impl FileFormat {
     }
 
     pub fn from_ext_str(ext: &str) -> Option<FileFormat> {
-        Some(match ext.trim_start_matches('.').to_ascii_lowercase().as_str() {
-            "png" => FileFormat::Png,
-            "jpg" | "jpeg" => FileFormat::Jpeg,
-            "tga" => FileFormat::Tga,
-            "hdr" | "rgbe" | "pic" => FileFormat::Hdr,
-            "exr" => FileFormat::Exr,
-            "ktx2" => FileFormat::Ktx2,
-            "dds" => FileFormat::Dds,
-            _ => return None,
-        })
+        Some(
+            match ext.trim_start_matches('.').to_ascii_lowercase().as_str() {
+                "png" => FileFormat::Png,
+                "jpg" | "jpeg" => FileFormat::Jpeg,
+                "tga" => FileFormat::Tga,
+                "hdr" | "rgbe" | "pic" => FileFormat::Hdr,
+                "exr" => FileFormat::Exr,
+                "ktx2" => FileFormat::Ktx2,
+                "dds" => FileFormat::Dds,
+                _ => return None,
+            },
+        )
     }
 
     pub fn from_magic(bytes: &[u8]) -> Option<FileFormat> {
@@ -252,8 +254,32 @@ pub struct ReadOptions {
     pub linear: bool,
 }
 
-/// Reads any supported file, by content, with the size limit checked from the header.
+/// Reads any supported file and replaces NaN, infinite and negative values by 0, counting
+/// them in `Meta::replaced_values`.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
+    let (decoded, mut meta) = read_raw(path, opts)?;
+    let mut replaced = 0;
+    let decoded = match decoded {
+        Decoded::Image(mut img) => {
+            replaced += img.sanitize();
+            Decoded::Image(img)
+        }
+        Decoded::Cube(mut cube) => {
+            for level in &mut cube.levels {
+                for f in level.iter_mut() {
+                    replaced += f.sanitize();
+                }
+            }
+            Decoded::Cube(cube)
+        }
+    };
+    meta.replaced_values = replaced;
+    Ok((decoded, meta))
+}
+
+/// Reads any supported file as stored, by content, with the size limit checked from the
+/// header before pixels are allocated.
+pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     let bytes = std::fs::read(path).map_err(|e| Error::file(path, io_msg(&e)))?;
     if bytes.is_empty() {
         return Err(Error::file(path, "file is empty"));
@@ -278,39 +304,17 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
                 format!("not a valid {} file (its signature is missing)", n.name()),
             ))
         }
-        (None, None) => {
-            return Err(Error::file(
-                path,
-                "not a recognised image file (cubeforge reads PNG, JPEG, TGA, HDR, EXR, KTX2 and DDS)",
-            ))
-        }
+        (None, None) => return Err(Error::file(
+            path,
+            "not a recognised image file (cubeforge reads PNG, JPEG, TGA, HDR, EXR, KTX2 and DDS)",
+        )),
     };
-    let (decoded, mut meta) = match format {
-        FileFormat::Exr => exr::decode(&bytes, path, &opts.limits)?,
-        FileFormat::Ktx2 => ktx2::decode(&bytes, path, &opts.limits)?,
-        FileFormat::Dds => dds::decode(&bytes, path, &opts.limits)?,
-        f => raster::decode(&bytes, f, path, opts)?,
-    };
-    let mut replaced = 0;
-    match &decoded {
-        Decoded::Image(_) | Decoded::Cube(_) => {}
+    match format {
+        FileFormat::Exr => exr::decode(&bytes, path, &opts.limits),
+        FileFormat::Ktx2 => ktx2::decode(&bytes, path, &opts.limits),
+        FileFormat::Dds => dds::decode(&bytes, path, &opts.limits),
+        f => raster::decode(&bytes, f, path, opts),
     }
-    let decoded = match decoded {
-        Decoded::Image(mut img) => {
-            replaced += img.sanitize();
-            Decoded::Image(img)
-        }
-        Decoded::Cube(mut cube) => {
-            for level in &mut cube.levels {
-                for f in level.iter_mut() {
-                    replaced += f.sanitize();
-                }
-            }
-            Decoded::Cube(cube)
-        }
-    };
-    meta.replaced_values = replaced;
-    Ok((decoded, meta))
 }
 
 /// How to write single images.
@@ -342,7 +346,10 @@ pub fn encode_cube(path: &Path, cube: &CubeMap, format: GpuFormat) -> Result<Vec
     match FileFormat::from_extension(path) {
         Some(FileFormat::Ktx2) => Ok(ktx2::encode(cube, format)),
         Some(FileFormat::Dds) => dds::encode(cube, format).map_err(|e| Error::file(path, e)),
-        _ => Err(Error::file(path, "a cube-map container must be named .ktx2 or .dds")),
+        _ => Err(Error::file(
+            path,
+            "a cube-map container must be named .ktx2 or .dds",
+        )),
     }
 }
 

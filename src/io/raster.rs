@@ -1,7 +1,201 @@
-//! stub
-use super::{Decoded, FileFormat, Meta, ReadOptions, WriteOptions};
-use crate::error::Result;
-use crate::image::Image;
+//! PNG, JPEG, TGA and Radiance HDR through the `image` crate, converted to and from linear f32.
+
+use super::{unorm8, Decoded, FileFormat, Meta, ReadOptions, WriteOptions};
+use crate::error::{Error, Result};
+use crate::image::{linear_to_srgb, srgb_to_linear, ColorSpace, Image};
+use ::image::{codecs, ColorType, DynamicImage, ImageDecoder, ImageEncoder, ImageFormat};
+use glam::Vec4;
+use rayon::prelude::*;
+use std::io::Cursor;
 use std::path::Path;
-pub fn decode(_b: &[u8], _f: FileFormat, _p: &Path, _o: &ReadOptions) -> Result<(Decoded, Meta)> { todo!() }
-pub fn encode(_i: &Image, _f: FileFormat, _o: &WriteOptions) -> std::result::Result<Vec<u8>, String> { todo!() }
+
+fn image_format(f: FileFormat) -> ImageFormat {
+    match f {
+        FileFormat::Png => ImageFormat::Png,
+        FileFormat::Jpeg => ImageFormat::Jpeg,
+        FileFormat::Tga => ImageFormat::Tga,
+        _ => ImageFormat::Hdr,
+    }
+}
+
+/// Decodes, checking the header's size against the limit before the pixels are read.
+pub fn decode(
+    bytes: &[u8],
+    f: FileFormat,
+    path: &Path,
+    opts: &ReadOptions,
+) -> Result<(Decoded, Meta)> {
+    let what = f.name();
+    let err = |e: ::image::ImageError| Error::file(path, format!("cannot decode {what}: {e}"));
+    let reader = ::image::ImageReader::with_format(Cursor::new(bytes), image_format(f));
+    let mut decoder = reader.into_decoder().map_err(err)?;
+    let (w, h) = decoder.dimensions();
+    opts.limits.check(path, w as u64, h as u64)?;
+    let mut limits = ::image::Limits::default();
+    limits.max_alloc = Some(opts.limits.max_pixels.saturating_mul(16).max(1 << 20));
+    decoder.set_limits(limits).map_err(err)?;
+    let color = decoder.color_type();
+    let img = DynamicImage::from_decoder(decoder).map_err(err)?;
+    let (w, h) = (w as usize, h as usize);
+    let float = matches!(color, ColorType::Rgb32F | ColorType::Rgba32F);
+    let srgb = !float && !opts.linear;
+    let pixels: Vec<Vec4> = if float {
+        img.into_rgba32f()
+            .into_raw()
+            .chunks_exact(4)
+            .map(|c| Vec4::new(c[0], c[1], c[2], c[3]))
+            .collect()
+    } else if matches!(color.bytes_per_pixel() / color.channel_count(), 1) {
+        let lut: Vec<f32> = (0..256)
+            .map(|i| {
+                let v = i as f32 / 255.0;
+                if srgb {
+                    srgb_to_linear(v)
+                } else {
+                    v
+                }
+            })
+            .collect();
+        img.into_rgba8()
+            .into_raw()
+            .chunks_exact(4)
+            .map(|c| {
+                Vec4::new(
+                    lut[c[0] as usize],
+                    lut[c[1] as usize],
+                    lut[c[2] as usize],
+                    c[3] as f32 / 255.0,
+                )
+            })
+            .collect()
+    } else {
+        let raw = img.into_rgba16().into_raw();
+        raw.par_chunks_exact(4)
+            .map(|c| {
+                let v = |x: u16| {
+                    let v = x as f32 / 65535.0;
+                    if srgb {
+                        srgb_to_linear(v)
+                    } else {
+                        v
+                    }
+                };
+                Vec4::new(v(c[0]), v(c[1]), v(c[2]), c[3] as f32 / 65535.0)
+            })
+            .collect()
+    };
+    let meta = Meta {
+        file_format: f,
+        pixel_format: pixel_format_name(color, f),
+        color_space: if srgb {
+            ColorSpace::Srgb
+        } else {
+            ColorSpace::Linear
+        },
+        hdr: float,
+        replaced_values: 0,
+    };
+    Ok((
+        Decoded::Image(Image {
+            width: w,
+            height: h,
+            pixels,
+        }),
+        meta,
+    ))
+}
+
+fn pixel_format_name(c: ColorType, f: FileFormat) -> String {
+    if f == FileFormat::Hdr {
+        return "RGBE (shared exponent)".into();
+    }
+    match c {
+        ColorType::L8 => "L8",
+        ColorType::La8 => "LA8",
+        ColorType::Rgb8 => "RGB8",
+        ColorType::Rgba8 => "RGBA8",
+        ColorType::L16 => "L16",
+        ColorType::La16 => "LA16",
+        ColorType::Rgb16 => "RGB16",
+        ColorType::Rgba16 => "RGBA16",
+        ColorType::Rgb32F => "RGB32F",
+        ColorType::Rgba32F => "RGBA32F",
+        _ => "other",
+    }
+    .into()
+}
+
+/// Encodes linear pixels: sRGB-encoded 8 or 16 bits (unless `linear`), or linear floats for HDR.
+pub fn encode(
+    img: &Image,
+    f: FileFormat,
+    opts: &WriteOptions,
+) -> std::result::Result<Vec<u8>, String> {
+    let (w, h) = (img.width as u32, img.height as u32);
+    let tf = |v: f32| {
+        if opts.linear {
+            v.clamp(0.0, 1.0)
+        } else {
+            linear_to_srgb(v)
+        }
+    };
+    let mut out = Vec::new();
+    let e = |e: ::image::ImageError| e.to_string();
+    match f {
+        FileFormat::Hdr => {
+            let rgb: Vec<::image::Rgb<f32>> = img
+                .pixels
+                .iter()
+                .map(|p| ::image::Rgb([p.x.max(0.0), p.y.max(0.0), p.z.max(0.0)]))
+                .collect();
+            codecs::hdr::HdrEncoder::new(&mut out)
+                .encode(&rgb, img.width, img.height)
+                .map_err(e)?;
+        }
+        FileFormat::Png if opts.png16 => {
+            let native: Vec<u8> = img
+                .pixels
+                .par_iter()
+                .flat_map_iter(|p| {
+                    let q = |v: f32| ((v * 65535.0 + 0.5) as u16).to_ne_bytes();
+                    [q(tf(p.x)), q(tf(p.y)), q(tf(p.z)), q(p.w.clamp(0.0, 1.0))]
+                        .into_iter()
+                        .flatten()
+                })
+                .collect();
+            codecs::png::PngEncoder::new(&mut out)
+                .write_image(&native, w, h, ::image::ExtendedColorType::Rgba16)
+                .map_err(e)?;
+        }
+        FileFormat::Png | FileFormat::Tga | FileFormat::Jpeg => {
+            let alpha = f != FileFormat::Jpeg;
+            let data: Vec<u8> = img
+                .pixels
+                .par_iter()
+                .flat_map_iter(|p| {
+                    let rgb = [unorm8(tf(p.x)), unorm8(tf(p.y)), unorm8(tf(p.z))];
+                    let a = unorm8(p.w);
+                    rgb.into_iter().chain(alpha.then_some(a))
+                })
+                .collect();
+            let ct = if alpha {
+                ::image::ExtendedColorType::Rgba8
+            } else {
+                ::image::ExtendedColorType::Rgb8
+            };
+            match f {
+                FileFormat::Png => codecs::png::PngEncoder::new(&mut out)
+                    .write_image(&data, w, h, ct)
+                    .map_err(e)?,
+                FileFormat::Tga => codecs::tga::TgaEncoder::new(&mut out)
+                    .write_image(&data, w, h, ct)
+                    .map_err(e)?,
+                _ => codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 95)
+                    .write_image(&data, w, h, ct)
+                    .map_err(e)?,
+            }
+        }
+        _ => return Err(format!("{} is not written by this encoder", f.name())),
+    }
+    Ok(out)
+}

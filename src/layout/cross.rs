@@ -24,7 +24,10 @@ const fn c(col: usize, row: usize) -> Cell {
 /// Grid size (columns, rows) and the cell of each face in px nx py ny pz nz order.
 pub fn cells(kind: Kind) -> Option<((usize, usize), [Cell; 6])> {
     Some(match kind {
-        Kind::Hcross => ((4, 3), [c(2, 1), c(0, 1), c(1, 0), c(1, 2), c(1, 1), c(3, 1)]),
+        Kind::Hcross => (
+            (4, 3),
+            [c(2, 1), c(0, 1), c(1, 0), c(1, 2), c(1, 1), c(3, 1)],
+        ),
         Kind::Vcross => (
             (3, 4),
             [

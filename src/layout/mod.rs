@@ -73,7 +73,7 @@ impl Kind {
             Kind::Equirect => w == 2 * h,
             Kind::Sphere | Kind::Angular => w == h,
             _ => match cross::cells(self) {
-                Some(((c, r), _)) => w % c == 0 && h % r == 0 && w / c == h / r,
+                Some(((c, r), _)) => w.is_multiple_of(c) && h.is_multiple_of(r) && w / c == h / r,
                 None => false,
             },
         }
@@ -107,7 +107,13 @@ impl Kind {
 
 /// Detects the layout of a single image from its aspect ratio; square images are ambiguous.
 pub fn detect(w: usize, h: usize) -> Result<Kind, String> {
-    for k in [Kind::Equirect, Kind::Hcross, Kind::Vcross, Kind::Hstrip, Kind::Vstrip] {
+    for k in [
+        Kind::Equirect,
+        Kind::Hcross,
+        Kind::Vcross,
+        Kind::Hstrip,
+        Kind::Vstrip,
+    ] {
         if k.fits(w, h) {
             return Ok(k);
         }

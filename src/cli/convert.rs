@@ -1,0 +1,245 @@
+//! `cubeforge convert`: any layout to any other.
+
+use super::{warn, Stages};
+use cubeforge::convert::{self, Output};
+use cubeforge::cube::{CubeMap, Interp, FACE_NAMES};
+use cubeforge::io::{self, FileFormat, GpuFormat, Limits, ReadOptions, WriteOptions};
+use cubeforge::layout::Kind;
+use cubeforge::resample::{Orientation, Resampler};
+use cubeforge::{Error, Result};
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// One image; six face images in px nx py ny pz nz order; or a folder of px/nx/... faces.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// Output file, or folder for --to faces.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Input layout (detected from the aspect ratio; square images need sphere or angular).
+    #[arg(long, value_enum)]
+    pub from: Option<Kind>,
+    /// Output layout (default: from the output's extension; hcross for images, faces for a folder).
+    #[arg(long, value_enum)]
+    pub to: Option<Kind>,
+    /// Cube face edge in texels (equirect output is 4N x 2N, sphere and angular 2N x 2N).
+    #[arg(long)]
+    pub size: Option<usize>,
+    /// File type of face images (png, jpg, tga, hdr, exr; default exr for HDR input, png for LDR).
+    #[arg(long)]
+    pub format: Option<String>,
+    /// Interpolation between input texels.
+    #[arg(long, value_enum, default_value_t = Interp::Bilinear)]
+    pub interp: Interp,
+    /// Turn off supersampling of coarse outputs (faster, aliases when shrinking).
+    #[arg(long)]
+    pub no_antialias: bool,
+    /// Rotate the environment about +Y, degrees (90 brings the old centre +Z to +X).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub yaw: f32,
+    /// Rotate the environment about +X, degrees.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub pitch: f32,
+    /// Rotate the environment about +Z, degrees.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub roll: f32,
+    /// Flip handedness (mirror X) for engines with the other convention.
+    #[arg(long)]
+    pub mirror: bool,
+    /// 8- and 16-bit files hold data, not colour: no sRGB decode on read or encode on write.
+    #[arg(long)]
+    pub linear: bool,
+    /// Write 16-bit PNG instead of 8-bit.
+    #[arg(long)]
+    pub png16: bool,
+    /// Texel format of KTX2 and DDS output.
+    #[arg(long, value_enum, default_value_t = GpuFormat::Rgba16f)]
+    pub gpu_format: GpuFormat,
+    /// Mip levels in KTX2 and DDS output (default: the full chain down to 1x1).
+    #[arg(long)]
+    pub levels: Option<usize>,
+    /// Refuse images with more pixels than this (checked before decoding).
+    #[arg(long, default_value_t = Limits::default().max_pixels)]
+    pub max_pixels: u64,
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let mut stages = Stages::new(verbose);
+    let limits = Limits {
+        max_pixels: a.max_pixels,
+        ..Limits::default()
+    };
+    let read = ReadOptions {
+        limits,
+        linear: a.linear,
+    };
+    let to = output_kind(&a)?;
+    // Check the options before the (possibly slow) decode.
+    let face_format = match to {
+        Kind::Faces => face_format(&a)?,
+        _ => None,
+    };
+    let loaded = convert::load(&a.inputs, a.from, &read)?;
+    stages.done("decode");
+    if loaded.meta.replaced_values > 0 {
+        warn(format!(
+            "{}: replaced {} NaN, infinite or negative values by 0",
+            loaded.files[0].display(),
+            loaded.meta.replaced_values
+        ));
+    }
+    let size = a.size.unwrap_or_else(|| loaded.face_size());
+    if size == 0 {
+        return Err(Error::usage("--size must be at least 1"));
+    }
+    let (w, h) = to.image_size(size);
+    limits.check(&a.output, w as u64, h as u64).map_err(|_| {
+        Error::usage(format!(
+            "--size {size} makes a {w}x{h} output, over the size limit (--max-pixels)"
+        ))
+    })?;
+    let hdr_out = loaded.hdr;
+    let face_format = face_format.unwrap_or(if hdr_out {
+        FileFormat::Exr
+    } else {
+        FileFormat::Png
+    });
+
+    let resampler = Resampler {
+        interp: a.interp,
+        antialias: !a.no_antialias,
+        orientation: Orientation {
+            yaw: a.yaw,
+            pitch: a.pitch,
+            roll: a.roll,
+            mirror: a.mirror,
+        },
+    };
+    let out = convert::convert(&loaded, to, size, &resampler);
+    stages.done("resample");
+
+    let write = WriteOptions {
+        linear: a.linear,
+        png16: a.png16,
+        gpu_format: a.gpu_format,
+    };
+    let files: Vec<(PathBuf, Vec<u8>)> = match (to, out) {
+        (Kind::Faces, Output::Cube(cube)) => {
+            let ext = match face_format {
+                FileFormat::Jpeg => "jpg",
+                FileFormat::Png => "png",
+                FileFormat::Tga => "tga",
+                FileFormat::Hdr => "hdr",
+                _ => "exr",
+            };
+            let paths: Vec<PathBuf> = FACE_NAMES
+                .iter()
+                .map(|n| a.output.join(format!("{n}.{ext}")))
+                .collect();
+            refuse_inputs(&paths, &loaded.files)?;
+            std::fs::create_dir_all(&a.output)
+                .map_err(|e| Error::file(&a.output, io::io_msg(&e)))?;
+            let encoded: Vec<Result<Vec<u8>>> = {
+                use rayon::prelude::*;
+                paths
+                    .par_iter()
+                    .zip(cube.levels[0].par_iter())
+                    .map(|(p, f)| io::encode_image(p, f, &write))
+                    .collect()
+            };
+            paths
+                .into_iter()
+                .zip(encoded)
+                .map(|(p, e)| e.map(|b| (p, b)))
+                .collect::<Result<_>>()?
+        }
+        (Kind::Ktx2 | Kind::Dds, Output::Cube(cube)) => {
+            refuse_inputs(std::slice::from_ref(&a.output), &loaded.files)?;
+            let cube: CubeMap = cube.with_box_mips(a.levels);
+            vec![(
+                a.output.clone(),
+                io::encode_cube(&a.output, &cube, a.gpu_format)?,
+            )]
+        }
+        (_, Output::Image(img)) => {
+            refuse_inputs(std::slice::from_ref(&a.output), &loaded.files)?;
+            vec![(a.output.clone(), io::encode_image(&a.output, &img, &write)?)]
+        }
+        (_, Output::Cube(_)) => unreachable!("only faces and containers produce cube output"),
+    };
+    stages.done("encode");
+    io::write_all_atomic(&files)?;
+    stages.done("write");
+    stages.total();
+    Ok(())
+}
+
+/// The output layout: --to, or what the output's name implies.
+fn output_kind(a: &Args) -> Result<Kind> {
+    let by_name = FileFormat::from_extension(&a.output);
+    match (a.to, by_name) {
+        (Some(Kind::Ktx2), Some(FileFormat::Ktx2)) | (Some(Kind::Dds), Some(FileFormat::Dds)) => {
+            Ok(a.to.unwrap())
+        }
+        (Some(k @ (Kind::Ktx2 | Kind::Dds)), _) => Err(Error::file(
+            &a.output,
+            format!("--to {} needs an output named .{}", k.name(), k.name()),
+        )),
+        (Some(Kind::Faces), Some(_)) => Err(Error::file(
+            &a.output,
+            "--to faces writes a folder: give a folder name without an image extension",
+        )),
+        (Some(Kind::Faces), None) => Ok(Kind::Faces),
+        (Some(k), Some(f)) if f.is_container() => Err(Error::file(
+            &a.output,
+            format!(
+                "{} holds cube maps, not a {} image: use --to {}",
+                f.name(),
+                k.name(),
+                if f == FileFormat::Dds { "dds" } else { "ktx2" }
+            ),
+        )),
+        (Some(k), Some(_)) => Ok(k),
+        (Some(k), None) => Err(Error::file(
+            &a.output,
+            format!(
+                "a {} image needs a file name ending in .png .jpg .tga .hdr or .exr",
+                k.name()
+            ),
+        )),
+        (None, Some(FileFormat::Ktx2)) => Ok(Kind::Ktx2),
+        (None, Some(FileFormat::Dds)) => Ok(Kind::Dds),
+        (None, Some(_)) => Ok(Kind::Hcross),
+        (None, None) if a.output.extension().is_some() && !a.output.is_dir() => {
+            Err(io::unknown_ext(&a.output))
+        }
+        (None, None) => Ok(Kind::Faces),
+    }
+}
+
+fn face_format(a: &Args) -> Result<Option<FileFormat>> {
+    match &a.format {
+        None => Ok(None),
+        Some(f) => match FileFormat::from_ext_str(f) {
+            Some(ff) if !ff.is_container() => Ok(Some(ff)),
+            _ => Err(Error::usage(format!(
+                "--format {f}: face images are png, jpg, tga, hdr or exr"
+            ))),
+        },
+    }
+}
+
+/// Refuses to write over any input file.
+fn refuse_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<()> {
+    let canon = |p: &Path| std::fs::canonicalize(p).ok();
+    let ins: Vec<PathBuf> = inputs.iter().filter_map(|p| canon(p)).collect();
+    for o in outputs {
+        if let Some(c) = canon(o) {
+            if ins.contains(&c) {
+                return Err(Error::file(o, "refusing to overwrite an input file"));
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,65 @@
+//! `cubeforge info`: describe files.
+
+use cubeforge::io::{Limits, ReadOptions};
+use cubeforge::{info, Error, Result};
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Files to describe.
+    #[arg(required = true)]
+    pub files: Vec<PathBuf>,
+    /// Print JSON: one object for one file, an array for several.
+    #[arg(long)]
+    pub json: bool,
+    /// Treat 8- and 16-bit values as data (no sRGB decode) for the statistics.
+    #[arg(long)]
+    pub linear: bool,
+    /// Refuse images with more pixels than this.
+    #[arg(long, default_value_t = Limits::default().max_pixels)]
+    pub max_pixels: u64,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let opts = ReadOptions {
+        limits: Limits {
+            max_pixels: args.max_pixels,
+            ..Limits::default()
+        },
+        linear: args.linear,
+    };
+    let mut reports = Vec::new();
+    let mut failed = 0;
+    for f in &args.files {
+        match info::describe(f, &opts) {
+            Ok(r) => reports.push(r),
+            Err(e) => {
+                eprintln!("cubeforge: error: {e}");
+                failed += 1;
+            }
+        }
+    }
+    if args.json {
+        let text = if args.files.len() == 1 {
+            reports
+                .first()
+                .map(|r| serde_json::to_string_pretty(r).unwrap_or_default())
+        } else {
+            serde_json::to_string_pretty(&reports).ok()
+        };
+        if let Some(t) = text {
+            println!("{t}");
+        }
+    } else {
+        for r in &reports {
+            println!("{r}");
+        }
+    }
+    if failed > 0 {
+        return Err(Error::usage(format!(
+            "{failed} of {} files could not be read",
+            args.files.len()
+        )));
+    }
+    Ok(())
+}

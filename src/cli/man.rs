@@ -1,0 +1,30 @@
+//! Man pages generated from the clap definitions (clap_mangen), so they never drift.
+
+use cubeforge::{Error, Result};
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Folder that receives cubeforge.1 and one page per command.
+    pub dir: PathBuf,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let mut cmd = super::command();
+    cmd.build();
+    let mut pages = vec![("cubeforge.1".to_string(), cmd.clone())];
+    for sub in cmd.get_subcommands().filter(|s| !s.is_hide_set()) {
+        let name = format!("cubeforge-{}", sub.get_name());
+        pages.push((format!("{name}.1"), sub.clone().name(name)));
+    }
+    std::fs::create_dir_all(&args.dir).map_err(|e| Error::file(&args.dir, e.to_string()))?;
+    let mut files = Vec::new();
+    for (file, page) in pages {
+        let mut buf = Vec::new();
+        clap_mangen::Man::new(page)
+            .render(&mut buf)
+            .map_err(|e| Error::file(&file, e.to_string()))?;
+        files.push((args.dir.join(file), buf));
+    }
+    cubeforge::io::write_all_atomic(&files)
+}

@@ -1,0 +1,104 @@
+//! Command-line front end: one file per command. Parses and reports; the library does the work.
+
+mod convert;
+mod fixtures;
+mod info;
+mod man;
+
+use clap::{Parser, Subcommand};
+use std::time::Instant;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "cubeforge",
+    version,
+    about = "Turn photographs into cube maps and check them",
+    long_about = "Turn photographs into cube maps and check them: convert between equirect panoramas, \
+                  face images, crosses, strips, mirror balls, angular maps, KTX2 and DDS; \
+                  describe what a file holds."
+)]
+pub struct Cli {
+    /// Print the time each stage takes (decode, resample, encode, write).
+    #[arg(short, long, global = true)]
+    pub verbose: bool,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Convert an environment map from any layout to any other.
+    Convert(convert::Args),
+    /// Describe files: layout, sizes, mip levels, pixel format, colour space, statistics.
+    Info(info::Args),
+    /// Write the man pages (man/*.1) from these definitions.
+    #[command(hide = true)]
+    Man(man::Args),
+    /// Write the project's generated test inputs (fixtures/).
+    #[command(hide = true)]
+    Fixtures(fixtures::Args),
+}
+
+/// Times stages and prints them with -v.
+pub struct Stages {
+    verbose: bool,
+    last: Instant,
+    start: Instant,
+}
+
+impl Stages {
+    pub fn new(verbose: bool) -> Self {
+        let now = Instant::now();
+        Stages {
+            verbose,
+            last: now,
+            start: now,
+        }
+    }
+    /// Ends the stage that began at the previous call.
+    pub fn done(&mut self, name: &str) {
+        let now = Instant::now();
+        if self.verbose {
+            eprintln!(
+                "cubeforge: {name:<10} {:8.3} s",
+                (now - self.last).as_secs_f64()
+            );
+        }
+        self.last = now;
+    }
+    pub fn total(&self) {
+        if self.verbose {
+            eprintln!(
+                "cubeforge: {:<10} {:8.3} s",
+                "total",
+                self.start.elapsed().as_secs_f64()
+            );
+        }
+    }
+}
+
+pub fn warn(msg: impl std::fmt::Display) {
+    eprintln!("cubeforge: warning: {msg}");
+}
+
+pub fn run() -> i32 {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Convert(a) => convert::run(a, cli.verbose),
+        Command::Info(a) => info::run(a),
+        Command::Man(a) => man::run(a),
+        Command::Fixtures(a) => fixtures::run(a),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("cubeforge: error: {e}");
+            1
+        }
+    }
+}
+
+/// The clap definition, for the man pages.
+pub fn command() -> clap::Command {
+    <Cli as clap::CommandFactory>::command()
+}
