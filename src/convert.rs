@@ -37,17 +37,29 @@ impl Loaded {
         }
     }
 
-    /// Prepares the input for lookups by direction, with a pyramid for antialiasing.
-    pub fn environment(&self) -> Box<dyn Environment + '_> {
+    /// Prepares the input for lookups by direction, with the pyramid levels an output whose
+    /// texels span at most `max_footprint` radians needs for antialiasing (None: all levels).
+    pub fn environment(&self, max_footprint: Option<f32>) -> Box<dyn Environment + '_> {
+        let levels = |texel_angle: f32| {
+            max_footprint.map(|f| {
+                // Levels down to where the footprint covers ~4 texels, plus one to spare.
+                let ratio = f / texel_angle;
+                (ratio / 4.0).log2().ceil().max(0.0) as usize + 2
+            })
+        };
         match &self.source {
             Source::Cube(c) => {
-                // Box mips of level 0 (any stored levels may be prefiltered, not plain mips).
+                // Box mips of level 0 (stored levels may be prefiltered, not plain mips).
                 let base = CubeMap {
                     levels: vec![c.levels[0].clone()],
                 };
-                Box::new(CubeSampler::new(&base.with_box_mips(None)))
+                let angle = std::f32::consts::FRAC_PI_2 / c.size() as f32;
+                Box::new(CubeSampler::new(&base.with_box_mips(levels(angle))))
             }
-            Source::Projection(p, img) => Box::new(ImageEnv::new(*p, img.clone())),
+            Source::Projection(p, img) => {
+                let angle = ImageEnv::new(*p, img, Some(1)).texel_angle();
+                Box::new(ImageEnv::new(*p, img, levels(angle)))
+            }
         }
     }
 }
@@ -209,12 +221,13 @@ pub fn convert(loaded: &Loaded, to: Kind, size: usize, resampler: &Resampler) ->
         Source::Cube(c) if as_is && c.size() == size => CubeMap {
             levels: vec![c.levels[0].clone()],
         },
-        _ => resampler.to_cube(loaded.environment().as_ref(), size),
+        _ => resampler.to_cube(loaded.environment(Some(2.0 / size as f32)).as_ref(), size),
     };
     match to.projection() {
         Some(p) => {
             let (w, h) = to.image_size(size);
-            Output::Image(resampler.to_projection(loaded.environment().as_ref(), p, w, h))
+            let footprint = (p == layout::Projection::Equirect).then(|| std::f32::consts::PI / h as f32);
+            Output::Image(resampler.to_projection(loaded.environment(footprint).as_ref(), p, w, h))
         }
         None if to.is_cells() => Output::Image(cross::assemble(to, &cube(size).levels[0])),
         None => Output::Cube(cube(size)),

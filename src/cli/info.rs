@@ -33,6 +33,8 @@ pub fn run(args: Args) -> Result<()> {
     for f in &args.files {
         match info::describe(f, &opts) {
             Ok(r) => reports.push(r),
+            // One file: its error is the one line (no summary after it).
+            Err(e) if args.files.len() == 1 => return Err(e),
             Err(e) => {
                 eprintln!("cubeforge: error: {e}");
                 failed += 1;

@@ -13,7 +13,10 @@ pub fn run(args: Args) -> Result<()> {
     let mut cmd = super::command();
     cmd.build();
     let mut pages = vec![("cubeforge.1".to_string(), cmd.clone())];
-    for sub in cmd.get_subcommands().filter(|s| !s.is_hide_set()) {
+    for sub in cmd
+        .get_subcommands()
+        .filter(|s| !s.is_hide_set() && s.get_name() != "help")
+    {
         let name = format!("cubeforge-{}", sub.get_name());
         pages.push((format!("{name}.1"), sub.clone().name(name)));
     }

@@ -27,6 +27,10 @@ pub fn decode(
 ) -> Result<(Decoded, Meta)> {
     let what = f.name();
     let err = |e: ::image::ImageError| Error::file(path, format!("cannot decode {what}: {e}"));
+    // The PNG decoder reads on to the first IDAT before it tells the size: check IHDR first.
+    if let Some((w, h)) = png_ihdr_size(bytes).filter(|_| f == FileFormat::Png) {
+        opts.limits.check(path, w as u64, h as u64)?;
+    }
     let reader = ::image::ImageReader::with_format(Cursor::new(bytes), image_format(f));
     let mut decoder = reader.into_decoder().map_err(err)?;
     let (w, h) = decoder.dimensions();
@@ -39,10 +43,16 @@ pub fn decode(
     let (w, h) = (w as usize, h as usize);
     let float = matches!(color, ColorType::Rgb32F | ColorType::Rgba32F);
     let srgb = !float && !opts.linear;
-    let pixels: Vec<Vec4> = if float {
+    let pixels: Vec<Vec4> = if let DynamicImage::ImageRgb32F(buf) = &img {
+        // The common HDR case, without an intermediate RGBA copy.
+        buf.as_raw()
+            .par_chunks_exact(3)
+            .map(|c| Vec4::new(c[0], c[1], c[2], 1.0))
+            .collect()
+    } else if float {
         img.into_rgba32f()
             .into_raw()
-            .chunks_exact(4)
+            .par_chunks_exact(4)
             .map(|c| Vec4::new(c[0], c[1], c[2], c[3]))
             .collect()
     } else if matches!(color.bytes_per_pixel() / color.channel_count(), 1) {
@@ -103,6 +113,13 @@ pub fn decode(
         }),
         meta,
     ))
+}
+
+/// Width and height from a PNG's IHDR chunk (which must come first), if present.
+fn png_ihdr_size(bytes: &[u8]) -> Option<(u32, u32)> {
+    let be = |i: usize| Some(u32::from_be_bytes(bytes.get(i..i + 4)?.try_into().ok()?));
+    (bytes.get(12..16)? == b"IHDR").then_some(())?;
+    Some((be(16)?, be(20)?))
 }
 
 fn pixel_format_name(c: ColorType, f: FileFormat) -> String {

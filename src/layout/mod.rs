@@ -164,30 +164,46 @@ fn flip(st: Vec2) -> Vec2 {
 }
 
 /// A panorama, mirror ball or angular map prepared for lookups by direction, with a pyramid
-/// of 2x2-averaged levels so a coarse output can be antialiased cheaply.
-pub struct ImageEnv {
+/// of 2x2-averaged levels so a coarse output can be antialiased cheaply. Level 0 is borrowed.
+pub struct ImageEnv<'a> {
     projection: Projection,
+    base: &'a Image,
+    /// Levels 1 and up.
     pyramid: Vec<Image>,
 }
 
-impl ImageEnv {
-    pub fn new(projection: Projection, image: Image) -> ImageEnv {
-        let mut pyramid = vec![image];
-        while pyramid.last().unwrap().height > 8 {
-            let next = pyramid.last().unwrap().downsample_2x();
+impl<'a> ImageEnv<'a> {
+    /// Prepares `levels` pyramid levels (None: down to 8 texels high).
+    pub fn new(projection: Projection, base: &'a Image, levels: Option<usize>) -> ImageEnv<'a> {
+        let mut pyramid: Vec<Image> = Vec::new();
+        let want = levels.unwrap_or(usize::MAX);
+        loop {
+            let last = pyramid.last().unwrap_or(base);
+            if last.height <= 8 || pyramid.len() + 1 >= want {
+                break;
+            }
+            let next = last.downsample_2x();
             pyramid.push(next);
         }
         ImageEnv {
             projection,
+            base,
             pyramid,
+        }
+    }
+
+    fn level(&self, level: usize) -> &Image {
+        match level {
+            0 => self.base,
+            l => &self.pyramid[(l - 1).min(self.pyramid.len().saturating_sub(1))],
         }
     }
 }
 
-impl Environment for ImageEnv {
+impl Environment for ImageEnv<'_> {
     #[inline]
     fn sample(&self, d: Vec3, level: usize, interp: Interp) -> Vec4 {
-        let img = &self.pyramid[level.min(self.pyramid.len() - 1)];
+        let img = self.level(level);
         let mut uv = self.projection.to_image(d);
         let wrap = self.projection == Projection::Equirect;
         if !wrap {
@@ -208,7 +224,7 @@ impl Environment for ImageEnv {
     }
 
     fn texel_angle(&self) -> f32 {
-        let img = &self.pyramid[0];
+        let img = self.base;
         match self.projection {
             Projection::Equirect => std::f32::consts::PI / img.height as f32,
             // Angle per unit radius is 2 at the ball's centre, pi everywhere on an angular map.
@@ -218,6 +234,6 @@ impl Environment for ImageEnv {
     }
 
     fn levels(&self) -> usize {
-        self.pyramid.len()
+        self.pyramid.len() + 1
     }
 }
