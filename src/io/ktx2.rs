@@ -1,17 +1,451 @@
-//! KTX2 cube maps (stub, being written).
-use super::{Decoded, GpuFormat, Limits, Meta};
+//! KTX2 cube maps with every mip level, in uncompressed RGBA16F, RGBA32F or RGBA8 (sRGB or
+//! UNORM), written and read by hand after the Khronos KTX 2.0 specification.
+//!
+//! File layout as written: the 80-byte header, the level index (one entry per level, level 0
+//! first), a Data Format Descriptor with one basic block, one key/value pair (`KTXwriter`), then
+//! the levels, smallest first, each holding its six faces in order +X -X +Y -Y +Z -Z and starting
+//! on a multiple of lcm(texel size, 4). Nothing in the output depends on the time or the machine,
+//! so the same cube map always gives the same bytes.
+//!
+//! The reader checks every header field, index entry and size against the file's length with
+//! checked arithmetic, and the declared size against [`Limits`], before it allocates any texels.
+
+use super::{Decoded, FileFormat, GpuFormat, Limits, Meta};
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
+use crate::image::{ColorSpace, Image};
 use std::path::Path;
 
+/// The 12 bytes every KTX2 file starts with ("«KTX 20»\r\n\x1A\n").
 pub const IDENTIFIER: [u8; 12] = [
     0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A,
 ];
 
-pub fn encode(_cube: &CubeMap, _format: GpuFormat) -> Vec<u8> {
-    unimplemented!()
+/// Header (identifier, nine UInt32 fields) plus the index (four UInt32, two UInt64).
+const HEADER_LEN: usize = 80;
+/// One level-index entry: byteOffset, byteLength, uncompressedByteLength (UInt64 each).
+const LEVEL_ENTRY_LEN: usize = 24;
+
+const VK_FORMAT_R8G8B8A8_UNORM: u32 = 37;
+const VK_FORMAT_R8G8B8A8_SRGB: u32 = 43;
+const VK_FORMAT_R16G16B16A16_SFLOAT: u32 = 97;
+const VK_FORMAT_R32G32B32A32_SFLOAT: u32 = 109;
+
+// Khronos Data Format Specification constants used by the basic descriptor block.
+const KHR_DF_VENDORID_KHRONOS: u32 = 0;
+const KHR_DF_KHR_DESCRIPTORTYPE_BASICFORMAT: u32 = 0;
+const KHR_DF_VERSIONNUMBER_1_3: u32 = 2;
+const KHR_DF_MODEL_RGBSDA: u32 = 1;
+const KHR_DF_PRIMARIES_BT709: u32 = 1;
+const KHR_DF_TRANSFER_LINEAR: u32 = 1;
+const KHR_DF_TRANSFER_SRGB: u32 = 2;
+const KHR_DF_FLAG_ALPHA_STRAIGHT: u32 = 0;
+const KHR_DF_CHANNEL_RGBSDA_RED: u32 = 0;
+const KHR_DF_CHANNEL_RGBSDA_GREEN: u32 = 1;
+const KHR_DF_CHANNEL_RGBSDA_BLUE: u32 = 2;
+const KHR_DF_CHANNEL_RGBSDA_ALPHA: u32 = 15;
+const KHR_DF_SAMPLE_DATATYPE_LINEAR: u32 = 0x10;
+const KHR_DF_SAMPLE_DATATYPE_SIGNED: u32 = 0x40;
+const KHR_DF_SAMPLE_DATATYPE_FLOAT: u32 = 0x80;
+/// Bytes of a basic descriptor block before its samples.
+const DFD_BLOCK_HEADER_LEN: u32 = 24;
+/// Bytes of one sample description.
+const DFD_SAMPLE_LEN: u32 = 16;
+
+const WRITER_KEY: &str = "KTXwriter";
+
+fn vk_format(format: GpuFormat) -> u32 {
+    match format {
+        GpuFormat::Rgba16f => VK_FORMAT_R16G16B16A16_SFLOAT,
+        GpuFormat::Rgba32f => VK_FORMAT_R32G32B32A32_SFLOAT,
+        GpuFormat::Rgba8Srgb => VK_FORMAT_R8G8B8A8_SRGB,
+        GpuFormat::Rgba8 => VK_FORMAT_R8G8B8A8_UNORM,
+    }
 }
 
-pub fn decode(_bytes: &[u8], path: &Path, _limits: &Limits) -> Result<(Decoded, Meta)> {
-    Err(Error::file(path, "KTX2 reading is not written yet"))
+fn from_vk_format(vk: u32) -> Option<GpuFormat> {
+    Some(match vk {
+        VK_FORMAT_R16G16B16A16_SFLOAT => GpuFormat::Rgba16f,
+        VK_FORMAT_R32G32B32A32_SFLOAT => GpuFormat::Rgba32f,
+        VK_FORMAT_R8G8B8A8_SRGB => GpuFormat::Rgba8Srgb,
+        VK_FORMAT_R8G8B8A8_UNORM => GpuFormat::Rgba8,
+        _ => return None,
+    })
+}
+
+/// Size of the data type, for endian conversion: bytes per channel.
+fn type_size(format: GpuFormat) -> u32 {
+    format.bytes_per_texel() as u32 / 4
+}
+
+fn is_float(format: GpuFormat) -> bool {
+    matches!(format, GpuFormat::Rgba16f | GpuFormat::Rgba32f)
+}
+
+/// Alignment of every level's data: lcm(texel block size, 4).
+fn level_alignment(format: GpuFormat) -> u64 {
+    let t = format.bytes_per_texel() as u64;
+    t / gcd(t, 4) * 4
+}
+
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
+
+fn align_up(v: usize, a: usize) -> usize {
+    v.div_ceil(a) * a
+}
+
+/// The Data Format Descriptor: dfdTotalSize, then one basic block with a sample per channel.
+fn data_format_descriptor(format: GpuFormat) -> Vec<u8> {
+    let bpt = format.bytes_per_texel() as u32;
+    let bits = bpt * 8 / 4;
+    let block_size = DFD_BLOCK_HEADER_LEN + 4 * DFD_SAMPLE_LEN;
+    let transfer = if format == GpuFormat::Rgba8Srgb {
+        KHR_DF_TRANSFER_SRGB
+    } else {
+        KHR_DF_TRANSFER_LINEAR
+    };
+    let mut words: Vec<u32> = vec![
+        4 + block_size,
+        KHR_DF_VENDORID_KHRONOS | (KHR_DF_KHR_DESCRIPTORTYPE_BASICFORMAT << 17),
+        KHR_DF_VERSIONNUMBER_1_3 | (block_size << 16),
+        KHR_DF_MODEL_RGBSDA
+            | (KHR_DF_PRIMARIES_BT709 << 8)
+            | (transfer << 16)
+            | (KHR_DF_FLAG_ALPHA_STRAIGHT << 24),
+        0,   // texelBlockDimension0..3: a 1x1x1x1 block (stored as value - 1)
+        bpt, // bytesPlane0; bytesPlane1..3 are 0
+        0,   // bytesPlane4..7
+    ];
+    let channels = [
+        KHR_DF_CHANNEL_RGBSDA_RED,
+        KHR_DF_CHANNEL_RGBSDA_GREEN,
+        KHR_DF_CHANNEL_RGBSDA_BLUE,
+        KHR_DF_CHANNEL_RGBSDA_ALPHA,
+    ];
+    for (i, channel) in channels.into_iter().enumerate() {
+        let mut qualifiers = 0;
+        if is_float(format) {
+            qualifiers |= KHR_DF_SAMPLE_DATATYPE_FLOAT | KHR_DF_SAMPLE_DATATYPE_SIGNED;
+        }
+        // Alpha is never sRGB-encoded: the spec asks for the LINEAR bit on it when the
+        // transfer function is not linear.
+        if channel == KHR_DF_CHANNEL_RGBSDA_ALPHA && transfer != KHR_DF_TRANSFER_LINEAR {
+            qualifiers |= KHR_DF_SAMPLE_DATATYPE_LINEAR;
+        }
+        let (lower, upper) = if is_float(format) {
+            (0xBF80_0000, 0x3F80_0000) // -1.0f and 1.0f
+        } else {
+            (0, 255)
+        };
+        words.push((i as u32 * bits) | ((bits - 1) << 16) | ((channel | qualifiers) << 24));
+        words.push(0); // samplePosition0..3
+        words.push(lower);
+        words.push(upper);
+    }
+    words.iter().flat_map(|w| w.to_le_bytes()).collect()
+}
+
+/// Key/value data: one `KTXwriter` entry with its padding to 4 bytes.
+fn key_value_data() -> Vec<u8> {
+    let mut kv = Vec::new();
+    kv.extend_from_slice(WRITER_KEY.as_bytes());
+    kv.push(0);
+    kv.extend_from_slice(format!("cubeforge {}", env!("CARGO_PKG_VERSION")).as_bytes());
+    kv.push(0);
+    let mut out = Vec::with_capacity(4 + kv.len() + 3);
+    out.extend_from_slice(&(kv.len() as u32).to_le_bytes());
+    out.extend_from_slice(&kv);
+    out.resize(align_up(out.len(), 4), 0);
+    out
+}
+
+/// Encodes every level of `cube` as a KTX2 cube map in `format`.
+pub fn encode(cube: &CubeMap, format: GpuFormat) -> Vec<u8> {
+    let bpt = format.bytes_per_texel();
+    let size = cube.size();
+    let level_count = cube.levels.len();
+    let level_len = |l: usize| {
+        let n = cube.levels[l][0].width;
+        6 * n * n * bpt
+    };
+
+    let dfd = data_format_descriptor(format);
+    let kvd = key_value_data();
+    let dfd_offset = HEADER_LEN + level_count * LEVEL_ENTRY_LEN;
+    let kvd_offset = dfd_offset + dfd.len();
+    let align = level_alignment(format) as usize;
+
+    // Levels go into the file smallest first; each starts on the alignment.
+    let mut offsets = vec![0usize; level_count];
+    let mut end = kvd_offset + kvd.len();
+    for l in (0..level_count).rev() {
+        offsets[l] = align_up(end, align);
+        end = offsets[l] + level_len(l);
+    }
+
+    let mut out = Vec::with_capacity(end);
+    out.extend_from_slice(&IDENTIFIER);
+    for v in [
+        vk_format(format),
+        type_size(format),
+        size as u32, // pixelWidth
+        size as u32, // pixelHeight
+        0,           // pixelDepth
+        0,           // layerCount
+        6,           // faceCount
+        level_count as u32,
+        0, // supercompressionScheme: none
+        dfd_offset as u32,
+        dfd.len() as u32,
+        kvd_offset as u32,
+        kvd.len() as u32,
+    ] {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out.extend_from_slice(&0u64.to_le_bytes()); // sgdByteOffset
+    out.extend_from_slice(&0u64.to_le_bytes()); // sgdByteLength
+    for (l, &offset) in offsets.iter().enumerate() {
+        let len = level_len(l) as u64;
+        out.extend_from_slice(&(offset as u64).to_le_bytes());
+        out.extend_from_slice(&len.to_le_bytes()); // byteLength
+        out.extend_from_slice(&len.to_le_bytes()); // uncompressedByteLength
+    }
+    out.extend_from_slice(&dfd);
+    out.extend_from_slice(&kvd);
+    for l in (0..level_count).rev() {
+        out.resize(offsets[l], 0); // mipPadding
+        for face in &cube.levels[l] {
+            format.encode_into(&face.pixels, &mut out);
+        }
+    }
+    debug_assert_eq!(out.len(), end);
+    out
+}
+
+fn le_u32(bytes: &[u8], offset: usize) -> Option<u32> {
+    let b = bytes.get(offset..offset.checked_add(4)?)?;
+    Some(u32::from_le_bytes(b.try_into().ok()?))
+}
+
+fn le_u64(bytes: &[u8], offset: usize) -> Option<u64> {
+    let b = bytes.get(offset..offset.checked_add(8)?)?;
+    Some(u64::from_le_bytes(b.try_into().ok()?))
+}
+
+/// Checks that `len` bytes from `offset` lie inside a file of `file_len` bytes.
+fn in_file(offset: u64, len: u64, file_len: usize) -> bool {
+    offset
+        .checked_add(len)
+        .is_some_and(|end| end <= file_len as u64)
+}
+
+/// Reads a KTX2 cube map with all its levels.
+pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
+    let err = |msg: String| Error::file(path, msg);
+    let file_len = bytes.len();
+    if !bytes.starts_with(&IDENTIFIER) && !IDENTIFIER.starts_with(bytes) {
+        return Err(err("not a KTX2 file (its identifier is missing)".into()));
+    }
+    if file_len < HEADER_LEN {
+        return Err(err(format!(
+            "truncated KTX2 file: {file_len} bytes, shorter than the {HEADER_LEN}-byte header"
+        )));
+    }
+    let field = |i: usize| le_u32(bytes, 12 + 4 * i).unwrap_or(0);
+    let vk = field(0);
+    let type_size_field = field(1);
+    let width = field(2);
+    let height = field(3);
+    let depth = field(4);
+    let layer_count = field(5);
+    let face_count = field(6);
+    let level_count_field = field(7);
+    let scheme = field(8);
+    let dfd_offset = field(9);
+    let dfd_len = field(10);
+    let kvd_offset = field(11);
+    let kvd_len = field(12);
+    let sgd_offset = le_u64(bytes, 64).unwrap_or(0);
+    let sgd_len = le_u64(bytes, 72).unwrap_or(0);
+
+    if face_count != 6 {
+        return Err(err(format!("not a cube map (faceCount {face_count})")));
+    }
+    if layer_count > 0 {
+        return Err(err("cube-map arrays are not supported".into()));
+    }
+    if depth != 0 {
+        return Err(err(format!(
+            "invalid cube map: pixelDepth is {depth}, but a cube map's must be 0"
+        )));
+    }
+    if scheme != 0 {
+        let name = match scheme {
+            1 => "BasisLZ",
+            2 => "Zstandard",
+            3 => "ZLIB",
+            _ => "unknown",
+        };
+        return Err(err(format!(
+            "supercompressed KTX2 (scheme {scheme}, {name}) is not supported: write it without supercompression"
+        )));
+    }
+    let format = from_vk_format(vk).ok_or_else(|| {
+        err(format!(
+            "unsupported vkFormat {vk} (cubeforge reads RGBA16F, RGBA32F, RGBA8 sRGB/UNORM)"
+        ))
+    })?;
+    if type_size_field != type_size(format) {
+        return Err(err(format!(
+            "invalid header: typeSize is {type_size_field}, but {} needs {}",
+            format.name(),
+            type_size(format)
+        )));
+    }
+    limits.check_cube(path, width as u64, height as u64)?;
+    if width != height {
+        return Err(err(format!(
+            "invalid cube map: faces must be square, but they are {width}x{height}"
+        )));
+    }
+    let size = width as usize;
+    let max_levels = CubeMap::full_chain_len(size);
+    // levelCount 0 asks the loader to make the mips; the file then holds level 0 only.
+    let level_count = (level_count_field as usize).max(1);
+    if level_count > max_levels {
+        return Err(err(format!(
+            "invalid header: levelCount is {level_count_field}, but a {size}x{size} face has at most {max_levels} levels"
+        )));
+    }
+    let index_end = HEADER_LEN + level_count * LEVEL_ENTRY_LEN;
+    if index_end > file_len {
+        return Err(err(format!(
+            "truncated KTX2 file: {file_len} bytes, but its level index ends at byte {index_end}"
+        )));
+    }
+
+    // Data Format Descriptor and key/value data: only their bounds matter to this reader,
+    // the vkFormat says everything about the texels.
+    if dfd_len < 4 {
+        return Err(err(
+            "invalid KTX2 file: it has no data format descriptor".into()
+        ));
+    }
+    if !in_file(dfd_offset as u64, dfd_len as u64, file_len) {
+        return Err(err(format!(
+            "invalid KTX2 file: its data format descriptor ({dfd_len} bytes at {dfd_offset}) does not fit in the file ({file_len} bytes)"
+        )));
+    }
+    let dfd_total = le_u32(bytes, dfd_offset as usize).unwrap_or(0);
+    if dfd_total != dfd_len {
+        return Err(err(format!(
+            "invalid KTX2 file: dfdTotalSize is {dfd_total} but dfdByteLength is {dfd_len}"
+        )));
+    }
+    if !in_file(kvd_offset as u64, kvd_len as u64, file_len) {
+        return Err(err(format!(
+            "invalid KTX2 file: its key/value data ({kvd_len} bytes at {kvd_offset}) does not fit in the file ({file_len} bytes)"
+        )));
+    }
+    if !in_file(sgd_offset, sgd_len, file_len) {
+        return Err(err(format!(
+            "invalid KTX2 file: its supercompression data ({sgd_len} bytes at {sgd_offset}) does not fit in the file ({file_len} bytes)"
+        )));
+    }
+
+    // Every level's place and size, checked before anything is allocated.
+    let bpt = format.bytes_per_texel() as u64;
+    let mut spans = Vec::with_capacity(level_count);
+    for l in 0..level_count {
+        let entry = HEADER_LEN + l * LEVEL_ENTRY_LEN;
+        let offset = le_u64(bytes, entry).unwrap_or(0);
+        let len = le_u64(bytes, entry + 8).unwrap_or(0);
+        let uncompressed = le_u64(bytes, entry + 16).unwrap_or(0);
+        let n = (size >> l).max(1) as u64;
+        let expected = n
+            .checked_mul(n)
+            .and_then(|t| t.checked_mul(6 * bpt))
+            .ok_or_else(|| err("invalid header: level size overflows".into()))?;
+        if len != expected || uncompressed != expected {
+            return Err(err(format!(
+                "invalid level index: level {l} claims {len} bytes ({uncompressed} uncompressed), but six {n}x{n} {} faces take {expected}",
+                format.name()
+            )));
+        }
+        if !in_file(offset, len, file_len) {
+            return Err(err(format!(
+                "truncated KTX2 file: level {l} needs bytes {offset} to {}, but the file has {file_len}",
+                offset.saturating_add(len)
+            )));
+        }
+        // Both fit in the file, so in usize.
+        spans.push((offset as usize, n as usize));
+    }
+
+    let mut levels = Vec::with_capacity(level_count);
+    for &(offset, n) in &spans {
+        let face_len = n * n * bpt as usize;
+        let faces: [Image; 6] = std::array::from_fn(|f| {
+            let start = offset + f * face_len;
+            Image {
+                width: n,
+                height: n,
+                pixels: format.decode(&bytes[start..start + face_len], n * n),
+            }
+        });
+        levels.push(faces);
+    }
+
+    let meta = Meta {
+        file_format: FileFormat::Ktx2,
+        pixel_format: format.name().into(),
+        color_space: if format == GpuFormat::Rgba8Srgb {
+            ColorSpace::Srgb
+        } else {
+            ColorSpace::Linear
+        },
+        hdr: is_float(format),
+        replaced_values: 0,
+    };
+    Ok((Decoded::Cube(CubeMap { levels }), meta))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn descriptor_matches_the_spec_layout() {
+        let d = data_format_descriptor(GpuFormat::Rgba16f);
+        assert_eq!(d.len(), 4 + 24 + 4 * 16);
+        let w = |i: usize| u32::from_le_bytes(d[4 * i..4 * i + 4].try_into().unwrap());
+        assert_eq!(w(0), 92); // dfdTotalSize
+        assert_eq!(w(2), 2 | (88 << 16)); // version 2, block size 88
+        assert_eq!(w(3) & 0xFF, KHR_DF_MODEL_RGBSDA);
+        assert_eq!((w(3) >> 16) & 0xFF, KHR_DF_TRANSFER_LINEAR);
+        assert_eq!(w(5), 8); // bytesPlane0
+                             // Blue sample: offset 32, 16 bits, float + signed.
+        assert_eq!(w(7 + 8), 32 | (15 << 16) | ((0xC0 | 2) << 24));
+        assert_eq!(w(7 + 10), 0xBF80_0000);
+
+        let d = data_format_descriptor(GpuFormat::Rgba8Srgb);
+        let w = |i: usize| u32::from_le_bytes(d[4 * i..4 * i + 4].try_into().unwrap());
+        assert_eq!((w(3) >> 16) & 0xFF, KHR_DF_TRANSFER_SRGB);
+        // Alpha sample: offset 24, 8 bits, linear qualifier, 0..255.
+        assert_eq!(w(7 + 12), 24 | (7 << 16) | ((0x10 | 15) << 24));
+        assert_eq!(w(7 + 15), 255);
+    }
+
+    #[test]
+    fn alignment_is_lcm_with_4() {
+        assert_eq!(level_alignment(GpuFormat::Rgba8), 4);
+        assert_eq!(level_alignment(GpuFormat::Rgba16f), 8);
+        assert_eq!(level_alignment(GpuFormat::Rgba32f), 16);
+    }
 }

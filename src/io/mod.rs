@@ -49,6 +49,23 @@ impl Limits {
     }
 }
 
+impl Limits {
+    /// Checks a cube map's declared face size: all six faces count against the pixel limit.
+    pub fn check_cube(&self, path: &Path, w: u64, h: u64) -> Result<()> {
+        self.check(path, w, h)?;
+        if w.saturating_mul(h).saturating_mul(6) > self.max_pixels {
+            return Err(Error::file(
+                path,
+                format!(
+                    "cube map claims six {w}x{h} faces, over the limit of {} pixels; raise it with --max-pixels if the file is genuine",
+                    self.max_pixels
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// File formats, told apart by their content (TGA, which has no signature, by its name).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
