@@ -20,7 +20,12 @@ fn main() {
             antialias: false,
             ..Resampler::default()
         }
-        .to_projection(&FnEnv(synthetic::demo_sky), Projection::Equirect, 4096, 2048);
+        .to_projection(
+            &FnEnv(synthetic::demo_sky),
+            Projection::Equirect,
+            4096,
+            2048,
+        );
         let bytes = io::encode_image(&input, &img, &WriteOptions::default()).unwrap();
         std::fs::write(&input, bytes).unwrap();
     }
@@ -31,7 +36,8 @@ fn main() {
         let loaded =
             convert::load(std::slice::from_ref(&input), None, &ReadOptions::default()).unwrap();
         let t1 = Instant::now();
-        let Output::Cube(cube) = convert::convert(&loaded, Kind::Faces, 1024, &Resampler::default())
+        let Output::Cube(cube) =
+            convert::convert(&loaded, Kind::Faces, 1024, &Resampler::default())
         else {
             unreachable!()
         };

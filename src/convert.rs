@@ -226,7 +226,8 @@ pub fn convert(loaded: &Loaded, to: Kind, size: usize, resampler: &Resampler) ->
     match to.projection() {
         Some(p) => {
             let (w, h) = to.image_size(size);
-            let footprint = (p == layout::Projection::Equirect).then(|| std::f32::consts::PI / h as f32);
+            let footprint =
+                (p == layout::Projection::Equirect).then(|| std::f32::consts::PI / h as f32);
             Output::Image(resampler.to_projection(loaded.environment(footprint).as_ref(), p, w, h))
         }
         None if to.is_cells() => Output::Image(cross::assemble(to, &cube(size).levels[0])),

@@ -224,30 +224,58 @@ impl CubeSampler {
     }
 
     /// Trilinear lookup: bilinear in the two levels around fractional `lod`, blended.
+    #[inline]
     pub fn sample_lod(&self, d: Vec3, lod: f32) -> Vec4 {
         let max = (self.levels.len() - 1) as f32;
         let lod = lod.clamp(0.0, max);
-        let l0 = lod.floor() as usize;
-        let frac = lod - l0 as f32;
-        let a = self.sample(d, l0, Interp::Bilinear);
-        if frac <= 0.0 || l0 + 1 >= self.levels.len() {
+        let l0 = lod as usize;
+        self.sample_split(d, l0, lod - l0 as f32)
+    }
+
+    /// Trilinear lookup with the level already split into integer level and fraction.
+    #[inline]
+    pub fn sample_split(&self, d: Vec3, level: usize, frac: f32) -> Vec4 {
+        let a = self.bilinear(d, level);
+        if frac <= 0.0 || level + 1 >= self.levels.len() {
             return a;
         }
-        a.lerp(self.sample(d, l0 + 1, Interp::Bilinear), frac)
+        a.lerp(self.bilinear(d, level + 1), frac)
+    }
+
+    /// Bilinear lookup in one level. The border makes every tap land inside the bordered
+    /// face, so no clamping or wrapping is needed: the hot path of every filter.
+    #[inline(always)]
+    pub fn bilinear(&self, d: Vec3, level: usize) -> Vec4 {
+        let (n, faces) = &self.levels[level];
+        let (face, s, t) = dir_face(d);
+        // Continuous coordinates minus half a texel; always >= BORDER - 0.5 > 0, so the
+        // truncating cast is a floor.
+        let x = (s * *n as f32 + (BORDER as f32 - 0.5)).max(0.0);
+        let y = (t * *n as f32 + (BORDER as f32 - 0.5)).max(0.0);
+        let (xi, yi) = (x as usize, y as usize);
+        let (ax, ay) = (x - xi as f32, y - yi as f32);
+        let img = &faces[face];
+        let w = img.width;
+        let i = (yi.min(w - 2)) * w + xi.min(w - 2);
+        let p = &img.pixels;
+        let top = p[i].lerp(p[i + 1], ax);
+        let bottom = p[i + w].lerp(p[i + w + 1], ax);
+        top.lerp(bottom, ay)
     }
 }
 
 impl Environment for CubeSampler {
     #[inline]
     fn sample(&self, d: Vec3, level: usize, interp: Interp) -> Vec4 {
-        let (n, faces) = &self.levels[level.min(self.levels.len() - 1)];
+        let level = level.min(self.levels.len() - 1);
+        if interp == Interp::Bilinear {
+            return self.bilinear(d, level);
+        }
+        let (n, faces) = &self.levels[level];
         let (face, s, t) = dir_face(d);
         let x = s * *n as f32 + BORDER as f32;
         let y = t * *n as f32 + BORDER as f32;
-        match interp {
-            Interp::Bilinear => faces[face].bilinear(x, y, false),
-            Interp::Bicubic => faces[face].bicubic(x, y, false),
-        }
+        faces[face].bicubic(x, y, false)
     }
     fn texel_angle(&self) -> f32 {
         std::f32::consts::FRAC_PI_2 / self.size() as f32

@@ -34,6 +34,27 @@ pub struct Report {
     pub pixel_format: String,
     pub color_space: crate::image::ColorSpace,
     pub stats: Stats,
+    /// What each level of a prefiltered chain holds (KTX2 metadata, or a DDS's
+    /// `NAME.dds.levels.json` sidecar), as `cubeforge prefilter` wrote it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub levels: Option<serde_json::Value>,
+}
+
+/// The levels description of a prefiltered KTX2 or DDS chain, if it has one.
+fn levels_description(path: &Path, format: io::FileFormat) -> Option<serde_json::Value> {
+    let bytes = match format {
+        io::FileFormat::Ktx2 => io::ktx2::metadata_from_file(path)
+            .into_iter()
+            .find(|(k, _)| k == io::ktx2::LEVELS_KEY)
+            .map(|(_, v)| v)?,
+        io::FileFormat::Dds => {
+            let mut s = path.as_os_str().to_owned();
+            s.push(".levels.json");
+            std::fs::read(s).ok()?
+        }
+        _ => return None,
+    };
+    serde_json::from_slice(&bytes).ok()
 }
 
 /// Statistics over images; luminance ignores non-finite values, sums run in a fixed order.
@@ -100,6 +121,7 @@ pub fn describe(path: &Path, opts: &ReadOptions) -> Result<Report> {
                 pixel_format: meta.pixel_format,
                 color_space: meta.color_space,
                 stats: stats(cube.levels[0].iter()),
+                levels: levels_description(path, meta.file_format),
             }
         }
         Decoded::Image(img) => {
@@ -122,6 +144,7 @@ pub fn describe(path: &Path, opts: &ReadOptions) -> Result<Report> {
                 pixel_format: meta.pixel_format,
                 color_space: meta.color_space,
                 stats: stats([&img]),
+                levels: None,
             }
         }
     })
@@ -160,6 +183,33 @@ impl std::fmt::Display for Report {
             f,
             "  bad values:   {} NaN, {} Inf, {} negative",
             s.nan, s.inf, s.negative
-        )
+        )?;
+        if let Some(levels) = self
+            .levels
+            .as_ref()
+            .and_then(|l| l.get("levels"))
+            .and_then(|l| l.as_array())
+        {
+            for l in levels {
+                let get = |k: &str| l.get(k).and_then(|v| v.as_f64());
+                let what = if let Some(r) = get("roughness") {
+                    format!("roughness {r:.3}")
+                } else if let Some(p) = get("power") {
+                    format!("power {p:.1}")
+                } else if let Some(s) = get("sigma") {
+                    format!("sigma {s:.5} rad")
+                } else {
+                    "box".to_string()
+                };
+                write!(
+                    f,
+                    "\n  level {:>2}:     {:>5} px, {} {what}",
+                    get("level").unwrap_or(0.0),
+                    get("size").unwrap_or(0.0),
+                    l.get("filter").and_then(|v| v.as_str()).unwrap_or("")
+                )?;
+            }
+        }
+        Ok(())
     }
 }

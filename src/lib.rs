@@ -4,13 +4,16 @@
 //! directions and image coordinates ([`layout`]); every conversion looks each output texel's
 //! direction up in an [`cube::Environment`] ([`resample`]).
 
+pub mod control;
 pub mod convert;
 pub mod cube;
 pub mod error;
+pub mod filter;
 pub mod image;
 pub mod info;
 pub mod io;
 pub mod layout;
+pub mod preview;
 pub mod resample;
 pub mod synthetic;
 

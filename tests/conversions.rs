@@ -131,7 +131,11 @@ fn projection_formulas_follow_the_conventions() {
     let st = angular::dir_to_st(Vec3::Y);
     assert!((st.y - 0.75).abs() < 1e-6);
     // Round trips of every projection.
-    for p in [Projection::Equirect, Projection::Sphere, Projection::Angular] {
+    for p in [
+        Projection::Equirect,
+        Projection::Sphere,
+        Projection::Angular,
+    ] {
         for d in [
             Vec3::new(0.3, 0.4, 0.5),
             Vec3::new(-0.7, 0.1, -0.2),
@@ -314,8 +318,7 @@ fn seams_are_continuous() {
     // neighbours inside a face do.
     let n = 64;
     let input = exact_input(Kind::Equirect, 256, synthetic::smooth);
-    let Output::Cube(cube) = convert::convert(&input, Kind::Faces, n, &Resampler::default())
-    else {
+    let Output::Cube(cube) = convert::convert(&input, Kind::Faces, n, &Resampler::default()) else {
         panic!()
     };
     let sampler = CubeSampler::new(&cube);
@@ -335,10 +338,16 @@ fn seams_are_continuous() {
                 let across = face_dir(face, s + ds, t + dt).normalize();
                 let inside = face_dir(face, s - ds, t - dt).normalize();
                 let v = sampler.sample(here, 0, Interp::Bilinear);
-                worst_cross = worst_cross
-                    .max((sampler.sample(across, 0, Interp::Bilinear) - v).abs().max_element());
-                worst_inside = worst_inside
-                    .max((sampler.sample(inside, 0, Interp::Bilinear) - v).abs().max_element());
+                worst_cross = worst_cross.max(
+                    (sampler.sample(across, 0, Interp::Bilinear) - v)
+                        .abs()
+                        .max_element(),
+                );
+                worst_inside = worst_inside.max(
+                    (sampler.sample(inside, 0, Interp::Bilinear) - v)
+                        .abs()
+                        .max_element(),
+                );
             }
         }
     }
@@ -359,7 +368,10 @@ fn equirect_output_wraps_without_a_seam() {
     for y in 0..eq.height {
         let d = (eq.get(0, y) - eq.get(eq.width - 1, y)).abs().max_element();
         let inner = (eq.get(1, y) - eq.get(0, y)).abs().max_element();
-        assert!(d <= 2.0 * inner + 1e-3, "row {y}: wrap step {d}, inner {inner}");
+        assert!(
+            d <= 2.0 * inner + 1e-3,
+            "row {y}: wrap step {d}, inner {inner}"
+        );
     }
 }
 
@@ -426,7 +438,10 @@ fn shrinking_is_antialiased() {
     let img = Image::from_fn(w, h, |x, y| {
         Vec4::new(((x + y) % 2) as f32, ((x / 2 + y / 2) % 2) as f32, 0.5, 1.0)
     });
-    let input = loaded(Source::Projection(Projection::Equirect, img), Kind::Equirect);
+    let input = loaded(
+        Source::Projection(Projection::Equirect, img),
+        Kind::Equirect,
+    );
     let out = |aa: bool| {
         let rs = Resampler {
             antialias: aa,
@@ -447,7 +462,10 @@ fn shrinking_is_antialiased() {
     let good = dev(&out(true));
     let bad = dev(&out(false));
     assert!(good < 0.08, "antialiased deviation {good}");
-    assert!(bad > 0.2, "without antialiasing the checker should alias ({bad})");
+    assert!(
+        bad > 0.2,
+        "without antialiasing the checker should alias ({bad})"
+    );
 }
 
 #[test]
@@ -483,7 +501,10 @@ fn bicubic_is_sharper_and_never_rings() {
             .fold(f64::MAX, f64::min)
     };
     let (bl, bc) = (err(Interp::Bilinear), err(Interp::Bicubic));
-    assert!(bc > bl, "bicubic {bc:.1} dB should beat bilinear {bl:.1} dB");
+    assert!(
+        bc > bl,
+        "bicubic {bc:.1} dB should beat bilinear {bl:.1} dB"
+    );
 }
 
 #[test]
@@ -497,8 +518,8 @@ fn box_mips_preserve_the_mean() {
         for f in faces {
             for y in 0..n {
                 for x in 0..n {
-                    acc += f.get(x, y).x as f64
-                        * cubeforge::cube::texel_solid_angle(n, x, y) as f64;
+                    acc +=
+                        f.get(x, y).x as f64 * cubeforge::cube::texel_solid_angle(n, x, y) as f64;
                 }
             }
         }
@@ -506,7 +527,11 @@ fn box_mips_preserve_the_mean() {
     };
     let m0 = mean(0);
     for l in 1..6 {
-        assert!((mean(l) - m0).abs() < 1e-4 * m0, "level {l}: {} vs {m0}", mean(l));
+        assert!(
+            (mean(l) - m0).abs() < 1e-4 * m0,
+            "level {l}: {} vs {m0}",
+            mean(l)
+        );
     }
 }
 
@@ -518,10 +543,12 @@ fn outputs_do_not_depend_on_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| match convert::convert(&input, Kind::Hcross, 48, &Resampler::default()) {
-                Output::Image(i) => i,
-                _ => panic!(),
-            })
+            .install(
+                || match convert::convert(&input, Kind::Hcross, 48, &Resampler::default()) {
+                    Output::Image(i) => i,
+                    _ => panic!(),
+                },
+            )
     };
     let a = run(1);
     let b = run(3);

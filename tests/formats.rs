@@ -156,7 +156,10 @@ fn openimageio_reads_our_float_files() {
         let text = String::from_utf8_lossy(&info.stdout);
         assert!(info.status.success(), "{name}: {text}");
         let words: Vec<&str> = text.split_whitespace().collect();
-        assert!(words.windows(3).any(|w| w == ["64", "x", "32,"]), "{name}: {text}");
+        assert!(
+            words.windows(3).any(|w| w == ["64", "x", "32,"]),
+            "{name}: {text}"
+        );
         // The brightest red is 8.0 (column 63).
         let stats = Command::new("oiiotool")
             .arg("--stats")

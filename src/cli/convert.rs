@@ -2,7 +2,7 @@
 
 use super::{warn, Stages};
 use cubeforge::convert::{self, Output};
-use cubeforge::cube::{CubeMap, Interp, FACE_NAMES};
+use cubeforge::cube::{CubeMap, Faces, Interp, FACE_NAMES};
 use cubeforge::io::{self, FileFormat, GpuFormat, Limits, ReadOptions, WriteOptions};
 use cubeforge::layout::Kind;
 use cubeforge::resample::{Orientation, Resampler};
@@ -124,50 +124,15 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         png16: a.png16,
         gpu_format: a.gpu_format,
     };
-    let files: Vec<(PathBuf, Vec<u8>)> = match (to, out) {
-        (Kind::Faces, Output::Cube(cube)) => {
-            let ext = match face_format {
-                FileFormat::Jpeg => "jpg",
-                FileFormat::Png => "png",
-                FileFormat::Tga => "tga",
-                FileFormat::Hdr => "hdr",
-                _ => "exr",
-            };
-            let paths: Vec<PathBuf> = FACE_NAMES
-                .iter()
-                .map(|n| a.output.join(format!("{n}.{ext}")))
-                .collect();
-            refuse_inputs(&paths, &loaded.files)?;
-            std::fs::create_dir_all(&a.output)
-                .map_err(|e| Error::file(&a.output, io::io_msg(&e)))?;
-            let encoded: Vec<Result<Vec<u8>>> = {
-                use rayon::prelude::*;
-                paths
-                    .par_iter()
-                    .zip(cube.levels[0].par_iter())
-                    .map(|(p, f)| io::encode_image(p, f, &write))
-                    .collect()
-            };
-            paths
-                .into_iter()
-                .zip(encoded)
-                .map(|(p, e)| e.map(|b| (p, b)))
-                .collect::<Result<_>>()?
-        }
-        (Kind::Ktx2 | Kind::Dds, Output::Cube(cube)) => {
-            refuse_inputs(std::slice::from_ref(&a.output), &loaded.files)?;
-            let cube: CubeMap = cube.with_box_mips(a.levels);
-            vec![(
-                a.output.clone(),
-                io::encode_cube(&a.output, &cube, a.gpu_format)?,
-            )]
-        }
-        (_, Output::Image(img)) => {
-            refuse_inputs(std::slice::from_ref(&a.output), &loaded.files)?;
-            vec![(a.output.clone(), io::encode_image(&a.output, &img, &write)?)]
-        }
-        (_, Output::Cube(_)) => unreachable!("only faces and containers produce cube output"),
-    };
+    let files = encode_output(
+        &a.output,
+        to,
+        out,
+        face_format,
+        &write,
+        a.levels,
+        &loaded.files,
+    )?;
     stages.done("encode");
     io::write_all_atomic(&files)?;
     stages.done("write");
@@ -175,24 +140,98 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     Ok(())
 }
 
+/// Encodes a conversion's result as the files it becomes: six faces in a folder, a container
+/// with `levels` box mips (None: the full chain), or one image. Refuses to overwrite inputs.
+pub(super) fn encode_output(
+    output: &Path,
+    to: Kind,
+    out: Output,
+    face_format: FileFormat,
+    write: &WriteOptions,
+    levels: Option<usize>,
+    inputs: &[PathBuf],
+) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    match (to, out) {
+        (Kind::Faces, Output::Cube(cube)) => {
+            encode_faces(output, &cube.levels[0], face_format, write, inputs)
+        }
+        (Kind::Ktx2 | Kind::Dds, Output::Cube(cube)) => {
+            refuse_inputs(&[output.to_path_buf()], inputs)?;
+            let cube: CubeMap = cube.with_box_mips(levels);
+            Ok(vec![(
+                output.to_path_buf(),
+                io::encode_cube(output, &cube, write.gpu_format)?,
+            )])
+        }
+        (_, Output::Image(img)) => {
+            refuse_inputs(&[output.to_path_buf()], inputs)?;
+            Ok(vec![(
+                output.to_path_buf(),
+                io::encode_image(output, &img, write)?,
+            )])
+        }
+        (_, Output::Cube(_)) => unreachable!("only faces and containers produce cube output"),
+    }
+}
+
+/// Six face images `dir/px.EXT` ... encoded in parallel; the folder is created.
+pub(super) fn encode_faces(
+    dir: &Path,
+    faces: &Faces,
+    format: FileFormat,
+    write: &WriteOptions,
+    inputs: &[PathBuf],
+) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    let ext = match format {
+        FileFormat::Jpeg => "jpg",
+        FileFormat::Png => "png",
+        FileFormat::Tga => "tga",
+        FileFormat::Hdr => "hdr",
+        _ => "exr",
+    };
+    let paths: Vec<PathBuf> = FACE_NAMES
+        .iter()
+        .map(|n| dir.join(format!("{n}.{ext}")))
+        .collect();
+    refuse_inputs(&paths, inputs)?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::file(dir, io::io_msg(&e)))?;
+    let encoded: Vec<Result<Vec<u8>>> = {
+        use rayon::prelude::*;
+        paths
+            .par_iter()
+            .zip(faces.par_iter())
+            .map(|(p, f)| io::encode_image(p, f, write))
+            .collect()
+    };
+    paths
+        .into_iter()
+        .zip(encoded)
+        .map(|(p, e)| e.map(|b| (p, b)))
+        .collect()
+}
+
 /// The output layout: --to, or what the output's name implies.
 fn output_kind(a: &Args) -> Result<Kind> {
-    let by_name = FileFormat::from_extension(&a.output);
-    match (a.to, by_name) {
+    output_kind_for(&a.output, a.to)
+}
+
+pub(super) fn output_kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
+    let by_name = FileFormat::from_extension(output);
+    match (to, by_name) {
         (Some(Kind::Ktx2), Some(FileFormat::Ktx2)) | (Some(Kind::Dds), Some(FileFormat::Dds)) => {
-            Ok(a.to.unwrap())
+            Ok(to.unwrap())
         }
         (Some(k @ (Kind::Ktx2 | Kind::Dds)), _) => Err(Error::file(
-            &a.output,
+            output,
             format!("--to {} needs an output named .{}", k.name(), k.name()),
         )),
         (Some(Kind::Faces), Some(_)) => Err(Error::file(
-            &a.output,
+            output,
             "--to faces writes a folder: give a folder name without an image extension",
         )),
         (Some(Kind::Faces), None) => Ok(Kind::Faces),
         (Some(k), Some(f)) if f.is_container() => Err(Error::file(
-            &a.output,
+            output,
             format!(
                 "{} holds cube maps, not a {} image: use --to {}",
                 f.name(),
@@ -202,7 +241,7 @@ fn output_kind(a: &Args) -> Result<Kind> {
         )),
         (Some(k), Some(_)) => Ok(k),
         (Some(k), None) => Err(Error::file(
-            &a.output,
+            output,
             format!(
                 "a {} image needs a file name ending in .png .jpg .tga .hdr or .exr",
                 k.name()
@@ -211,8 +250,8 @@ fn output_kind(a: &Args) -> Result<Kind> {
         (None, Some(FileFormat::Ktx2)) => Ok(Kind::Ktx2),
         (None, Some(FileFormat::Dds)) => Ok(Kind::Dds),
         (None, Some(_)) => Ok(Kind::Hcross),
-        (None, None) if a.output.extension().is_some() && !a.output.is_dir() => {
-            Err(io::unknown_ext(&a.output))
+        (None, None) if output.extension().is_some() && !output.is_dir() => {
+            Err(io::unknown_ext(output))
         }
         (None, None) => Ok(Kind::Faces),
     }
@@ -231,7 +270,7 @@ fn face_format(a: &Args) -> Result<Option<FileFormat>> {
 }
 
 /// Refuses to write over any input file.
-fn refuse_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<()> {
+pub(super) fn refuse_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<()> {
     let canon = |p: &Path| std::fs::canonicalize(p).ok();
     let ins: Vec<PathBuf> = inputs.iter().filter_map(|p| canon(p)).collect();
     for o in outputs {

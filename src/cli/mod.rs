@@ -1,9 +1,13 @@
 //! Command-line front end: one file per command. Parses and reports; the library does the work.
 
+mod control;
 mod convert;
 mod fixtures;
 mod info;
+mod irradiance;
 mod man;
+mod prefilter;
+mod preview;
 
 use clap::{Parser, Subcommand};
 use std::time::Instant;
@@ -31,6 +35,14 @@ pub enum Command {
     Convert(convert::Args),
     /// Describe files: layout, sizes, mip levels, pixel format, colour space, statistics.
     Info(info::Args),
+    /// Prefiltered mip chains: box mipmaps, LOD-bias Gaussian blur, cosine-power and GGX radiance.
+    Prefilter(prefilter::Args),
+    /// The diffuse side: a Lambertian irradiance cube map and 9 spherical-harmonic coefficients.
+    Irradiance(irradiance::Args),
+    /// Bake a control map (reflectivity, transmittance, blur, Fresnel mask) from a recipe.
+    Control(control::Args),
+    /// Preview a map on a sphere: reflection, refraction, Fresnel and dispersion (Cg Tutorial ch. 7).
+    Preview(preview::Args),
     /// Write the man pages (man/*.1) from these definitions.
     #[command(hide = true)]
     Man(man::Args),
@@ -86,6 +98,10 @@ pub fn run() -> i32 {
     let result = match cli.command {
         Command::Convert(a) => convert::run(a, cli.verbose),
         Command::Info(a) => info::run(a),
+        Command::Prefilter(a) => prefilter::run(a, cli.verbose),
+        Command::Irradiance(a) => irradiance::run(a, cli.verbose),
+        Command::Control(a) => control::run(a, cli.verbose),
+        Command::Preview(a) => preview::run(a, cli.verbose),
         Command::Man(a) => man::run(a),
         Command::Fixtures(a) => fixtures::run(a),
     };

@@ -1,5 +1,6 @@
 //! KTX2 cube maps with every mip level, in uncompressed RGBA16F, RGBA32F or RGBA8 (sRGB or
-//! UNORM), written and read by hand after the Khronos KTX 2.0 specification.
+//! UNORM), written and read by hand after the Khronos KTX 2.0 specification. 2D textures with a
+//! mip chain (faceCount 1, for control maps) are written by [`encode_2d`] the same way.
 //!
 //! File layout as written: the 80-byte header, the level index (one entry per level, level 0
 //! first), a Data Format Descriptor with one basic block, one key/value pair (`KTXwriter`), then
@@ -151,32 +152,131 @@ fn data_format_descriptor(format: GpuFormat) -> Vec<u8> {
     words.iter().flat_map(|w| w.to_le_bytes()).collect()
 }
 
-/// Key/value data: one `KTXwriter` entry with its padding to 4 bytes.
-fn key_value_data() -> Vec<u8> {
-    let mut kv = Vec::new();
-    kv.extend_from_slice(WRITER_KEY.as_bytes());
-    kv.push(0);
-    kv.extend_from_slice(format!("cubeforge {}", env!("CARGO_PKG_VERSION")).as_bytes());
-    kv.push(0);
-    let mut out = Vec::with_capacity(4 + kv.len() + 3);
-    out.extend_from_slice(&(kv.len() as u32).to_le_bytes());
-    out.extend_from_slice(&kv);
-    out.resize(align_up(out.len(), 4), 0);
+/// Key of the levels description a prefiltered chain carries (JSON, NUL-terminated).
+pub const LEVELS_KEY: &str = "cubeforge.levels";
+
+/// Key/value data: the `KTXwriter` entry and any `extra` ones, sorted by key as the spec asks,
+/// each padded to 4 bytes. Values are written NUL-terminated.
+fn key_value_data(extra: &[(&str, &[u8])]) -> Vec<u8> {
+    let writer = format!("cubeforge {}", env!("CARGO_PKG_VERSION"));
+    let mut entries: Vec<(&str, &[u8])> = vec![(WRITER_KEY, writer.as_bytes())];
+    entries.extend_from_slice(extra);
+    entries.sort_by(|a, b| a.0.as_bytes().cmp(b.0.as_bytes()));
+    let mut out = Vec::new();
+    for (key, value) in entries {
+        let mut kv = Vec::with_capacity(key.len() + value.len() + 2);
+        kv.extend_from_slice(key.as_bytes());
+        kv.push(0);
+        kv.extend_from_slice(value);
+        kv.push(0);
+        out.extend_from_slice(&(kv.len() as u32).to_le_bytes());
+        out.extend_from_slice(&kv);
+        out.resize(align_up(out.len(), 4), 0);
+    }
+    out
+}
+
+/// Reads just the start of a KTX2 file, up to the end of its key/value data (at most 16 MiB),
+/// and returns its pairs: enough to describe a file without decoding its levels.
+pub fn metadata_from_file(path: &Path) -> Vec<(String, Vec<u8>)> {
+    use std::io::Read;
+    let Ok(mut f) = std::fs::File::open(path) else {
+        return Vec::new();
+    };
+    let mut head = vec![0u8; 80];
+    if f.read_exact(&mut head).is_err() {
+        return Vec::new();
+    }
+    let word =
+        |i: usize| u32::from_le_bytes([head[i], head[i + 1], head[i + 2], head[i + 3]]) as u64;
+    let end = (word(12 + 4 * 11) + word(12 + 4 * 12)).min(16 << 20) as usize;
+    if end > 80 {
+        let mut rest = vec![0u8; end - 80];
+        if f.read_exact(&mut rest).is_err() {
+            return Vec::new();
+        }
+        head.extend_from_slice(&rest);
+    }
+    metadata(&head)
+}
+
+/// Reads the key/value pairs of a KTX2 file (values without their terminating NUL), or
+/// nothing when the file is not KTX2 or the data does not fit.
+pub fn metadata(bytes: &[u8]) -> Vec<(String, Vec<u8>)> {
+    let field = |i: usize| -> Option<usize> {
+        let b = bytes.get(12 + 4 * i..16 + 4 * i)?;
+        Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    let (Some(offset), Some(len)) = (field(11), field(12)) else {
+        return Vec::new();
+    };
+    if !bytes.starts_with(&IDENTIFIER) {
+        return Vec::new();
+    }
+    let Some(data) = offset
+        .checked_add(len)
+        .and_then(|end| bytes.get(offset..end))
+    else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    let mut at = 0usize;
+    while at + 4 <= data.len() {
+        let n = u32::from_le_bytes([data[at], data[at + 1], data[at + 2], data[at + 3]]) as usize;
+        let Some(kv) = at.checked_add(4 + n).and_then(|end| data.get(at + 4..end)) else {
+            break;
+        };
+        if let Some(nul) = kv.iter().position(|&b| b == 0) {
+            let key = String::from_utf8_lossy(&kv[..nul]).into_owned();
+            let mut value = kv[nul + 1..].to_vec();
+            if value.last() == Some(&0) {
+                value.pop();
+            }
+            out.push((key, value));
+        }
+        at = align_up(at + 4 + n, 4);
+    }
     out
 }
 
 /// Encodes every level of `cube` as a KTX2 cube map in `format`.
 pub fn encode(cube: &CubeMap, format: GpuFormat) -> Vec<u8> {
+    encode_with_metadata(cube, format, &[])
+}
+
+/// Encodes a cube map with extra key/value entries (e.g. [`LEVELS_KEY`]).
+pub fn encode_with_metadata(cube: &CubeMap, format: GpuFormat, extra: &[(&str, &[u8])]) -> Vec<u8> {
+    let levels: Vec<&[Image]> = cube.levels.iter().map(|faces| &faces[..]).collect();
+    encode_levels(&levels, format, extra)
+}
+
+/// Encodes a 2D texture (faceCount 1) with its mip chain, `levels[0]` the full size and each
+/// further level the next smaller one (what [`Image::downsample_2x`] makes), in `format`.
+/// Used for control maps, which hold data: pass [`GpuFormat::Rgba8`] (UNORM) or a float format.
+pub fn encode_2d(levels: &[Image], format: GpuFormat) -> Vec<u8> {
+    let levels: Vec<&[Image]> = levels.iter().map(std::slice::from_ref).collect();
+    encode_levels(&levels, format, &[])
+}
+
+/// Writes the file: `levels[l]` holds the faces of level `l` (six for a cube map, one for a 2D
+/// texture), all of one size.
+fn encode_levels(levels: &[&[Image]], format: GpuFormat, extra: &[(&str, &[u8])]) -> Vec<u8> {
     let bpt = format.bytes_per_texel();
-    let size = cube.size();
-    let level_count = cube.levels.len();
+    let (width, height) = levels
+        .first()
+        .and_then(|faces| faces.first())
+        .map_or((0, 0), |f| (f.width, f.height));
+    let face_count = levels.first().map_or(1, |faces| faces.len());
+    let level_count = levels.len();
     let level_len = |l: usize| {
-        let n = cube.levels[l][0].width;
-        6 * n * n * bpt
+        levels[l]
+            .iter()
+            .map(|f| f.width * f.height * bpt)
+            .sum::<usize>()
     };
 
     let dfd = data_format_descriptor(format);
-    let kvd = key_value_data();
+    let kvd = key_value_data(extra);
     let dfd_offset = HEADER_LEN + level_count * LEVEL_ENTRY_LEN;
     let kvd_offset = dfd_offset + dfd.len();
     let align = level_alignment(format) as usize;
@@ -194,11 +294,11 @@ pub fn encode(cube: &CubeMap, format: GpuFormat) -> Vec<u8> {
     for v in [
         vk_format(format),
         type_size(format),
-        size as u32, // pixelWidth
-        size as u32, // pixelHeight
-        0,           // pixelDepth
-        0,           // layerCount
-        6,           // faceCount
+        width as u32,  // pixelWidth
+        height as u32, // pixelHeight
+        0,             // pixelDepth
+        0,             // layerCount
+        face_count as u32,
         level_count as u32,
         0, // supercompressionScheme: none
         dfd_offset as u32,
@@ -220,7 +320,7 @@ pub fn encode(cube: &CubeMap, format: GpuFormat) -> Vec<u8> {
     out.extend_from_slice(&kvd);
     for l in (0..level_count).rev() {
         out.resize(offsets[l], 0); // mipPadding
-        for face in &cube.levels[l] {
+        for face in levels[l] {
             format.encode_into(&face.pixels, &mut out);
         }
     }

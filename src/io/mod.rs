@@ -386,6 +386,10 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
             let _ = std::fs::remove_file(t);
         }
     };
+    // A rename onto a folder fails: find that out before anything is written.
+    if let Some((path, _)) = files.iter().find(|(p, _)| p.is_dir()) {
+        return Err(Error::file(path, "a folder of that name is in the way"));
+    }
     for (path, bytes) in files {
         let dir = path
             .parent()
@@ -403,9 +407,14 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
         }
         temps.push((tmp, path));
     }
+    // Should a rename still fail, the files this call created are taken back.
+    let existed: Vec<bool> = temps.iter().map(|(_, p)| p.exists()).collect();
     for (i, (tmp, path)) in temps.iter().enumerate() {
         if let Err(e) = std::fs::rename(tmp, path) {
             cleanup(&temps[i..]);
+            for ((_, done), _) in temps[..i].iter().zip(&existed).filter(|(_, &x)| !x) {
+                let _ = std::fs::remove_file(done);
+            }
             return Err(Error::file(path, io_msg(&e)));
         }
     }

@@ -31,10 +31,9 @@ pub fn atan2(y: f32, x: f32) -> f32 {
         (0.0, a)
     };
     let z = t * t;
-    let p = (((8.053_744_5e-2 * z - 1.387_768_6e-1) * z + 1.997_771_1e-1) * z - 3.333_295e-1)
-        * z
-        * t
-        + t;
+    let p =
+        (((8.053_744_5e-2 * z - 1.387_768_6e-1) * z + 1.997_771_1e-1) * z - 3.333_295e-1) * z * t
+            + t;
     let mut r = base + p;
     if ay > ax {
         r = FRAC_PI_2 - r;
@@ -47,6 +46,16 @@ pub fn atan2(y: f32, x: f32) -> f32 {
     } else {
         r
     }
+}
+
+/// The unit direction at image coordinates (u, v).
+#[inline]
+pub fn uv_to_dir(u: f32, v: f32) -> Vec3 {
+    let phi = (u - 0.5) * TAU;
+    let theta = (0.5 - v) * PI;
+    let (sp, cp) = phi.sin_cos();
+    let (st, ct) = theta.sin_cos();
+    Vec3::new(ct * sp, st, ct * cp)
 }
 
 #[cfg(test)]
@@ -67,14 +76,4 @@ mod tests {
         assert!((super::atan2(1.0, 0.0) - std::f32::consts::FRAC_PI_2).abs() < 1e-7);
         assert!((super::atan2(0.0, -1.0) - std::f32::consts::PI).abs() < 1e-7);
     }
-}
-
-/// The unit direction at image coordinates (u, v).
-#[inline]
-pub fn uv_to_dir(u: f32, v: f32) -> Vec3 {
-    let phi = (u - 0.5) * TAU;
-    let theta = (0.5 - v) * PI;
-    let (sp, cp) = phi.sin_cos();
-    let (st, ct) = theta.sin_cos();
-    Vec3::new(ct * sp, st, ct * cp)
 }

@@ -1,0 +1,221 @@
+//! `cubeforge control`: bake a control map (reflectivity, transmittance, blur, Fresnel mask)
+//! from a recipe.
+
+use super::{warn, Stages};
+use cubeforge::control::{self, Baked, Size};
+use cubeforge::image::Image;
+use cubeforge::io::{self, ktx2, FileFormat, GpuFormat, Limits, WriteOptions};
+use cubeforge::{Error, Result};
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args, Debug)]
+#[command(after_long_help = RECIPE_HELP)]
+pub struct Args {
+    /// Recipe naming each parameter's source (.toml or .json; image paths relative to it).
+    pub recipe: PathBuf,
+    /// Output: .png (8-bit, or 16-bit with --png16), .exr (half float) or .ktx2 (with mips).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Output size, WIDTHxHEIGHT or N for a square (default: the recipe's size, else its first image's).
+    #[arg(long)]
+    pub size: Option<Size>,
+    /// Write 16-bit PNG instead of 8-bit.
+    #[arg(long)]
+    pub png16: bool,
+    /// Texel format of KTX2 output (never sRGB: control maps hold data).
+    #[arg(long, value_enum, default_value_t = KtxFormat::Rgba8)]
+    pub gpu_format: KtxFormat,
+    /// Mip levels in KTX2 output (default: the full chain down to 1x1).
+    #[arg(long)]
+    pub levels: Option<usize>,
+    /// Refuse images with more pixels than this (checked before decoding).
+    #[arg(long, default_value_t = Limits::default().max_pixels)]
+    pub max_pixels: u64,
+}
+
+const RECIPE_HELP: &str = "\
+Channels hold linear data (never sRGB), each a fraction from 0 to 1: R = reflectivity, \
+G = transmittance, B = blur (LOD bias = blur x max_lod_bias), A = Fresnel mask (1 where the \
+Fresnel term applies). The recipe's [pack] table reassigns them (r, g, b, a = reflectivity, \
+transmittance, blur, fresnel, zero or one). OUTPUT.json, written beside the map, records \
+max_lod_bias and the packing.
+
+Each parameter is a number or a table with one source: constant; image = { path, channel = \
+r|g|b|a|luminance, srgb }; linear_gradient = { from, to }; radial_gradient = { center, radius }; \
+checker = { cells }; stripes = { count, width, angle, offset }; noise = { cells, seed, octaves, \
+persistence }. Optional operations, applied in this order: remap = { in, out, gamma }, \
+invert = true, multiply = SOURCE, mix = { with = SOURCE, amount = SOURCE }. A missing image, an \
+unknown key, channel or parameter, or a value outside [0, 1] is an error naming the recipe line.
+
+Example recipe:
+  size = \"512x512\"
+  max_lod_bias = 6
+  reflectivity = 0.9
+  [blur]
+  linear_gradient = { from = [0, 0], to = [0, 1] }
+  remap = { in = [0.2, 0.8], gamma = 1.5 }
+  [fresnel]
+  checker = { cells = [8, 8] }
+  invert = true";
+
+/// KTX2 texel formats for data.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum KtxFormat {
+    /// RGBA 8-bit UNORM.
+    Rgba8,
+    /// RGBA half float.
+    Rgba16f,
+    /// RGBA 32-bit float.
+    Rgba32f,
+}
+
+impl KtxFormat {
+    fn gpu(self) -> GpuFormat {
+        match self {
+            KtxFormat::Rgba8 => GpuFormat::Rgba8,
+            KtxFormat::Rgba16f => GpuFormat::Rgba16f,
+            KtxFormat::Rgba32f => GpuFormat::Rgba32f,
+        }
+    }
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let mut stages = Stages::new(verbose);
+    let limits = Limits {
+        max_pixels: a.max_pixels,
+        ..Limits::default()
+    };
+    // Check the options before reading anything.
+    let format = match FileFormat::from_extension(&a.output) {
+        Some(f @ (FileFormat::Png | FileFormat::Exr | FileFormat::Ktx2)) => f,
+        _ => {
+            return Err(Error::file(
+                &a.output,
+                "a control map is written as .png, .exr or .ktx2",
+            ))
+        }
+    };
+    if a.png16 && format != FileFormat::Png {
+        return Err(Error::usage("--png16 applies to PNG output only"));
+    }
+    if a.levels.is_some() && format != FileFormat::Ktx2 {
+        return Err(Error::usage("--levels applies to KTX2 output only"));
+    }
+    let sidecar_path = sidecar_path(&a.output);
+
+    let recipe = control::load(&a.recipe, &limits)?;
+    stages.done("read");
+    let mut inputs = vec![a.recipe.clone()];
+    inputs.extend(recipe.images().iter().map(|f| f.path.clone()));
+    refuse_inputs(&[a.output.clone(), sidecar_path.clone()], &inputs)?;
+
+    let size = recipe
+        .output_size(a.size)
+        .map_err(|e| Error::file(&a.recipe, e.to_string()))?;
+    let full_chain = (usize::BITS - size.width.max(size.height).leading_zeros()) as usize;
+    if let Some(n) = a.levels {
+        if n == 0 || n > full_chain {
+            return Err(Error::usage(format!(
+                "--levels {n}: a {size} map has 1 to {full_chain} levels"
+            )));
+        }
+    }
+    let baked = recipe.bake(Some(size), &limits)?;
+    stages.done("bake");
+
+    let (bytes, what) = match format {
+        FileFormat::Ktx2 => {
+            let levels = mip_chain(&baked.image, a.levels.unwrap_or(full_chain));
+            let gpu = a.gpu_format.gpu();
+            let what = format!("KTX2 {} with {} mip levels", gpu.name(), levels.len());
+            (ktx2::encode_2d(&levels, gpu), what)
+        }
+        FileFormat::Exr => (
+            io::encode_image(&a.output, &baked.image, &WriteOptions::default())?,
+            "half-float EXR".to_string(),
+        ),
+        _ => {
+            let write = WriteOptions {
+                linear: true,
+                png16: a.png16,
+                ..WriteOptions::default()
+            };
+            let bits = if a.png16 { 16 } else { 8 };
+            (
+                io::encode_image(&a.output, &baked.image, &write)?,
+                format!("{bits}-bit PNG"),
+            )
+        }
+    };
+    let name = a
+        .output
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut sidecar = serde_json::to_vec_pretty(&baked.sidecar(&name))
+        .map_err(|e| Error::file(&sidecar_path, e.to_string()))?;
+    sidecar.push(b'\n');
+    stages.done("encode");
+    io::write_all_atomic(&[(a.output.clone(), bytes), (sidecar_path.clone(), sidecar)])?;
+    stages.done("write");
+
+    report(&a.output, &sidecar_path, &baked, &what);
+    stages.total();
+    Ok(())
+}
+
+/// `mask.png` -> `mask.png.json`.
+fn sidecar_path(output: &Path) -> PathBuf {
+    let mut s = output.as_os_str().to_owned();
+    s.push(".json");
+    PathBuf::from(s)
+}
+
+/// Level 0 and each half-size level after it, `count` in all.
+fn mip_chain(img: &Image, count: usize) -> Vec<Image> {
+    let mut levels = vec![img.clone()];
+    while levels.len() < count {
+        let next = levels[levels.len() - 1].downsample_2x();
+        levels.push(next);
+    }
+    levels
+}
+
+fn report(output: &Path, sidecar: &Path, baked: &Baked, what: &str) {
+    for w in &baked.warnings {
+        warn(w);
+    }
+    println!(
+        "{}: {}x{} control map, {what}, linear data",
+        output.display(),
+        baked.image.width,
+        baked.image.height
+    );
+    for (c, ch) in ["R", "G", "B", "A"].iter().zip(&baked.channels) {
+        let note = if ch.holds == control::Slot::Blur && baked.max_lod_bias > 0.0 {
+            format!(" (lod bias = blur x {})", baked.max_lod_bias)
+        } else {
+            String::new()
+        };
+        println!("  {c} = {:<13} {}{note}", ch.holds.name(), ch.source);
+    }
+    println!(
+        "{}: max_lod_bias {} and the packing",
+        sidecar.display(),
+        baked.max_lod_bias
+    );
+}
+
+/// Refuses to write over the recipe or an image it reads.
+fn refuse_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<()> {
+    let canon = |p: &Path| std::fs::canonicalize(p).ok();
+    let ins: Vec<PathBuf> = inputs.iter().filter_map(|p| canon(p)).collect();
+    for o in outputs {
+        if let Some(c) = canon(o) {
+            if ins.contains(&c) {
+                return Err(Error::file(o, "refusing to overwrite an input file"));
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,126 @@
+//! `cubeforge irradiance`: the diffuse side: an irradiance cube map and 9 SH coefficients.
+
+use super::{convert::encode_output, convert::output_kind_for, Stages};
+use cubeforge::convert::{self, Loaded, Output, Source};
+use cubeforge::filter::{self, sh, IrradianceMethod};
+use cubeforge::io::{self, FileFormat, GpuFormat, Limits, ReadOptions, WriteOptions};
+use cubeforge::layout::Kind;
+use cubeforge::resample::Resampler;
+use cubeforge::{Error, Result};
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Anything `convert` reads: one image, six faces, or a folder of faces.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// As for convert: a folder receives px.exr ...; a file gets a layout or container.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Output layout (default: from the output's name, as for convert).
+    #[arg(long, value_enum)]
+    pub to: Option<Kind>,
+    /// Face edge of the irradiance map (it holds no detail: 32 is plenty).
+    #[arg(long, default_value_t = 32)]
+    pub size: usize,
+    /// Also write the 9 SH coefficients (radiance, irradiance, irradiance / pi) as JSON.
+    #[arg(long)]
+    pub sh: Option<PathBuf>,
+    /// brute: exact integral (default; right next to HDR suns); sh: from the 9 coefficients.
+    #[arg(long, value_enum, default_value_t = IrradianceMethod::Brute)]
+    pub method: IrradianceMethod,
+    /// Input layout for square images (sphere or angular).
+    #[arg(long, value_enum)]
+    pub from: Option<Kind>,
+    /// File type of face images (default exr).
+    #[arg(long, default_value = "exr")]
+    pub format: String,
+    /// Texel format of KTX2 and DDS output.
+    #[arg(long, value_enum, default_value_t = GpuFormat::Rgba16f)]
+    pub gpu_format: GpuFormat,
+    /// 8- and 16-bit files hold data, not colour.
+    #[arg(long)]
+    pub linear: bool,
+    /// Refuse images with more pixels than this.
+    #[arg(long, default_value_t = Limits::default().max_pixels)]
+    pub max_pixels: u64,
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let mut stages = Stages::new(verbose);
+    let to = output_kind_for(&a.output, a.to)?;
+    let face_format = FileFormat::from_ext_str(&a.format)
+        .filter(|f| !f.is_container())
+        .ok_or_else(|| {
+            Error::usage(format!(
+                "--format {}: use exr, hdr, png, tga or jpg",
+                a.format
+            ))
+        })?;
+    if a.size == 0 || a.size > 4096 {
+        return Err(Error::usage(format!("--size {}: use 1 to 4096", a.size)));
+    }
+    let read = ReadOptions {
+        limits: Limits {
+            max_pixels: a.max_pixels,
+            ..Limits::default()
+        },
+        linear: a.linear,
+    };
+    let loaded = convert::load(&a.inputs, a.from, &read)?;
+    stages.done("decode");
+    // 256 faces hold everything the integral and the SH can see.
+    let base_size = loaded.face_size().min(256);
+    let Output::Cube(base) =
+        convert::convert(&loaded, Kind::Faces, base_size, &Resampler::default())
+    else {
+        unreachable!("faces are a cube")
+    };
+    stages.done("resample");
+    let (irr, coeffs) = filter::irradiance(&base, a.size, a.method);
+    stages.done("filter");
+
+    let out = match to {
+        Kind::Faces | Kind::Ktx2 | Kind::Dds => Output::Cube(irr),
+        _ => {
+            let as_input = Loaded {
+                source: Source::Cube(irr),
+                kind: Kind::Faces,
+                hdr: true,
+                meta: loaded.meta.clone(),
+                files: loaded.files.clone(),
+            };
+            convert::convert(&as_input, to, a.size, &Resampler::default())
+        }
+    };
+    let write = WriteOptions {
+        linear: a.linear,
+        gpu_format: a.gpu_format,
+        ..WriteOptions::default()
+    };
+    let mut files = encode_output(
+        &a.output,
+        to,
+        out,
+        face_format,
+        &write,
+        Some(1),
+        &loaded.files,
+    )?;
+    if let Some(p) = &a.sh {
+        let json = serde_json::to_vec_pretty(&sh::ShFile::new(&coeffs))
+            .map_err(|e| Error::usage(e.to_string()))?;
+        super::convert::refuse_inputs(std::slice::from_ref(p), &loaded.files)?;
+        files.push((p.clone(), json));
+    }
+    stages.done("encode");
+    io::write_all_atomic(&files)?;
+    stages.done("write");
+    let dc = coeffs[0].map(|v| v * sh::BASIS[0].3);
+    println!(
+        "irradiance {} px ({:?}); mean radiance {:.4} {:.4} {:.4}",
+        a.size, a.method, dc[0], dc[1], dc[2]
+    );
+    stages.total();
+    Ok(())
+}

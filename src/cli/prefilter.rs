@@ -1,0 +1,231 @@
+//! `cubeforge prefilter`: mip chains for blurred and glossy reflections.
+
+use super::{convert::encode_faces, convert::refuse_inputs, Stages};
+use cubeforge::convert::{self, Output};
+use cubeforge::filter::{self, ChainOptions, FilterKind, LevelInfo, LightingModel};
+use cubeforge::io::{self, FileFormat, GpuFormat, Limits, ReadOptions, WriteOptions};
+use cubeforge::layout::Kind;
+use cubeforge::resample::Resampler;
+use cubeforge::{Error, Result};
+use serde::Serialize;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Anything `convert` reads: one image, six faces, or a folder of faces.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// A .ktx2 or .dds cube map with every level, or a folder that receives m{level}/{face}.EXT
+    /// and levels.json.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// box: plain mipmaps; gaussian: LOD-bias blur; cosine: Phong lobes (cmft); ggx: split-sum
+    /// GGX radiance.
+    #[arg(long, value_enum)]
+    pub filter: FilterKind,
+    /// Face edge of level 0 (default: the input's).
+    #[arg(long)]
+    pub size: Option<usize>,
+    /// Number of levels (default: the full chain down to 1 x 1).
+    #[arg(long)]
+    pub levels: Option<usize>,
+    /// Importance samples per texel at the sharpest filtered level; doubled per level after it
+    /// (wider lobes), up to 32 times.
+    #[arg(long, default_value_t = filter::DEFAULT_SAMPLES)]
+    pub samples: u32,
+    /// cosine: specular power = 2^(gloss-scale * glossiness + gloss-bias), as cmft.
+    #[arg(long, default_value_t = 10.0)]
+    pub gloss_scale: f32,
+    /// cosine: see --gloss-scale.
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    pub gloss_bias: f32,
+    /// cosine: cmft's lighting model (phongbrdf: power + 1, blinn: power / 4, blinnbrdf: / 4 + 1).
+    #[arg(long, value_enum, default_value_t = LightingModel::Phong)]
+    pub lighting: LightingModel,
+    /// Input layout for square images (sphere or angular).
+    #[arg(long, value_enum)]
+    pub from: Option<Kind>,
+    /// File type of the level images in a folder output (default exr).
+    #[arg(long, default_value = "exr")]
+    pub format: String,
+    /// Texel format of KTX2 and DDS output.
+    #[arg(long, value_enum, default_value_t = GpuFormat::Rgba16f)]
+    pub gpu_format: GpuFormat,
+    /// 8- and 16-bit files hold data, not colour.
+    #[arg(long)]
+    pub linear: bool,
+    /// Refuse images with more pixels than this.
+    #[arg(long, default_value_t = Limits::default().max_pixels)]
+    pub max_pixels: u64,
+}
+
+/// levels.json: what each level holds.
+#[derive(Serialize)]
+pub struct LevelsFile<'a> {
+    pub filter: FilterKind,
+    pub face_size: usize,
+    pub level_count: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lighting: Option<LightingModel>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gloss_scale: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gloss_bias: Option<f32>,
+    pub levels: &'a [LevelInfo],
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let mut stages = Stages::new(verbose);
+    let container = FileFormat::from_extension(&a.output).filter(|f| f.is_container());
+    if container.is_none() && a.output.extension().is_some() && !a.output.is_dir() {
+        return Err(Error::file(
+            &a.output,
+            "prefilter writes a .ktx2 or .dds cube map, or a folder (no extension)",
+        ));
+    }
+    let face_format = FileFormat::from_ext_str(&a.format)
+        .filter(|f| !f.is_container())
+        .ok_or_else(|| {
+            Error::usage(format!(
+                "--format {}: use exr, hdr, png, tga or jpg",
+                a.format
+            ))
+        })?;
+    if a.samples == 0 {
+        return Err(Error::usage("--samples must be at least 1"));
+    }
+    let read = ReadOptions {
+        limits: Limits {
+            max_pixels: a.max_pixels,
+            ..Limits::default()
+        },
+        linear: a.linear,
+    };
+    let loaded = convert::load(&a.inputs, a.from, &read)?;
+    stages.done("decode");
+    if loaded.meta.replaced_values > 0 {
+        super::warn(format!(
+            "{}: replaced {} NaN, infinite or negative values by 0",
+            loaded.files[0].display(),
+            loaded.meta.replaced_values
+        ));
+    }
+    let size = a.size.unwrap_or_else(|| loaded.face_size());
+    if size == 0 || size > 16384 {
+        return Err(Error::usage(format!("--size {size}: use 1 to 16384")));
+    }
+    let Output::Cube(base) = convert::convert(&loaded, Kind::Faces, size, &Resampler::default())
+    else {
+        unreachable!("faces are a cube")
+    };
+    stages.done("resample");
+
+    let opts = ChainOptions {
+        filter: a.filter,
+        levels: a.levels,
+        samples: a.samples,
+        gloss_scale: a.gloss_scale,
+        gloss_bias: a.gloss_bias,
+        lighting: a.lighting,
+    };
+    let plan = filter::plan(&opts, size);
+    let cost = |i: &LevelInfo| (6 * i.size * i.size) as u64 * i.samples.unwrap_or(1) as u64;
+    let total: u64 = plan.iter().map(|(i, _)| cost(i)).sum();
+    let bar = if std::io::stderr().is_terminal() {
+        let b = indicatif::ProgressBar::new(total);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{prefix} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        b.set_prefix(format!("{} {size}", a.filter.name()));
+        Some(b)
+    } else {
+        None
+    };
+    let costs: Vec<u64> = plan.iter().map(|(i, _)| cost(i)).collect();
+    let (chain, infos) = filter::prefilter(&base, &opts, &|level| {
+        if let Some(b) = &bar {
+            b.inc(costs[level]);
+        }
+    });
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    stages.done("filter");
+
+    let levels_json = serde_json::to_vec_pretty(&LevelsFile {
+        filter: a.filter,
+        face_size: size,
+        level_count: infos.len(),
+        lighting: (a.filter == FilterKind::Cosine).then_some(a.lighting),
+        gloss_scale: (a.filter == FilterKind::Cosine).then_some(a.gloss_scale),
+        gloss_bias: (a.filter == FilterKind::Cosine).then_some(a.gloss_bias),
+        levels: &infos,
+    })
+    .map_err(|e| Error::usage(e.to_string()))?;
+    let mut files = Vec::new();
+    match container {
+        Some(f) => {
+            refuse_inputs(std::slice::from_ref(&a.output), &loaded.files)?;
+            let bytes = match f {
+                FileFormat::Ktx2 => io::ktx2::encode_with_metadata(
+                    &chain,
+                    a.gpu_format,
+                    &[(io::ktx2::LEVELS_KEY, &levels_json)],
+                ),
+                _ => io::encode_cube(&a.output, &chain, a.gpu_format)?,
+            };
+            files.push((a.output.clone(), bytes));
+            if f == FileFormat::Dds {
+                // DDS has no room for metadata: a sidecar that `info` reads.
+                files.push((sidecar(&a.output), levels_json));
+            }
+        }
+        None => {
+            let write = WriteOptions {
+                linear: a.linear,
+                ..WriteOptions::default()
+            };
+            for (m, faces) in chain.levels.iter().enumerate() {
+                let dir = a.output.join(format!("m{m}"));
+                files.extend(encode_faces(
+                    &dir,
+                    faces,
+                    face_format,
+                    &write,
+                    &loaded.files,
+                )?);
+            }
+            files.push((a.output.join("levels.json"), levels_json));
+        }
+    }
+    stages.done("encode");
+    io::write_all_atomic(&files)?;
+    stages.done("write");
+    for i in &infos {
+        let what = match (i.roughness, i.power, i.sigma) {
+            (Some(r), _, _) => format!("roughness {r:.3} (alpha {:.4})", r * r),
+            (_, Some(p), _) => format!("power {p:.1}"),
+            (_, _, Some(s)) => format!("sigma {:.5} rad ({:.3} deg)", s, s.to_degrees()),
+            _ => "2x2 box mean".to_string(),
+        };
+        let samples = i
+            .samples
+            .map(|s| format!(", {s} samples"))
+            .unwrap_or_default();
+        println!("level {:2}  {:5} px  {what}{samples}", i.level, i.size);
+    }
+    stages.total();
+    Ok(())
+}
+
+/// Where a DDS chain's levels description goes: `NAME.dds.levels.json`.
+pub fn sidecar(output: &Path) -> PathBuf {
+    let mut s = output.as_os_str().to_owned();
+    s.push(".levels.json");
+    PathBuf::from(s)
+}

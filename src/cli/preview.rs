@@ -1,0 +1,359 @@
+//! `cubeforge preview`: a material on a sphere lit by an environment map, shaded by the
+//! programs of The Cg Tutorial, chapter 7.
+
+use super::{warn, Stages};
+use cubeforge::image::{srgb_to_linear, Image};
+use cubeforge::io::{self, FileFormat, Limits, ReadOptions, WriteOptions};
+use cubeforge::layout::Kind;
+use cubeforge::preview::material::{self, Material};
+use cubeforge::preview::tonemap::{self, Tonemap};
+use cubeforge::preview::{
+    self, grid, Background, Control, Options, Parallax, ParallaxMode, Shading, Surface,
+};
+use cubeforge::{Error, Result};
+use glam::{Vec3, Vec4};
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Geometry: the unit sphere at the origin in cube-map space, the camera at \
+    (0, 0, D) looking at the origin with +Y up (image right is -X, so the environment reads as \
+    its face images do). Materials: reflect, refract and dispersion models of The Cg Tutorial \
+    chapter 7; `--material list` prints the presets."
+)]
+pub struct Args {
+    /// Environment: anything `convert` reads (panorama, cross, folder of faces, KTX2 or DDS
+    /// with all its levels), or a folder m0/ m1/ ... written by `cubeforge prefilter`.
+    #[arg(value_name = "ENV")]
+    pub env: Option<PathBuf>,
+    /// Output image: .png .jpg .tga (tone-mapped, sRGB) or .exr .hdr (linear radiance).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Material: a preset (chrome, mirror-decal, glass, water, diamond, plastic, crystal), a
+    /// .toml material file, or `list` to print the presets.
+    #[arg(short, long, default_value = "chrome")]
+    pub material: String,
+    /// Image edge in pixels (square; each cell of a --grid).
+    #[arg(long, default_value_t = 512)]
+    pub size: usize,
+    /// Vertical field of view, degrees.
+    #[arg(long, default_value_t = 30.0)]
+    pub fov: f32,
+    /// Camera distance from the sphere's centre (the sphere has radius 1).
+    #[arg(long, default_value_t = 4.0)]
+    pub distance: f32,
+    /// Orbit the camera about +Y, degrees (90 puts it on +X, 180 on -Z).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub yaw: f32,
+    /// Orbit the camera towards +Y, degrees (90 looks straight down).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub pitch: f32,
+    /// Compute the vectors per fragment (exact) or per vertex of a tessellated sphere
+    /// (interpolated by the rasterizer, as section 7.2.5 compares).
+    #[arg(long, value_enum, default_value_t = Shading::PerFragment)]
+    pub shading: Shading,
+    /// Latitude bands of the per-vertex sphere (longitude segments: twice as many).
+    #[arg(long, default_value_t = 16)]
+    pub tessellation: usize,
+    /// Texture LOD bias added to the level a GPU would pick (needs a prefiltered chain).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub lod_bias: f32,
+    /// LOD bias a control map's blur of 1 means, when its sidecar JSON does not say.
+    #[arg(long, default_value_t = 4.0)]
+    pub max_lod_bias: f32,
+    /// Radius of the environment (Brennan's correction for a finite distance; default: infinite).
+    #[arg(long, allow_hyphen_values = true)]
+    pub env_radius: Option<f32>,
+    /// Centre of the environment's sphere, X,Y,Z (with --env-radius; default 0,0,0).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub env_center: Option<Vec3>,
+    /// Brennan's approximation normalize(V) + (P - C) / R, or the exact ray-sphere hit.
+    #[arg(long, value_enum)]
+    pub parallax: Option<ParallaxMode>,
+    /// Decal texture on the sphere's (u, v) (default: the material's decal_color).
+    #[arg(long)]
+    pub decal: Option<PathBuf>,
+    /// Control map from `cubeforge control`: R reflectivity, G transmittance, B blur, A Fresnel mask.
+    #[arg(long)]
+    pub control: Option<PathBuf>,
+    /// Exposure in stops before tone mapping (tone-mapped outputs only).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub exposure: f32,
+    /// Tone curve for PNG, JPEG and TGA output (EXR and HDR stay linear).
+    #[arg(long, value_enum, default_value_t = Tonemap::None)]
+    pub tonemap: Tonemap,
+    /// Background: env (the environment), transparent, black, white, grey, #RRGGBB (sRGB) or
+    /// R,G,B (linear).
+    #[arg(long, default_value = "env")]
+    pub background: String,
+    /// Samples per pixel, stratified (default 4 for tone-mapped output, 1 for EXR and HDR:
+    /// each pixel the radiance through its centre).
+    #[arg(long)]
+    pub samples: Option<usize>,
+    /// Contact sheet of several materials, e.g. chrome,glass,crystal (presets or .toml files).
+    #[arg(long, value_delimiter = ',', conflicts_with = "grid_bias")]
+    pub grid: Vec<String>,
+    /// Contact sheet of one material at several LOD biases, e.g. 0,1,2,3.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub grid_bias: Vec<f32>,
+    /// Layout of ENV (detected from the aspect ratio; square images need sphere or angular).
+    #[arg(long, value_enum)]
+    pub from: Option<Kind>,
+    /// Refuse images with more pixels than this (checked before decoding).
+    #[arg(long, default_value_t = Limits::default().max_pixels)]
+    pub max_pixels: u64,
+}
+
+fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let vals: Vec<f32> = parts
+        .iter()
+        .map(|p| p.parse::<f32>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| format!("\"{s}\" is not X,Y,Z (three numbers)"))?;
+    match vals.as_slice() {
+        [x, y, z] if vals.iter().all(|v| v.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
+        _ => Err(format!("\"{s}\" is not X,Y,Z (three numbers)")),
+    }
+}
+
+fn parse_background(s: &str) -> Result<Background> {
+    let bad = || {
+        Error::usage(format!(
+            "--background {s}: use env, transparent, black, white, grey, #RRGGBB or R,G,B"
+        ))
+    };
+    let t = s.trim().to_ascii_lowercase();
+    Ok(match t.as_str() {
+        "env" => Background::Env,
+        "transparent" => Background::Color(Vec4::ZERO),
+        "black" => Background::Color(Vec4::new(0.0, 0.0, 0.0, 1.0)),
+        "white" => Background::Color(Vec4::ONE),
+        "grey" | "gray" => Background::Color(Vec4::new(0.18, 0.18, 0.18, 1.0)),
+        hex if hex.starts_with('#') => {
+            let h = &hex[1..];
+            if h.len() != 6 || !h.chars().all(|c| c.is_ascii_hexdigit()) {
+                return Err(bad());
+            }
+            let c = |i: usize| {
+                srgb_to_linear(u8::from_str_radix(&h[i..i + 2], 16).unwrap_or(0) as f32 / 255.0)
+            };
+            Background::Color(Vec4::new(c(0), c(2), c(4), 1.0))
+        }
+        _ => {
+            let v = parse_vec3(&t).map_err(|_| bad())?;
+            if v.min_element() < 0.0 {
+                return Err(bad());
+            }
+            Background::Color(v.extend(1.0))
+        }
+    })
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    if a.material == "list" {
+        print!("{}", material::list());
+        return Ok(());
+    }
+    let mut stages = Stages::new(verbose);
+    let (Some(env_path), Some(output)) = (&a.env, &a.output) else {
+        return Err(Error::usage(
+            "preview needs an environment and an output: cubeforge preview ENV -o OUTPUT",
+        ));
+    };
+    // Everything that can be checked is checked before the (possibly slow) decode.
+    let tone_mapped = match FileFormat::from_extension(output) {
+        Some(f) if f.is_container() => {
+            return Err(Error::file(
+                output,
+                "the preview is an image: name it .png .jpg .tga .exr or .hdr",
+            ))
+        }
+        Some(f) => !f.is_float(),
+        None => return Err(io::unknown_ext(output)),
+    };
+    let specs: Vec<String> = if a.grid.is_empty() {
+        vec![a.material.clone()]
+    } else {
+        a.grid.clone()
+    };
+    let materials: Vec<Material> = specs
+        .iter()
+        .map(|s| material::resolve(s.trim()))
+        .collect::<Result<_>>()?;
+    if a.env_radius.is_none() && (a.env_center.is_some() || a.parallax.is_some()) {
+        return Err(Error::usage(
+            "--env-center and --parallax need --env-radius (the environment's distance)",
+        ));
+    }
+    let opts = Options {
+        size: a.size,
+        fov: a.fov,
+        distance: a.distance,
+        yaw: a.yaw,
+        pitch: a.pitch,
+        shading: a.shading,
+        tessellation: a.tessellation,
+        lod_bias: a.lod_bias,
+        parallax: a.env_radius.map(|radius| Parallax {
+            radius,
+            center: a.env_center.unwrap_or(Vec3::ZERO),
+            mode: a.parallax.unwrap_or_default(),
+        }),
+        samples: a.samples.unwrap_or(if tone_mapped { 4 } else { 1 }),
+        background: parse_background(&a.background)?,
+    };
+    opts.validate()?;
+    if !(a.max_lod_bias.is_finite() && a.max_lod_bias >= 0.0) {
+        return Err(Error::usage("--max-lod-bias must be a number >= 0"));
+    }
+    if a.grid_bias.iter().any(|b| !b.is_finite()) {
+        return Err(Error::usage("--grid-bias values must be finite numbers"));
+    }
+    if !a.exposure.is_finite() {
+        return Err(Error::usage("--exposure must be a finite number"));
+    }
+    let cells = a.grid.len().max(a.grid_bias.len()).max(1);
+    let limits = Limits {
+        max_pixels: a.max_pixels,
+        ..Limits::default()
+    };
+    // The picture (every cell of a grid) against the pixel limit, before anything is read.
+    let pixels = (a.size as u64).saturating_mul(a.size as u64) * cells as u64;
+    if pixels > limits.max_pixels {
+        return Err(Error::usage(format!(
+            "--size {} makes {pixels} pixels, over the limit of {} (--max-pixels)",
+            a.size, limits.max_pixels
+        )));
+    }
+
+    let read = ReadOptions {
+        limits,
+        linear: false,
+    };
+    let env = preview::load_environment(env_path, a.from, &read)?;
+    if env.replaced_values > 0 {
+        warn(format!(
+            "{}: replaced {} NaN, infinite or negative values by 0",
+            env_path.display(),
+            env.replaced_values
+        ));
+    }
+    let mut inputs: Vec<PathBuf> = env.files.clone();
+    let decal_img = a
+        .decal
+        .as_ref()
+        .map(|p| preview::read_texture(p, false))
+        .transpose()?;
+    inputs.extend(a.decal.iter().cloned());
+    let control = match &a.control {
+        Some(p) => {
+            let (img, max, side) = preview::read_control(p, a.max_lod_bias)?;
+            inputs.push(p.clone());
+            if verbose {
+                match &side {
+                    Some(s) => eprintln!(
+                        "cubeforge: control map blur 1 = LOD bias {max} (from {})",
+                        s.display()
+                    ),
+                    None => {
+                        eprintln!("cubeforge: control map blur 1 = LOD bias {max} (--max-lod-bias)")
+                    }
+                }
+            }
+            Some((img, max))
+        }
+        None => None,
+    };
+    // Decals named by material files, read once each.
+    let mut file_decals: Vec<(PathBuf, Image)> = Vec::new();
+    if decal_img.is_none() {
+        for m in &materials {
+            if let Some(p) = &m.decal {
+                if !file_decals.iter().any(|(q, _)| q == p) {
+                    file_decals.push((p.clone(), preview::read_texture(p, false)?));
+                    inputs.push(p.clone());
+                }
+            }
+        }
+    }
+    stages.done("decode");
+
+    let wants_blur = a.lod_bias != 0.0
+        || a.grid_bias.iter().any(|b| *b != 0.0)
+        || control
+            .as_ref()
+            .is_some_and(|(img, max)| *max > 0.0 && img.pixels.iter().any(|p| p.z > 0.0));
+    if env.levels() == 1 && wants_blur {
+        warn(format!(
+            "{} has one level: LOD bias and blur need a prefiltered mip chain (make one with `cubeforge prefilter`); rendering without blur",
+            env_path.display()
+        ));
+    }
+
+    // One render per cell: materials, or biases of the one material.
+    let jobs: Vec<(Material, f32, String)> = if !a.grid_bias.is_empty() {
+        a.grid_bias
+            .iter()
+            .map(|b| (materials[0].clone(), *b, format!("bias {b}")))
+            .collect()
+    } else {
+        materials
+            .iter()
+            .map(|m| (m.clone(), a.lod_bias, m.name.clone()))
+            .collect()
+    };
+    let mut rendered: Vec<(Image, String)> = Vec::with_capacity(jobs.len());
+    for (m, bias, label) in jobs {
+        let decal = decal_img.as_ref().or_else(|| {
+            m.decal
+                .as_ref()
+                .and_then(|p| file_decals.iter().find(|(q, _)| q == p).map(|(_, i)| i))
+        });
+        let surface = Surface {
+            decal,
+            control: control.as_ref().map(|(img, max)| Control {
+                map: img,
+                max_lod_bias: *max,
+            }),
+        };
+        let o = Options {
+            lod_bias: bias,
+            ..opts
+        };
+        let mut img = preview::render(&env.sampler, &m, &surface, &o)?;
+        if tone_mapped {
+            tonemap::apply(&mut img, a.tonemap, a.exposure);
+        }
+        rendered.push((img, label));
+    }
+    let img = if a.grid.is_empty() && a.grid_bias.is_empty() {
+        rendered.swap_remove(0).0
+    } else {
+        grid::contact_sheet(&rendered)
+    };
+    stages.done("render");
+
+    refuse_inputs(output, &inputs)?;
+    let bytes = io::encode_image(output, &img, &WriteOptions::default())?;
+    stages.done("encode");
+    io::write_all_atomic(&[(output.clone(), bytes)])?;
+    stages.done("write");
+    stages.total();
+    Ok(())
+}
+
+/// Refuses to write over an input file.
+fn refuse_inputs(output: &Path, inputs: &[PathBuf]) -> Result<()> {
+    let Ok(out) = std::fs::canonicalize(output) else {
+        return Ok(());
+    };
+    if inputs
+        .iter()
+        .filter_map(|p| std::fs::canonicalize(p).ok())
+        .any(|p| p == out)
+    {
+        return Err(Error::file(output, "refusing to overwrite an input file"));
+    }
+    Ok(())
+}

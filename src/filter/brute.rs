@@ -1,0 +1,54 @@
+//! Brute-force convolution: every output texel integrates a lobe over every source texel,
+//! weighted by exact texel solid angles. Slow (output x source texels) but exact: the
+//! reference the fast filters are measured against, and the irradiance default at small sizes.
+
+use super::lobe::Lobe;
+use crate::cube::{face_dir, texel_solid_angle, CubeMap};
+use crate::image::Image;
+use glam::{Vec3, Vec4};
+
+/// Directions and solid angles of every texel of a face size, in face order.
+pub fn texel_table(n: usize) -> Vec<(Vec3, f32)> {
+    let inv = 1.0 / n as f32;
+    let mut out = Vec::with_capacity(6 * n * n);
+    for face in 0..6 {
+        for y in 0..n {
+            for x in 0..n {
+                let d = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                out.push((d, texel_solid_angle(n, x, y)));
+            }
+        }
+    }
+    out
+}
+
+/// Convolves level 0 of `src` with `lobe` into faces of edge `size`, normalised by the lobe's
+/// own discrete integral (so a constant environment stays exactly constant).
+pub fn convolve(src: &CubeMap, lobe: Lobe, size: usize) -> [Image; 6] {
+    let n = src.size();
+    let table = texel_table(n);
+    let values: Vec<Vec4> = src.levels[0]
+        .iter()
+        .flat_map(|f| f.pixels.iter().copied())
+        .collect();
+    let inv = 1.0 / size as f32;
+    std::array::from_fn(|face| {
+        Image::from_fn(size, size, |x, y| {
+            let r = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+            let mut acc = Vec4::ZERO;
+            let mut wsum = 0.0f32;
+            for ((d, sa), v) in table.iter().zip(&values) {
+                let w = lobe.weight(r.dot(*d)) * sa;
+                if w > 0.0 {
+                    acc += *v * w;
+                    wsum += w;
+                }
+            }
+            if wsum > 0.0 {
+                acc / wsum
+            } else {
+                Vec4::ZERO
+            }
+        })
+    })
+}

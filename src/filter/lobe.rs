@@ -1,0 +1,269 @@
+//! Filtered importance sampling of rotationally symmetric lobes around each texel's direction:
+//! one precomputed set of (local direction, weight, source lod) per level, rotated into every
+//! texel's frame and looked up trilinearly in a box-mipmapped, seamless source.
+
+use crate::cube::{face_dir, CubeMap, CubeSampler};
+use crate::image::Image;
+use glam::{Vec3, Vec4};
+use std::f32::consts::{PI, TAU};
+
+/// A lobe around the direction being filtered, as a function of the angle to it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lobe {
+    /// GGX (Trowbridge-Reitz) with alpha = roughness^2, weighted by n.l, n = v = r: the
+    /// split-sum radiance prefilter.
+    Ggx { alpha: f32 },
+    /// cos^power of the angle (Phong lobe around the reflection vector).
+    CosinePower { power: f32 },
+    /// exp(-angle^2 / (2 sigma^2)).
+    Gaussian { sigma: f32 },
+}
+
+impl Lobe {
+    /// Weight of a direction at cosine `c` from the lobe's axis (not normalised), as the
+    /// brute-force reference integrates it.
+    pub fn weight(&self, c: f32) -> f32 {
+        match *self {
+            Lobe::Ggx { alpha } => {
+                if c <= 0.0 {
+                    return 0.0;
+                }
+                // Half vector between n and l: n.h = cos(theta / 2).
+                let nh = ((1.0 + c) * 0.5).sqrt();
+                ggx_d(nh, alpha) * c
+            }
+            Lobe::CosinePower { power } => {
+                if c <= 0.0 {
+                    0.0
+                } else {
+                    c.powf(power)
+                }
+            }
+            Lobe::Gaussian { sigma } => {
+                let a = c.clamp(-1.0, 1.0).acos();
+                (-a * a / (2.0 * sigma * sigma)).exp()
+            }
+        }
+    }
+}
+
+impl Lobe {
+    /// The lobe's integral over the sphere, 2 pi * int w(cos t) sin t dt, by the midpoint rule
+    /// on 16384 steps (fine enough for the narrowest lobes of a 4096-face chain).
+    pub fn integral(&self) -> f64 {
+        let steps = 16384;
+        let dt = std::f64::consts::PI / steps as f64;
+        let mut sum = 0.0f64;
+        for i in 0..steps {
+            let t = (i as f64 + 0.5) * dt;
+            sum += self.weight(t.cos() as f32) as f64 * t.sin();
+        }
+        sum * dt * std::f64::consts::TAU
+    }
+}
+
+/// GGX normal distribution D(h) for cos(n, h) = `nh`.
+#[inline]
+pub fn ggx_d(nh: f32, alpha: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let d = nh * nh * (a2 - 1.0) + 1.0;
+    a2 / (PI * d * d)
+}
+
+/// The i-th of n points of the Hammersley set: deterministic, low discrepancy.
+#[inline]
+pub fn hammersley(i: u32, n: u32) -> (f32, f32) {
+    (
+        (i as f32 + 0.5) / n as f32,
+        (i.reverse_bits() as f64 / 4_294_967_296.0) as f32,
+    )
+}
+
+/// One sample of a kernel: direction in the lobe's frame (+Z is the axis), weight, source lod.
+#[derive(Clone, Copy, Debug)]
+pub struct Tap {
+    pub dir: Vec3,
+    pub weight: f32,
+    pub lod: f32,
+    /// The lod split for the lookup: level below and the fraction towards the next.
+    pub level: usize,
+    pub frac: f32,
+}
+
+/// The precomputed samples of one lobe.
+#[derive(Clone, Debug)]
+pub struct Kernel {
+    pub taps: Vec<Tap>,
+}
+
+impl Kernel {
+    /// `count` importance samples of `lobe`, each looked up at the source level whose texels
+    /// cover the solid angle the sample stands for (Krivanek and Colbert's filtered importance
+    /// sampling), on a source whose level 0 has faces of edge `src_size`.
+    pub fn new(lobe: Lobe, count: u32, src_size: usize) -> Kernel {
+        let texel_solid_angle = 4.0 * PI / (6.0 * (src_size * src_size) as f32);
+        let mut taps = Vec::with_capacity(count as usize);
+        for i in 0..count {
+            let (u, v) = hammersley(i, count);
+            let phi = TAU * v;
+            // (cos theta of the sampled direction, weight, pdf in solid angle)
+            let (cos_t, weight, pdf) = match lobe {
+                Lobe::Ggx { alpha } => {
+                    let a2 = alpha * alpha;
+                    let cos_h = ((1.0 - u) / (1.0 + (a2 - 1.0) * u)).sqrt();
+                    // l = reflect(-n, h) with n = v: angle doubles.
+                    let cos_l = 2.0 * cos_h * cos_h - 1.0;
+                    if cos_l <= 0.0 {
+                        continue;
+                    }
+                    // pdf(l) = D(h) (n.h) / (4 (v.h)) = D / 4 with n = v.
+                    (cos_l, cos_l, ggx_d(cos_h, alpha) * 0.25)
+                }
+                Lobe::CosinePower { power } => {
+                    let c = (1.0 - u).powf(1.0 / (power + 1.0));
+                    (c, 1.0, (power + 1.0) / TAU * c.powf(power))
+                }
+                Lobe::Gaussian { sigma } => {
+                    // Rayleigh-distributed angle; the sphere's sin(theta) / theta corrects it.
+                    let theta = sigma * (-2.0 * (1.0 - u).ln()).sqrt();
+                    if theta >= PI {
+                        continue;
+                    }
+                    let pdf = (-theta * theta / (2.0 * sigma * sigma)).exp()
+                        / (TAU * sigma * sigma)
+                        * theta
+                        / theta.sin().max(1e-12);
+                    let w = if theta > 1e-6 {
+                        theta.sin() / theta
+                    } else {
+                        1.0
+                    };
+                    (theta.cos(), w, pdf)
+                }
+            };
+            let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+            let dir = Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
+            let sample_solid_angle = 1.0 / (count as f32 * pdf.max(1e-20));
+            let max_lod = (CubeMap::full_chain_len(src_size) - 1) as f32;
+            let lod = (0.5 * (sample_solid_angle / texel_solid_angle).log2()).clamp(0.0, max_lod);
+            taps.push(Tap {
+                dir,
+                weight,
+                lod,
+                level: lod as usize,
+                frac: lod.fract(),
+            });
+        }
+        Kernel { taps }
+    }
+}
+
+/// An orthonormal frame around unit `n`, continuous except where n is near +-Y.
+#[inline]
+pub fn frame(n: Vec3) -> (Vec3, Vec3) {
+    let up = if n.y.abs() < 0.999 { Vec3::Y } else { Vec3::X };
+    let t = up.cross(n).normalize();
+    (t, n.cross(t))
+}
+
+/// Texels too bright to importance-sample without fireflies (an HDR sun), split off the
+/// source: their excess over a threshold is convolved exactly, texel by texel.
+#[derive(Clone, Debug, Default)]
+pub struct Bright {
+    /// Direction, solid angle and excess radiance of each bright texel.
+    pub texels: Vec<(Vec3, f32, Vec4)>,
+}
+
+/// Most texels handled exactly; beyond that the threshold rises.
+pub const MAX_BRIGHT: usize = 4096;
+
+/// Splits `base` into a residual whose luminance is at most `ratio` times its mean (what the
+/// sampled filters see) and the excess of the brighter texels.
+pub fn split_bright(base: &CubeMap, ratio: f32) -> (CubeMap, Bright) {
+    use crate::image::luminance;
+    let n = base.size();
+    let table = super::brute::texel_table(n);
+    let values: Vec<Vec4> = base.levels[0]
+        .iter()
+        .flat_map(|f| f.pixels.iter().copied())
+        .collect();
+    let mut total = 0.0f64;
+    let mut area = 0.0f64;
+    for ((_, sa), v) in table.iter().zip(&values) {
+        total += luminance(*v) as f64 * *sa as f64;
+        area += *sa as f64;
+    }
+    let mean = (total / area) as f32;
+    let mut lums: Vec<f32> = values.iter().map(|v| luminance(*v)).collect();
+    let mut threshold = (ratio * mean).max(1e-6);
+    if lums.iter().filter(|&&l| l > threshold).count() > MAX_BRIGHT {
+        lums.sort_by(|a, b| b.total_cmp(a));
+        threshold = lums[MAX_BRIGHT];
+    }
+    let mut bright = Bright::default();
+    let mut residual = base.levels[0].clone();
+    for (face, img) in residual.iter_mut().enumerate() {
+        for (i, p) in img.pixels.iter_mut().enumerate() {
+            let l = luminance(*p);
+            if l > threshold {
+                let kept = (*p * (threshold / l)).truncate().extend(p.w);
+                let excess = (*p - kept).truncate().extend(0.0);
+                let (d, sa) = table[face * n * n + i];
+                bright.texels.push((d, sa, excess));
+                *p = kept;
+            }
+        }
+    }
+    (
+        CubeMap {
+            levels: vec![residual],
+        },
+        bright,
+    )
+}
+
+/// Filters one level: every texel of six `size` faces is the weighted mean of the kernel's
+/// taps around its direction, plus the exact convolution of the bright texels with `lobe`.
+/// Rows in parallel; sums in a fixed order (deterministic).
+pub fn filter_level(
+    src: &CubeSampler,
+    kernel: &Kernel,
+    size: usize,
+    lobe: Lobe,
+    bright: &Bright,
+) -> [Image; 6] {
+    let inv = 1.0 / size as f32;
+    let wsum: f32 = kernel.taps.iter().map(|t| t.weight).sum();
+    let norm = if bright.texels.is_empty() {
+        0.0
+    } else {
+        (1.0 / lobe.integral()) as f32
+    };
+    std::array::from_fn(|face| {
+        Image::from_fn(size, size, |x, y| {
+            let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+            let (t, b) = frame(n);
+            let mut acc = Vec4::ZERO;
+            for tap in &kernel.taps {
+                let d = t * tap.dir.x + b * tap.dir.y + n * tap.dir.z;
+                acc += src.sample_split(d, tap.level, tap.frac) * tap.weight;
+            }
+            let mut out = acc / wsum;
+            for (d, sa, excess) in &bright.texels {
+                let w = lobe.weight(n.dot(*d));
+                if w > 0.0 {
+                    out += *excess * (w * sa * norm);
+                }
+            }
+            out
+        })
+    })
+}
+
+/// The source prepared for filtering: its box mips, seamless.
+pub fn source_sampler(base: &CubeMap) -> CubeSampler {
+    let b = CubeMap {
+        levels: vec![base.levels[0].clone()],
+    };
+    CubeSampler::new(&b.with_box_mips(None))
+}

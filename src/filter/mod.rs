@@ -1,0 +1,290 @@
+//! Prefiltered mip chains (box, LOD-bias Gaussian, cosine power, GGX) and the diffuse side
+//! (irradiance, spherical harmonics). Every filter samples the same seamless cube map.
+
+pub mod brute;
+pub mod lobe;
+pub mod sh;
+
+use crate::cube::{CubeMap, Faces};
+use lobe::{Kernel, Lobe};
+use serde::{Deserialize, Serialize};
+
+/// The filters of `cubeforge prefilter`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FilterKind {
+    /// Plain mipmaps: each level the solid-angle-weighted 2x2 mean of the one above.
+    Box,
+    /// LOD-bias blur: level m is the base convolved with a Gaussian as wide as its texels.
+    Gaussian,
+    /// Phong / cosine-power lobes, cmft's gloss scale and bias mapping of level to power.
+    Cosine,
+    /// Split-sum GGX radiance: level m has roughness m / (levels - 1).
+    Ggx,
+}
+
+impl FilterKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            FilterKind::Box => "box",
+            FilterKind::Gaussian => "gaussian",
+            FilterKind::Cosine => "cosine",
+            FilterKind::Ggx => "ggx",
+        }
+    }
+}
+
+/// cmft's lighting models: how a gloss level's specular power is adjusted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LightingModel {
+    #[default]
+    Phong,
+    /// Phong with the n.l factor folded in: power + 1.
+    Phongbrdf,
+    /// Blinn-Phong expressed around the reflection vector: power / 4.
+    Blinn,
+    /// power / 4 + 1.
+    Blinnbrdf,
+}
+
+impl LightingModel {
+    pub fn apply(self, power: f32) -> f32 {
+        match self {
+            LightingModel::Phong => power,
+            LightingModel::Phongbrdf => power + 1.0,
+            LightingModel::Blinn => power / 4.0,
+            LightingModel::Blinnbrdf => power / 4.0 + 1.0,
+        }
+    }
+}
+
+/// What to build.
+#[derive(Clone, Copy, Debug)]
+pub struct ChainOptions {
+    pub filter: FilterKind,
+    /// Level count (None: down to 1 x 1).
+    pub levels: Option<usize>,
+    /// Importance samples per texel for gaussian, cosine and ggx.
+    pub samples: u32,
+    pub gloss_scale: f32,
+    pub gloss_bias: f32,
+    pub lighting: LightingModel,
+}
+
+impl Default for ChainOptions {
+    fn default() -> Self {
+        ChainOptions {
+            filter: FilterKind::Ggx,
+            levels: None,
+            samples: DEFAULT_SAMPLES,
+            gloss_scale: 10.0,
+            gloss_bias: 1.0,
+            lighting: LightingModel::Phong,
+        }
+    }
+}
+
+pub const DEFAULT_SAMPLES: u32 = 64;
+
+/// Texels brighter than this many times the mean luminance are convolved exactly.
+pub const BRIGHT_RATIO: f32 = 64.0;
+
+/// What one level holds, for levels.json and container metadata.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LevelInfo {
+    pub level: usize,
+    pub size: usize,
+    pub filter: FilterKind,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub roughness: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub alpha: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub power: Option<f32>,
+    /// Gaussian standard deviation, radians.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub sigma: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub samples: Option<u32>,
+}
+
+/// cmft's mapping of a level to a specular power: glossiness falls linearly from 1 at level
+/// 0 to 0 at the last level, power = 2^(scale * glossiness + bias).
+pub fn specular_power(level: usize, count: usize, scale: f32, bias: f32) -> f32 {
+    let gloss = (1.0 - level as f32 / (count as f32 - (1.0 + 1e-7))).max(0.0);
+    2f32.powf(scale * gloss + bias)
+}
+
+/// Angle one texel of a level spans on average: a quarter turn over the face edge.
+pub fn texel_angle(size: usize) -> f32 {
+    std::f32::consts::FRAC_PI_2 / size as f32
+}
+
+/// Per-level lobes (None: the level is copied or box-reduced, not convolved).
+pub fn plan(opts: &ChainOptions, base: usize) -> Vec<(LevelInfo, Option<Lobe>)> {
+    let count = opts
+        .levels
+        .unwrap_or(usize::MAX)
+        .clamp(1, CubeMap::full_chain_len(base));
+    let mut plan: Vec<(LevelInfo, Option<Lobe>)> = (0..count)
+        .map(|m| {
+            let size = (base >> m).max(1);
+            let mut info = LevelInfo {
+                level: m,
+                size,
+                filter: opts.filter,
+                roughness: None,
+                alpha: None,
+                power: None,
+                sigma: None,
+                samples: None,
+            };
+            let lobe = match opts.filter {
+                FilterKind::Box => None,
+                FilterKind::Gaussian => {
+                    let sigma = texel_angle(size);
+                    info.sigma = Some(sigma);
+                    Some(Lobe::Gaussian { sigma })
+                }
+                FilterKind::Cosine => {
+                    let p = opts.lighting.apply(specular_power(
+                        m,
+                        count,
+                        opts.gloss_scale,
+                        opts.gloss_bias,
+                    ));
+                    info.power = Some(p);
+                    Some(Lobe::CosinePower { power: p })
+                }
+                FilterKind::Ggx => {
+                    let r = if count > 1 {
+                        m as f32 / (count - 1) as f32
+                    } else {
+                        0.0
+                    };
+                    info.roughness = Some(r);
+                    info.alpha = Some(r * r);
+                    // Level 0 is the mirror: the source itself.
+                    (m > 0).then_some(Lobe::Ggx { alpha: r * r })
+                }
+            };
+            (info, lobe)
+        })
+        .collect();
+    // Wider lobes need more samples for the same accuracy, and smaller levels can afford them:
+    // double per level from the first convolved one, up to 32 times the base count.
+    let first = plan.iter().position(|(_, l)| l.is_some()).unwrap_or(0);
+    for (info, lobe) in &mut plan {
+        if lobe.is_some() {
+            let doublings = (info.level - first).min(5) as u32;
+            info.samples = Some(opts.samples.max(1) << doublings);
+        }
+    }
+    plan
+}
+
+/// Builds the chain from a base cube map (level 0 at the output size). Calls `progress` once
+/// per finished level with its index.
+pub fn prefilter(
+    base: &CubeMap,
+    opts: &ChainOptions,
+    progress: &(dyn Fn(usize) + Sync),
+) -> (CubeMap, Vec<LevelInfo>) {
+    let n = base.size();
+    let plan = plan(opts, n);
+    if opts.filter == FilterKind::Box {
+        let chain = CubeMap {
+            levels: vec![base.levels[0].clone()],
+        }
+        .with_box_mips(Some(plan.len()));
+        (0..plan.len()).for_each(progress);
+        return (chain, plan.into_iter().map(|(i, _)| i).collect());
+    }
+    // An HDR sun is convolved exactly; the sampled filters see the rest, at most
+    // BRIGHT_RATIO times the mean luminance, so no tap can turn into a firefly.
+    let (residual, bright) = lobe::split_bright(base, BRIGHT_RATIO);
+    let src = lobe::source_sampler(&residual);
+    let levels: Vec<Faces> = {
+        use rayon::prelude::*;
+        plan.par_iter()
+            .map(|(info, lobe)| {
+                let faces = match lobe {
+                    None => base.levels[0].clone(),
+                    Some(l) => {
+                        let k = Kernel::new(*l, info.samples.unwrap_or(opts.samples), n);
+                        lobe::filter_level(&src, &k, info.size, *l, &bright)
+                    }
+                };
+                progress(info.level);
+                faces
+            })
+            .collect()
+    };
+    (
+        CubeMap { levels },
+        plan.into_iter().map(|(i, _)| i).collect(),
+    )
+}
+
+/// How the irradiance map is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum IrradianceMethod {
+    /// Exact cosine-weighted integral over every texel of a 64-face copy of the source:
+    /// right next to an HDR sun, where 9 SH coefficients ring (the default).
+    #[default]
+    Brute,
+    /// From the 9 SH coefficients: fast, smooth, up to ~10% off (and possibly negative)
+    /// opposite a strong sun.
+    Sh,
+}
+
+/// Face edge of the source copy the brute-force irradiance integrates.
+pub const IRRADIANCE_SOURCE_SIZE: usize = 64;
+
+/// The Lambertian irradiance map at face edge `size`, stored as (1/pi) times the
+/// cosine-weighted integral of radiance (a constant environment c gives c), and the order-2
+/// SH coefficients of the radiance.
+pub fn irradiance(
+    base: &CubeMap,
+    size: usize,
+    method: IrradianceMethod,
+) -> (CubeMap, [[f64; 3]; 9]) {
+    // A box-reduced copy: exact for the integral, and the SH of it is what the map holds.
+    let chain = CubeMap {
+        levels: vec![base.levels[0].clone()],
+    }
+    .with_box_mips(None);
+    let pick = |max: usize| {
+        let i = chain
+            .levels
+            .iter()
+            .position(|l| l[0].width <= max)
+            .unwrap_or(chain.levels.len() - 1);
+        CubeMap {
+            levels: vec![chain.levels[i].clone()],
+        }
+    };
+    let coeffs = sh::project(&pick(256));
+    let faces = match method {
+        IrradianceMethod::Brute => brute::convolve(
+            &pick(IRRADIANCE_SOURCE_SIZE),
+            Lobe::CosinePower { power: 1.0 },
+            size,
+        ),
+        IrradianceMethod::Sh => {
+            let e = sh::irradiance(&coeffs);
+            let over_pi: [[f64; 3]; 9] =
+                std::array::from_fn(|i| e[i].map(|v| v / std::f64::consts::PI));
+            CubeMap::from_fn(size, |d| sh::eval(&over_pi, d))
+                .levels
+                .remove(0)
+        }
+    };
+    let mut cube = CubeMap {
+        levels: vec![faces],
+    };
+    cube.map_texels(|p| p.truncate().extend(1.0));
+    (cube, coeffs)
+}

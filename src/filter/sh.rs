@@ -1,0 +1,142 @@
+//! Order-2 real spherical harmonics (9 coefficients per channel) of a cube map's radiance, and
+//! their convolution with the clamped cosine (Ramamoorthi and Hanrahan 2001).
+
+use super::brute::texel_table;
+use crate::cube::CubeMap;
+use glam::{Vec3, Vec4};
+use serde::Serialize;
+use std::f64::consts::PI;
+
+/// The normalisation constants of the real SH basis, in coefficient order.
+pub const BASIS: [(&str, i32, i32, f64); 9] = [
+    ("0.5 * sqrt(1/pi)", 0, 0, 0.282_094_791_773_878_1),
+    ("0.5 * sqrt(3/pi) * y", 1, -1, 0.488_602_511_902_919_9),
+    ("0.5 * sqrt(3/pi) * z", 1, 0, 0.488_602_511_902_919_9),
+    ("0.5 * sqrt(3/pi) * x", 1, 1, 0.488_602_511_902_919_9),
+    ("0.5 * sqrt(15/pi) * x * y", 2, -2, 1.092_548_430_592_079_2),
+    ("0.5 * sqrt(15/pi) * y * z", 2, -1, 1.092_548_430_592_079_2),
+    (
+        "0.25 * sqrt(5/pi) * (3 z^2 - 1)",
+        2,
+        0,
+        0.315_391_565_252_520_05,
+    ),
+    ("0.5 * sqrt(15/pi) * x * z", 2, 1, 1.092_548_430_592_079_2),
+    (
+        "0.25 * sqrt(15/pi) * (x^2 - y^2)",
+        2,
+        2,
+        0.546_274_215_296_039_6,
+    ),
+];
+
+/// The clamped-cosine convolution factors per band: pi, 2pi/3, pi/4.
+pub const COSINE_BAND: [f64; 3] = [PI, 2.0 * PI / 3.0, PI / 4.0];
+
+/// The 9 basis functions at unit direction `d`, in coefficient order.
+pub fn basis(d: Vec3) -> [f64; 9] {
+    let (x, y, z) = (d.x as f64, d.y as f64, d.z as f64);
+    let k = |i: usize| BASIS[i].3;
+    [
+        k(0),
+        k(1) * y,
+        k(2) * z,
+        k(3) * x,
+        k(4) * x * y,
+        k(5) * y * z,
+        k(6) * (3.0 * z * z - 1.0),
+        k(7) * x * z,
+        k(8) * (x * x - y * y),
+    ]
+}
+
+/// Projects level 0 of the cube map (RGB) onto the basis with exact texel solid angles.
+/// Accumulates in f64 in a fixed order, so results do not depend on threads.
+pub fn project(cube: &CubeMap) -> [[f64; 3]; 9] {
+    let n = cube.size();
+    let table = texel_table(n);
+    let mut c = [[0.0f64; 3]; 9];
+    let values = cube.levels[0].iter().flat_map(|f| f.pixels.iter());
+    for ((d, sa), v) in table.iter().zip(values) {
+        let y = basis(*d);
+        for (i, yi) in y.iter().enumerate() {
+            let w = yi * *sa as f64;
+            c[i][0] += v.x as f64 * w;
+            c[i][1] += v.y as f64 * w;
+            c[i][2] += v.z as f64 * w;
+        }
+    }
+    c
+}
+
+/// Band of coefficient i.
+pub fn band(i: usize) -> usize {
+    BASIS[i].1 as usize
+}
+
+/// Coefficients of irradiance E(n) = integral of L(l) max(0, n.l) dl: each band times pi,
+/// 2pi/3 or pi/4.
+pub fn irradiance(radiance: &[[f64; 3]; 9]) -> [[f64; 3]; 9] {
+    std::array::from_fn(|i| radiance[i].map(|v| v * COSINE_BAND[band(i)]))
+}
+
+/// Evaluates coefficients at a direction.
+pub fn eval(coeffs: &[[f64; 3]; 9], d: Vec3) -> Vec4 {
+    let y = basis(d);
+    let mut out = [0.0f64; 3];
+    for i in 0..9 {
+        for c in 0..3 {
+            out[c] += coeffs[i][c] * y[i];
+        }
+    }
+    Vec4::new(out[0] as f32, out[1] as f32, out[2] as f32, 1.0)
+}
+
+/// What `--sh FILE.json` holds.
+#[derive(Serialize)]
+pub struct ShFile {
+    pub order: u32,
+    pub basis: &'static str,
+    pub ordering: Vec<[i32; 2]>,
+    pub constants: Vec<ShConstant>,
+    /// Coefficients of the radiance L(d) = sum c_i Y_i(d), per channel [r, g, b].
+    pub radiance: Vec<[f64; 3]>,
+    /// Coefficients of the irradiance E(n) = sum c_i Y_i(n) (band factors pi, 2pi/3, pi/4).
+    pub irradiance: Vec<[f64; 3]>,
+    /// Irradiance divided by pi: the value the irradiance cube map stores, and what a shader
+    /// multiplies by the diffuse albedo.
+    pub irradiance_over_pi: Vec<[f64; 3]>,
+    pub note: &'static str,
+}
+
+#[derive(Serialize)]
+pub struct ShConstant {
+    pub l: i32,
+    pub m: i32,
+    pub formula: &'static str,
+    pub value: f64,
+}
+
+impl ShFile {
+    pub fn new(radiance: &[[f64; 3]; 9]) -> ShFile {
+        let e = irradiance(radiance);
+        ShFile {
+            order: 2,
+            basis: "real spherical harmonics, directions in cube-map space (x, y, z) unit length",
+            ordering: BASIS.iter().map(|b| [b.1, b.2]).collect(),
+            constants: BASIS
+                .iter()
+                .map(|b| ShConstant {
+                    l: b.1,
+                    m: b.2,
+                    formula: b.0,
+                    value: b.3,
+                })
+                .collect(),
+            radiance: radiance.to_vec(),
+            irradiance: e.to_vec(),
+            irradiance_over_pi: e.iter().map(|c| c.map(|v| v / PI)).collect(),
+            note: "shader: color = albedo * sum_i irradiance_over_pi[i] * Y_i(n), Y_i = constant * polynomial above",
+        }
+    }
+}

@@ -1,0 +1,109 @@
+//! The unit sphere at the origin: ray intersection and texture coordinates for per-fragment
+//! shading, and the tessellated mesh (latitude bands x longitude segments) for per-vertex
+//! shading.
+//!
+//! Texture coordinates: u goes around +Y starting at +Z (u = 0) towards +X (u = 0.25), so
+//! u = atan2(x, z) / 2pi wrapped to [0, 1); v runs from the north pole (+Y, v = 0) to the
+//! south pole (v = 1), v = acos(y) / pi. Row 0 of a decal or control map is v = 0.
+
+use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
+
+/// Nearest intersection t > 0 of the ray `origin + t dir` (dir of any length) with the unit
+/// sphere, for an origin outside the sphere.
+#[inline]
+pub fn intersect(origin: Vec3, dir: Vec3) -> Option<f32> {
+    let len = dir.length();
+    hit(origin, dir).map(|p| (p - origin).length() / len)
+}
+
+/// The nearest point where the ray from `origin` (outside the sphere) along `dir` (any
+/// length) meets the unit sphere. Computed from the ray's closest approach to the centre
+/// (Haines et al., Ray Tracing Gems ch. 7), so a distant camera keeps full precision.
+#[inline]
+pub fn hit(origin: Vec3, dir: Vec3) -> Option<Vec3> {
+    let dn = dir.normalize();
+    let b = origin.dot(dn);
+    if b >= 0.0 {
+        return None;
+    }
+    // The point of the line nearest the centre, and its squared distance from it.
+    let w = origin - dn * b;
+    let h2 = w.length_squared();
+    if h2 > 1.0 {
+        return None;
+    }
+    Some(w - dn * (1.0 - h2).sqrt())
+}
+
+/// Texture coordinates of a point on (or radially projected onto) the sphere.
+#[inline]
+pub fn uv(p: Vec3) -> Vec2 {
+    let u = p.x.atan2(p.z) / (2.0 * PI);
+    let u = if u < 0.0 { u + 1.0 } else { u };
+    let r = p.length();
+    let v = (p.y / r).clamp(-1.0, 1.0).acos() / PI;
+    Vec2::new(u.min(1.0 - f32::EPSILON * 0.5), v)
+}
+
+/// A triangle mesh approximating the sphere, vertices on the sphere (so its normal there is
+/// the position), with texture coordinates seamed at u = 0 / 1 like a real mesh.
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// `bands` latitude bands and 2 x `bands` longitude segments: each band-segment cell is two
+/// triangles, one at the poles (where the cell's top or bottom edge is a point).
+pub fn tessellate(bands: usize) -> Mesh {
+    let n = bands.max(2);
+    let m = 2 * n;
+    let cols = m + 1;
+    let mut positions = Vec::with_capacity((n + 1) * cols);
+    let mut uvs = Vec::with_capacity((n + 1) * cols);
+    for i in 0..=n {
+        let theta = PI * i as f32 / n as f32;
+        let (st, ct) = theta.sin_cos();
+        for j in 0..=m {
+            let phi = 2.0 * PI * j as f32 / m as f32;
+            let (sp, cp) = phi.sin_cos();
+            let p = if i == 0 {
+                Vec3::Y
+            } else if i == n {
+                Vec3::NEG_Y
+            } else {
+                Vec3::new(st * sp, ct, st * cp)
+            };
+            positions.push(p);
+            // A pole vertex belongs to one cell: give it that cell's middle u.
+            let u = if (i == 0 || i == n) && j < m {
+                (j as f32 + 0.5) / m as f32
+            } else {
+                j as f32 / m as f32
+            };
+            uvs.push(Vec2::new(u, i as f32 / n as f32));
+        }
+    }
+    let idx = |i: usize, j: usize| (i * cols + j) as u32;
+    let mut triangles = Vec::with_capacity(2 * n * m);
+    for i in 0..n {
+        for j in 0..m {
+            let (a, b, c, d) = (idx(i, j), idx(i, j + 1), idx(i + 1, j), idx(i + 1, j + 1));
+            if i == 0 {
+                triangles.push([a, c, d]);
+            } else if i == n - 1 {
+                triangles.push([a, c, b]);
+            } else {
+                triangles.push([a, c, d]);
+                triangles.push([a, d, b]);
+            }
+        }
+    }
+    Mesh {
+        positions,
+        uvs,
+        triangles,
+    }
+}

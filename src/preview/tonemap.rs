@@ -1,0 +1,51 @@
+//! Display transforms for tone-mapped (8-bit, sRGB) outputs: an exposure in stops, then a
+//! curve taking radiance to [0, 1]. EXR and HDR outputs keep linear radiance and skip this.
+
+use crate::image::Image;
+use glam::Vec4;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum Tonemap {
+    /// Clip at 1 (values at or below 1 pass unchanged).
+    #[default]
+    None,
+    /// Reinhard, per channel: x / (1 + x).
+    Reinhard,
+    /// Narkowicz's fit of the ACES filmic curve: x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14).
+    Aces,
+}
+
+impl Tonemap {
+    /// Maps one linear channel value (already exposed) to [0, 1].
+    #[inline]
+    pub fn curve(self, x: f32) -> f32 {
+        let x = x.max(0.0);
+        match self {
+            Tonemap::None => x.min(1.0),
+            Tonemap::Reinhard => x / (1.0 + x),
+            Tonemap::Aces => {
+                ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+            }
+        }
+    }
+
+    /// The colour `c` (linear radiance) scaled by 2^`exposure` and mapped; alpha unchanged.
+    #[inline]
+    pub fn map(self, c: Vec4, exposure: f32) -> Vec4 {
+        let k = exposure.exp2();
+        Vec4::new(
+            self.curve(c.x * k),
+            self.curve(c.y * k),
+            self.curve(c.z * k),
+            c.w,
+        )
+    }
+}
+
+/// Applies exposure and curve to every pixel.
+pub fn apply(img: &mut Image, tonemap: Tonemap, exposure: f32) {
+    use rayon::prelude::*;
+    img.pixels
+        .par_iter_mut()
+        .for_each(|p| *p = tonemap.map(*p, exposure));
+}

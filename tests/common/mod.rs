@@ -1,0 +1,123 @@
+//! Helpers shared by the integration tests: image comparison, running the binary, the real
+//! fixtures. Not every test file uses every helper.
+#![allow(dead_code)]
+
+use cubeforge::image::Image;
+use cubeforge::io::{self, ReadOptions, WriteOptions};
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Peak signal-to-noise ratio in dB over the RGB channels (alpha ignored), values as they are
+/// (clamp them first with [`clamped`] for HDR images). Identical images give infinity.
+pub fn psnr(a: &Image, b: &Image, peak: f32) -> f64 {
+    psnr_where(a, b, peak, |_, _| true)
+}
+
+/// PSNR over the pixels (x, y) for which `keep` is true.
+pub fn psnr_where(a: &Image, b: &Image, peak: f32, keep: impl Fn(usize, usize) -> bool) -> f64 {
+    assert_same_size(a, b);
+    let mut sum = 0.0f64;
+    let mut n = 0usize;
+    for y in 0..a.height {
+        for x in 0..a.width {
+            if !keep(x, y) {
+                continue;
+            }
+            let d = a.get(x, y) - b.get(x, y);
+            for c in 0..3 {
+                sum += (d[c] as f64) * (d[c] as f64);
+            }
+            n += 3;
+        }
+    }
+    assert!(n > 0, "no pixels to compare");
+    let mse = sum / n as f64;
+    if mse == 0.0 {
+        return f64::INFINITY;
+    }
+    10.0 * ((peak as f64) * (peak as f64) / mse).log10()
+}
+
+/// Largest absolute difference of any RGB channel.
+pub fn max_abs_error(a: &Image, b: &Image) -> f32 {
+    max_abs_error_where(a, b, |_, _| true)
+}
+
+/// Largest absolute RGB difference over the pixels (x, y) for which `keep` is true.
+pub fn max_abs_error_where(a: &Image, b: &Image, keep: impl Fn(usize, usize) -> bool) -> f32 {
+    assert_same_size(a, b);
+    let mut m = 0.0f32;
+    for y in 0..a.height {
+        for x in 0..a.width {
+            if keep(x, y) {
+                let d = (a.get(x, y) - b.get(x, y)).abs();
+                m = m.max(d.x).max(d.y).max(d.z);
+            }
+        }
+    }
+    m
+}
+
+/// Every channel clamped to [0, max] (for PSNR of HDR images against a fixed peak).
+pub fn clamped(img: &Image, max: f32) -> Image {
+    let mut out = img.clone();
+    for p in &mut out.pixels {
+        *p = p.clamp(glam::Vec4::ZERO, glam::Vec4::splat(max));
+    }
+    out
+}
+
+fn assert_same_size(a: &Image, b: &Image) {
+    assert_eq!(
+        (a.width, a.height),
+        (b.width, b.height),
+        "images to compare differ in size"
+    );
+}
+
+/// Runs the `cubeforge` binary with `args`.
+pub fn run<I, S>(args: I) -> Output
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<OsStr>,
+{
+    Command::new(env!("CARGO_BIN_EXE_cubeforge"))
+        .args(args)
+        .output()
+        .expect("cubeforge runs")
+}
+
+/// Standard error of a run as text.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// The real images of `../shared/fixtures/real`, or None (after saying so) when absent.
+pub fn real_dir() -> Option<PathBuf> {
+    let dir = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/fixtures/real"
+    ));
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        println!("skipped: ../shared/fixtures/real not found");
+        None
+    }
+}
+
+/// Reads an image file (NaN, infinite and negative values replaced by 0, as the CLI does).
+pub fn read_image(path: &Path) -> Image {
+    match io::read(path, &ReadOptions::default()) {
+        Ok((io::Decoded::Image(img), _)) => img,
+        Ok((io::Decoded::Cube(_), _)) => panic!("{} holds a cube map", path.display()),
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// Writes an image in the format its name says (PNG 8-bit sRGB, EXR half float, ...).
+pub fn write_image(path: &Path, img: &Image) {
+    let bytes = io::encode_image(path, img, &WriteOptions::default()).expect("encodes");
+    std::fs::write(path, bytes).expect("writes");
+}
