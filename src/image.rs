@@ -154,8 +154,19 @@ impl Image {
     #[inline]
     fn cols(&self, x0: isize, wrap_x: bool) -> (usize, usize) {
         if wrap_x {
+            // Coordinates come from 0..width (plus half a texel), so one wrap suffices;
+            // rem_euclid stays for anything further out.
             let w = self.width as isize;
-            (x0.rem_euclid(w) as usize, (x0 + 1).rem_euclid(w) as usize)
+            let wrap = |v: isize| {
+                if (0..w).contains(&v) {
+                    v as usize
+                } else if (-w..0).contains(&v) {
+                    (v + w) as usize
+                } else {
+                    v.rem_euclid(w) as usize
+                }
+            };
+            (wrap(x0), wrap(x0 + 1))
         } else {
             (clampi(x0, self.width), clampi(x0 + 1, self.width))
         }
