@@ -464,9 +464,22 @@ fn info_counts_bad_values() {
 
 #[test]
 fn output_folder_missing() {
+    // A missing output folder is created (the README's first command relies on it) ...
     let s = Scratch::new();
     let p = s.write("pano.png", &encode("a.png", &equirect(64, 32)));
     let o = s.out("no/such/dir/o.png");
+    let out = run([
+        "convert".as_ref(),
+        p.as_os_str(),
+        "-o".as_ref(),
+        o.as_os_str(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(o.is_file());
+    // ... but one that cannot be (a file stands in its way) is one clear error, nothing written.
+    let s = Scratch::new();
+    let p = s.write("pano.png", &encode("a.png", &equirect(64, 32)));
+    let o = p.join("sub/o.png");
     let out = run([
         "convert".as_ref(),
         p.as_os_str(),

@@ -399,6 +399,11 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
+        // A missing output folder is created (the README's first command writes into out/).
+        if let Err(e) = std::fs::create_dir_all(dir) {
+            cleanup(&temps);
+            return Err(Error::file(path, io_msg(&e)));
+        }
         let tmp = dir.join(format!(".{name}.cubeforge-{}.tmp", std::process::id()));
         if let Err(e) = std::fs::write(&tmp, bytes) {
             let _ = std::fs::remove_file(&tmp);
