@@ -107,7 +107,8 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     stages.done("read");
     let mut inputs = vec![a.recipe.clone()];
     inputs.extend(recipe.images().iter().map(|f| f.path.clone()));
-    refuse_inputs(&[a.output.clone(), sidecar_path.clone()], &inputs)?;
+    // Never over the recipe or an image it reads.
+    super::convert::refuse_inputs(&[a.output.clone(), sidecar_path.clone()], &inputs)?;
 
     let size = recipe
         .output_size(a.size)
@@ -204,18 +205,4 @@ fn report(output: &Path, sidecar: &Path, baked: &Baked, what: &str) {
         sidecar.display(),
         baked.max_lod_bias
     );
-}
-
-/// Refuses to write over the recipe or an image it reads.
-fn refuse_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<()> {
-    let canon = |p: &Path| std::fs::canonicalize(p).ok();
-    let ins: Vec<PathBuf> = inputs.iter().filter_map(|p| canon(p)).collect();
-    for o in outputs {
-        if let Some(c) = canon(o) {
-            if ins.contains(&c) {
-                return Err(Error::file(o, "refusing to overwrite an input file"));
-            }
-        }
-    }
-    Ok(())
 }

@@ -12,7 +12,7 @@ use cubeforge::preview::{
 };
 use cubeforge::{Error, Result};
 use glam::{Vec3, Vec4};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 #[command(
@@ -334,26 +334,11 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     };
     stages.done("render");
 
-    refuse_inputs(output, &inputs)?;
+    super::convert::refuse_inputs(std::slice::from_ref(output), &inputs)?;
     let bytes = io::encode_image(output, &img, &WriteOptions::default())?;
     stages.done("encode");
     io::write_all_atomic(&[(output.clone(), bytes)])?;
     stages.done("write");
     stages.total();
-    Ok(())
-}
-
-/// Refuses to write over an input file.
-fn refuse_inputs(output: &Path, inputs: &[PathBuf]) -> Result<()> {
-    let Ok(out) = std::fs::canonicalize(output) else {
-        return Ok(());
-    };
-    if inputs
-        .iter()
-        .filter_map(|p| std::fs::canonicalize(p).ok())
-        .any(|p| p == out)
-    {
-        return Err(Error::file(output, "refusing to overwrite an input file"));
-    }
     Ok(())
 }
