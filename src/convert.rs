@@ -42,9 +42,14 @@ impl Loaded {
     pub fn environment(&self, max_footprint: Option<f32>) -> Box<dyn Environment + '_> {
         let levels = |texel_angle: f32| {
             max_footprint.map(|f| {
-                // Levels down to where the footprint covers ~4 texels, plus one to spare.
+                // The deepest level the resampler picks for that footprint (it reads level 0
+                // up to 1.5 texels, then a level where the footprint spans at most 4).
                 let ratio = f / texel_angle;
-                (ratio / 4.0).log2().ceil().max(0.0) as usize + 2
+                if ratio <= 1.5 {
+                    1
+                } else {
+                    (ratio / 4.0).log2().ceil().max(0.0) as usize + 1
+                }
             })
         };
         match &self.source {

@@ -54,6 +54,20 @@ impl Image {
         img
     }
 
+    /// Builds an image by letting `f(y, row)` fill each row, rows in parallel: for loops that
+    /// keep per-row state (batches, scratch space) instead of working texel by texel.
+    pub fn from_rows(width: usize, height: usize, f: impl Fn(usize, &mut [Vec4]) + Sync) -> Self {
+        use rayon::prelude::*;
+        let mut img = Image::new(width, height);
+        if width > 0 {
+            img.pixels
+                .par_chunks_mut(width)
+                .enumerate()
+                .for_each(|(y, row)| f(y, row));
+        }
+        img
+    }
+
     #[inline]
     pub fn get(&self, x: usize, y: usize) -> Vec4 {
         self.pixels[y * self.width + x]
@@ -151,6 +165,69 @@ impl Image {
         r0.lerp(r1, ay)
     }
 
+    /// `out[i]` = `bilinear(x[i], y[i], wrap_x)` for coordinates within one image width of
+    /// the image (all a projection produces), in three passes: the coordinate arithmetic in
+    /// vector lanes, prefetches for every tap so many cache misses are in flight at once (a
+    /// lookup at a time was bound by one miss at a time), then the texel reads.
+    pub fn bilinear_many(&self, x: &[f32], y: &[f32], wrap_x: bool, out: &mut [Vec4]) {
+        const CHUNK: usize = 64;
+        for ((x, y), out) in x
+            .chunks(CHUNK)
+            .zip(y.chunks(CHUNK))
+            .zip(out.chunks_mut(CHUNK))
+        {
+            let n = out.len();
+            let mut col = [[0i32; CHUNK]; 2];
+            let mut row = [[0i32; CHUNK]; 2];
+            let mut ax = [0.0f32; CHUNK];
+            let mut ay = [0.0f32; CHUNK];
+            // Float arithmetic throughout (column wrap and clamps included) so the loop
+            // vectorises; the clamped values convert to integers exactly.
+            let (wf, hf) = (self.width as f32, self.height as f32);
+            for i in 0..n {
+                let fx = x[i] - 0.5;
+                let fy = y[i] - 0.5;
+                let x0 = floor_small(fx);
+                let y0 = floor_small(fy);
+                ax[i] = fx - x0;
+                ay[i] = fy - y0;
+                let x1 = x0 + 1.0;
+                let (xa, xb) = if wrap_x {
+                    (
+                        if x0 < 0.0 { x0 + wf } else { x0 },
+                        if x1 >= wf { x1 - wf } else { x1 },
+                    )
+                } else {
+                    (x0, x1)
+                };
+                col[0][i] = index(xa, wf);
+                col[1][i] = index(xb, wf);
+                row[0][i] = index(y0, hf);
+                row[1][i] = index(y0 + 1.0, hf);
+            }
+            let at = |r: i32, c: i32| r as usize * self.width + c as usize;
+            #[cfg(target_arch = "x86_64")]
+            for i in 0..n {
+                use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+                let p = self.pixels.as_ptr();
+                // SAFETY: the indices lie inside the pixel buffer (clamped above); a prefetch
+                // never faults and brings nothing into the program.
+                unsafe {
+                    _mm_prefetch::<_MM_HINT_T0>(p.add(at(row[0][i], col[0][i])) as *const i8);
+                    _mm_prefetch::<_MM_HINT_T0>(p.add(at(row[1][i], col[0][i])) as *const i8);
+                }
+            }
+            for (i, o) in out.iter_mut().enumerate() {
+                let p = &self.pixels;
+                let (ra, rb) = (row[0][i], row[1][i]);
+                let (ca, cb) = (col[0][i], col[1][i]);
+                let r0 = p[at(ra, ca)].lerp(p[at(ra, cb)], ax[i]);
+                let r1 = p[at(rb, ca)].lerp(p[at(rb, cb)], ax[i]);
+                *o = r0.lerp(r1, ay[i]);
+            }
+        }
+    }
+
     #[inline]
     fn cols(&self, x0: isize, wrap_x: bool) -> (usize, usize) {
         if wrap_x {
@@ -218,6 +295,28 @@ fn fast_floor(v: f32) -> f32 {
     } else {
         t
     }
+}
+
+/// `fast_floor` for vector lanes: the same value for |v| < 4e6 (far beyond any image
+/// coordinate), without the saturating integer cast that keeps a loop scalar.
+#[inline(always)]
+#[allow(clippy::manual_clamp)] // clamp keeps NaN; max/min drop it, which the cast needs
+fn floor_small(v: f32) -> f32 {
+    let c = v.max(-4.0e6).min(4.0e6);
+    // SAFETY: `c` is finite (max/min drop NaN) and far inside i32's range.
+    let t = unsafe { c.to_int_unchecked::<i32>() } as f32;
+    if t > c {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
+/// An integral coordinate clamped to 0..n-1, as an index.
+#[inline(always)]
+fn index(v: f32, n: f32) -> i32 {
+    // SAFETY: max/min drop NaN and bound the value to 0..n-1 < 2^31.
+    unsafe { v.max(0.0).min(n - 1.0).to_int_unchecked::<i32>() }
 }
 
 #[inline]

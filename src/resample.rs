@@ -1,7 +1,7 @@
 //! Every conversion: for each output texel, its direction; look the direction up in the input.
 //! Coarse outputs are antialiased by supersampling the texel's footprint on a pyramid level.
 
-use crate::cube::{dir_face, face_dir, CubeMap, Environment, Interp};
+use crate::cube::{dir_face, face_dir, CubeMap, Dirs, Environment, Interp, BATCH};
 use crate::image::Image;
 use crate::layout::Projection;
 use glam::{Mat3, Vec3, Vec4};
@@ -115,6 +115,8 @@ impl Resampler {
 
     /// The shared loop: `dir(x, y)` gives the direction at continuous pixel coordinates
     /// (None where the layout shows nothing), `footprint` the angle one texel spans there.
+    /// Texels are worked in short runs of a row: every tap of a run (one per texel, or up to
+    /// MAX_SUB x MAX_SUB for coarse texels) is queued and looked up in batches.
     pub fn render(
         &self,
         env: &dyn Environment,
@@ -123,48 +125,107 @@ impl Resampler {
         dir: impl Fn(f32, f32) -> Option<Vec3> + Sync,
         footprint: impl Fn(f32, f32) -> f32 + Sync,
     ) -> Image {
-        let m = self.orientation.lookup_matrix();
-        let rotate = !self.orientation.is_identity();
+        let turn = (!self.orientation.is_identity()).then(|| self.orientation.lookup_matrix());
         let src_angle = env.texel_angle();
         let levels = env.levels();
-        let lookup = |d: Vec3, level: usize| {
-            let d = if rotate { m * d } else { d };
-            env.sample(d.normalize(), level, self.interp)
-        };
-        Image::from_fn(w, h, |x, y| {
-            let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
-            let ratio = if self.antialias {
-                footprint(cx, cy) / src_angle
-            } else {
-                0.0
+        Image::from_rows(w, h, |y, row| {
+            let mut taps = Taps {
+                env,
+                interp: self.interp,
+                turn,
+                level: 0,
+                dirs: Dirs::default(),
+                slot: [0; BATCH],
             };
-            if ratio <= 1.5 {
-                return dir(cx, cy).map_or(Vec4::ZERO, |d| lookup(d, 0));
-            }
-            // A pyramid level where the footprint spans at most ~4 texels, then up to
-            // MAX_SUB x MAX_SUB bilinear taps spread over the texel.
-            let level = ((ratio / 4.0).log2().ceil().max(0.0) as usize).min(levels - 1);
-            let rest = ratio / (1u32 << level) as f32;
-            let n = ((rest / 1.5).ceil() as usize).clamp(1, MAX_SUB);
-            let step = 1.0 / n as f32;
-            let mut acc = Vec4::ZERO;
-            let mut count = 0u32;
-            for j in 0..n {
-                for i in 0..n {
-                    let sx = x as f32 + (i as f32 + 0.5) * step;
-                    let sy = y as f32 + (j as f32 + 0.5) * step;
-                    if let Some(d) = dir(sx, sy) {
-                        acc += lookup(d, level);
-                        count += 1;
+            for (run, out) in row.chunks_mut(RUN).enumerate() {
+                let mut acc = [Vec4::ZERO; RUN];
+                let mut count = [0u32; RUN];
+                for (i, n_taps) in count.iter_mut().enumerate().take(out.len()) {
+                    let x = run * RUN + i;
+                    let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
+                    let ratio = if self.antialias {
+                        footprint(cx, cy) / src_angle
+                    } else {
+                        0.0
+                    };
+                    if ratio <= 1.5 {
+                        if let Some(d) = dir(cx, cy) {
+                            taps.push(d, 0, i, &mut acc);
+                            *n_taps = 1;
+                        }
+                        continue;
+                    }
+                    // A pyramid level where the footprint spans at most ~4 texels, then up to
+                    // MAX_SUB x MAX_SUB bilinear taps spread over the texel.
+                    let level = ((ratio / 4.0).log2().ceil().max(0.0) as usize).min(levels - 1);
+                    let rest = ratio / (1u32 << level) as f32;
+                    let n = ((rest / 1.5).ceil() as usize).clamp(1, MAX_SUB);
+                    let step = 1.0 / n as f32;
+                    for j in 0..n {
+                        for k in 0..n {
+                            let sx = x as f32 + (k as f32 + 0.5) * step;
+                            let sy = y as f32 + (j as f32 + 0.5) * step;
+                            if let Some(d) = dir(sx, sy) {
+                                taps.push(d, level, i, &mut acc);
+                                *n_taps += 1;
+                            }
+                        }
                     }
                 }
-            }
-            if count == 0 {
-                Vec4::ZERO
-            } else {
-                acc / count as f32
+                taps.flush(&mut acc);
+                for ((o, a), &c) in out.iter_mut().zip(acc).zip(&count) {
+                    *o = match c {
+                        0 => Vec4::ZERO,
+                        1 => a,
+                        _ => a / c as f32,
+                    };
+                }
             }
         })
+    }
+}
+
+/// Output texels per run: their sums live on the stack while the run's taps are looked up.
+const RUN: usize = 64;
+
+/// Queued lookups of one level, each adding into the sum of the texel (slot) it belongs to.
+/// Flushing keeps each slot's order of additions, so results do not depend on batch edges.
+struct Taps<'a> {
+    env: &'a dyn Environment,
+    interp: Interp,
+    turn: Option<Mat3>,
+    level: usize,
+    dirs: Dirs,
+    slot: [u8; BATCH],
+}
+
+impl Taps<'_> {
+    #[inline]
+    fn push(&mut self, d: Vec3, level: usize, slot: usize, acc: &mut [Vec4; RUN]) {
+        if self.dirs.is_full() || (level != self.level && self.dirs.len > 0) {
+            self.flush(acc);
+        }
+        self.level = level;
+        self.slot[self.dirs.len] = slot as u8;
+        self.dirs.push(d);
+    }
+
+    fn flush(&mut self, acc: &mut [Vec4; RUN]) {
+        let n = self.dirs.len;
+        if n == 0 {
+            return;
+        }
+        if let Some(m) = &self.turn {
+            self.dirs.transform(m);
+        }
+        self.dirs.normalize();
+        let mut out = [Vec4::ZERO; BATCH];
+        self.env
+            .sample_many(&self.dirs, self.level, self.interp, &mut out[..n]);
+        for (&s, v) in self.slot[..n].iter().zip(&out[..n]) {
+            acc[s as usize] += *v;
+        }
+        self.dirs.len = 0;
     }
 }
 

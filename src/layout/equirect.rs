@@ -5,7 +5,7 @@ use std::f32::consts::{PI, TAU};
 
 /// Image coordinates (u, v) in 0..1 of a unit direction, v = 0 the top row.
 /// (asin(d.y) is taken as atan2(d.y, |d.xz|), which also tolerates unnormalised input.)
-#[inline]
+#[inline(always)]
 pub fn dir_to_uv(d: Vec3) -> Vec2 {
     let horizontal = (d.x * d.x + d.z * d.z).sqrt();
     Vec2::new(
@@ -16,31 +16,23 @@ pub fn dir_to_uv(d: Vec3) -> Vec2 {
 
 /// atan2 within 6e-7 rad (2 ulp near pi) of libm's, inlined: the libm call dominated panorama lookups.
 /// Octant reduction to [0, 1], then to |t| <= tan(pi/8), then the classic odd polynomial.
-#[inline]
+/// Every branch is a select, so loops over many directions vectorise.
+#[inline(always)]
 pub fn atan2(y: f32, x: f32) -> f32 {
     use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
     let (ax, ay) = (x.abs(), y.abs());
     let (lo, hi) = (ax.min(ay), ax.max(ay));
-    if hi == 0.0 {
-        return 0.0;
-    }
-    let a = lo / hi;
-    let (base, t) = if a > 0.414_213_57 {
-        (FRAC_PI_4, (a - 1.0) / (a + 1.0))
-    } else {
-        (0.0, a)
-    };
+    let a = if hi > 0.0 { lo / hi } else { 0.0 };
+    let big = a > 0.414_213_57;
+    let t = if big { (a - 1.0) / (a + 1.0) } else { a };
+    let base = if big { FRAC_PI_4 } else { 0.0 };
     let z = t * t;
     let p =
         (((8.053_744_5e-2 * z - 1.387_768_6e-1) * z + 1.997_771_1e-1) * z - 3.333_295e-1) * z * t
             + t;
-    let mut r = base + p;
-    if ay > ax {
-        r = FRAC_PI_2 - r;
-    }
-    if x < 0.0 {
-        r = PI - r;
-    }
+    let r = base + p;
+    let r = if ay > ax { FRAC_PI_2 - r } else { r };
+    let r = if x < 0.0 { PI - r } else { r };
     if y < 0.0 {
         -r
     } else {

@@ -6,7 +6,7 @@ pub mod cross;
 pub mod equirect;
 pub mod sphere;
 
-use crate::cube::{Environment, Interp};
+use crate::cube::{Dirs, Environment, Interp, BATCH};
 use crate::image::Image;
 use glam::{Vec2, Vec3, Vec4};
 
@@ -158,6 +158,23 @@ impl Projection {
     }
 }
 
+/// Image coordinates of every direction of a batch.
+#[inline(always)]
+fn project(dirs: &Dirs, u: &mut [f32], v: &mut [f32], f: impl Fn(Vec3) -> Vec2) {
+    let n = dirs.len;
+    for ((((u, v), &x), &y), &z) in u[..n]
+        .iter_mut()
+        .zip(v[..n].iter_mut())
+        .zip(&dirs.x[..n])
+        .zip(&dirs.y[..n])
+        .zip(&dirs.z[..n])
+    {
+        let uv = f(Vec3::new(x, y, z));
+        *u = uv.x;
+        *v = uv.y;
+    }
+}
+
 #[inline]
 fn flip(st: Vec2) -> Vec2 {
     Vec2::new(st.x, 1.0 - st.y)
@@ -200,11 +217,11 @@ impl<'a> ImageEnv<'a> {
     }
 }
 
-impl Environment for ImageEnv<'_> {
+impl ImageEnv<'_> {
+    /// Reconstructs the value at normalised image coordinates `uv` of one pyramid level.
     #[inline]
-    fn sample(&self, d: Vec3, level: usize, interp: Interp) -> Vec4 {
+    fn at(&self, mut uv: Vec2, level: usize, interp: Interp) -> Vec4 {
         let img = self.level(level);
-        let mut uv = self.projection.to_image(d);
         let wrap = self.projection == Projection::Equirect;
         if !wrap {
             // Keep the taps half a texel inside the disc so its dark outside never bleeds in.
@@ -220,6 +237,40 @@ impl Environment for ImageEnv<'_> {
         match interp {
             Interp::Bilinear => img.bilinear(x, y, wrap),
             Interp::Bicubic => img.bicubic(x, y, wrap),
+        }
+    }
+}
+
+impl Environment for ImageEnv<'_> {
+    #[inline]
+    fn sample(&self, d: Vec3, level: usize, interp: Interp) -> Vec4 {
+        self.at(self.projection.to_image(d), level, interp)
+    }
+
+    /// Image coordinates of the whole batch first (a vectorised loop: the trigonometry is
+    /// most of a panorama lookup's cost), then the texel reads.
+    fn sample_many(&self, dirs: &Dirs, level: usize, interp: Interp, out: &mut [Vec4]) {
+        let n = dirs.len;
+        let mut u = [0.0f32; BATCH];
+        let mut v = [0.0f32; BATCH];
+        // One loop per projection, so each is branch-free and vectorises.
+        match self.projection {
+            Projection::Equirect => project(dirs, &mut u, &mut v, equirect::dir_to_uv),
+            Projection::Sphere => project(dirs, &mut u, &mut v, |d| flip(sphere::dir_to_st(d))),
+            Projection::Angular => project(dirs, &mut u, &mut v, |d| flip(angular::dir_to_st(d))),
+        }
+        if self.projection == Projection::Equirect && interp == Interp::Bilinear {
+            let img = self.level(level);
+            let (w, h) = (img.width as f32, img.height as f32);
+            for (u, v) in u[..n].iter_mut().zip(v[..n].iter_mut()) {
+                *u *= w;
+                *v *= h;
+            }
+            img.bilinear_many(&u[..n], &v[..n], true, &mut out[..n]);
+            return;
+        }
+        for ((o, &u), &v) in out[..n].iter_mut().zip(&u[..n]).zip(&v[..n]) {
+            *o = self.at(Vec2::new(u, v), level, interp);
         }
     }
 
