@@ -180,3 +180,110 @@ fn openimageio_reads_our_float_files() {
         assert!((first - 8.0).abs() < 0.07, "{name}: max red {first}");
     }
 }
+
+/// Our ZIP blocks (compressed by us, the file laid out by the exr crate) decode to exactly the
+/// half-float values written, in OpenImageIO and in cubeforge: blocks that shrink and blocks
+/// stored as they are (noise), a partial last block, with and without alpha.
+#[test]
+fn exr_zip_blocks_read_back_exactly() {
+    for (w, h) in [(45, 37), (3, 5)] {
+        exr_zip_round_trip(w, h);
+    }
+}
+
+fn exr_zip_round_trip(w: usize, h: usize) {
+    let noise = |x: usize, y: usize, c: usize| {
+        let mut k = (x as u32).wrapping_mul(0x9E37_79B9)
+            ^ (y as u32 * 4 + c as u32).wrapping_mul(0x85EB_CA6B);
+        k ^= k >> 15;
+        k = k.wrapping_mul(0x2C1B_3C6D);
+        k ^= k >> 12;
+        (k & 0xffff) as f32 / 4096.0
+    };
+    for alpha in [false, true] {
+        let img = Image::from_fn(w, h, |x, y| {
+            if y < 16 && w > 8 {
+                // Smooth: compresses.
+                Vec4::new(x as f32 * 0.1, y as f32 * 0.01, 0.5, 1.0)
+            } else {
+                // Noise: a block that does not shrink (3 x 5 here) is stored raw.
+                Vec4::new(noise(x, y, 0), noise(x, y, 1), noise(x, y, 2), 1.0)
+            }
+        });
+        let img = if alpha {
+            Image::from_fn(w, h, |x, y| {
+                img.get(x, y).truncate().extend((x % 7) as f32 / 6.0)
+            })
+        } else {
+            img
+        };
+        let half = |v: f32| half::f16::from_f32(v).to_f32();
+        let want = Image::from_fn(w, h, |x, y| {
+            let p = img.get(x, y);
+            Vec4::new(half(p.x), half(p.y), half(p.z), half(p.w))
+        });
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("z.exr");
+        std::fs::write(
+            &path,
+            io::encode_image(&path, &img, &WriteOptions::default()).unwrap(),
+        )
+        .unwrap();
+        let (back, _) = io::read(&path, &ReadOptions::default()).unwrap();
+        let Decoded::Image(back) = back else {
+            panic!("not an image")
+        };
+        assert_eq!(
+            back, want,
+            "alpha {alpha}: cubeforge reads back other values"
+        );
+
+        if !oiiotool() {
+            eprintln!("skipped: oiiotool not installed (apt-get install openimageio-tools)");
+            continue;
+        }
+        let dump = Command::new("oiiotool")
+            .arg("--dumpdata")
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(
+            dump.status.success(),
+            "{}",
+            String::from_utf8_lossy(&dump.stderr)
+        );
+        let text = String::from_utf8_lossy(&dump.stdout);
+        let mut seen = 0;
+        for line in text.lines() {
+            let Some(rest) = line.trim_start().strip_prefix("Pixel (") else {
+                continue;
+            };
+            let (xy, values) = rest.split_once("):").unwrap();
+            let mut xy = xy.split(',').map(|v| v.trim().parse::<usize>().unwrap());
+            let (x, y) = (xy.next().unwrap(), xy.next().unwrap());
+            let v: Vec<f32> = values
+                .split_whitespace()
+                .map(|v| v.parse().unwrap())
+                .collect();
+            let p = want.get(x, y);
+            let expect: Vec<f32> = if alpha {
+                vec![p.x, p.y, p.z, p.w]
+            } else {
+                vec![p.x, p.y, p.z]
+            };
+            assert_eq!(v.len(), expect.len(), "alpha {alpha}: {line}");
+            for (a, b) in v.iter().zip(&expect) {
+                assert!(
+                    (a - b).abs() <= b.abs() * 1e-5,
+                    "alpha {alpha} at ({x}, {y}): {v:?} vs {expect:?}"
+                );
+            }
+            seen += 1;
+        }
+        assert_eq!(
+            seen,
+            w * h,
+            "alpha {alpha}: OpenImageIO printed {seen} pixels"
+        );
+    }
+}
