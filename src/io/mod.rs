@@ -5,6 +5,7 @@ pub mod dds;
 pub mod exr;
 pub mod ktx2;
 pub mod raster;
+pub mod rgbe;
 
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
@@ -275,6 +276,14 @@ pub struct ReadOptions {
 /// them in `Meta::replaced_values`.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     let (decoded, mut meta) = read_raw(path, opts)?;
+    // Integer and shared-exponent encodings hold only finite values >= 0: no pass needed
+    // (it cost a quarter of a 4K panorama's decode).
+    if matches!(
+        meta.file_format,
+        FileFormat::Png | FileFormat::Jpeg | FileFormat::Tga | FileFormat::Hdr
+    ) {
+        return Ok((decoded, meta));
+    }
     let mut replaced = 0;
     let decoded = match decoded {
         Decoded::Image(mut img) => {
@@ -330,6 +339,10 @@ pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
         FileFormat::Exr => exr::decode(&bytes, path, &opts.limits),
         FileFormat::Ktx2 => ktx2::decode(&bytes, path, &opts.limits),
         FileFormat::Dds => dds::decode(&bytes, path, &opts.limits),
+        FileFormat::Hdr => match rgbe::decode(&bytes, path, opts) {
+            Some(result) => result.map(|(img, meta)| (Decoded::Image(img), meta)),
+            None => raster::decode(&bytes, FileFormat::Hdr, path, opts),
+        },
         f => raster::decode(&bytes, f, path, opts),
     }
 }

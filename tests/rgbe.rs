@@ -1,0 +1,127 @@
+//! The parallel Radiance HDR reader gives the image crate's values bit for bit, on every kind
+//! of scanline (run-length channels, flat texels, old-style repeat markers), and leaves every
+//! malformed file to the crate's reader and its error messages.
+
+mod common;
+
+use cubeforge::image::Image;
+use cubeforge::io::{self, raster, rgbe, Decoded, FileFormat, ReadOptions, WriteOptions};
+use glam::Vec4;
+use std::path::Path;
+
+fn crate_decode(bytes: &[u8]) -> Image {
+    let (d, _) = raster::decode(
+        bytes,
+        FileFormat::Hdr,
+        Path::new("x.hdr"),
+        &ReadOptions::default(),
+    )
+    .expect("the image crate reads it");
+    let Decoded::Image(img) = d else {
+        panic!("not an image")
+    };
+    img
+}
+
+fn ours(bytes: &[u8]) -> Option<Image> {
+    rgbe::decode(bytes, Path::new("x.hdr"), &ReadOptions::default()).map(|r| r.unwrap().0)
+}
+
+fn header(w: usize, h: usize) -> Vec<u8> {
+    format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {h} +X {w}\n").into_bytes()
+}
+
+#[test]
+fn run_length_files_match_the_crate() {
+    // Written by the image crate's encoder: run-length channels, runs and literals both.
+    let img = Image::from_fn(300, 7, |x, y| {
+        let v = if x < 100 {
+            0.25
+        } else {
+            (x * 31 + y * 17) as f32 % 97.0 * 0.37
+        };
+        Vec4::new(v, v * 0.5 + y as f32, 1e-3 * x as f32, 1.0)
+    });
+    let bytes = io::encode_image(Path::new("a.hdr"), &img, &WriteOptions::default()).unwrap();
+    assert!(
+        bytes.windows(4).any(|t| t == [2, 2, 1, 44]),
+        "the encoder wrote run-length lines (width 300)"
+    );
+    let got = ours(&bytes).expect("our reader takes run-length files");
+    assert_eq!(got, crate_decode(&bytes));
+}
+
+#[test]
+fn flat_and_marker_lines_match_the_crate() {
+    let (w, h) = (5, 3);
+    let mut bytes = header(w, h);
+    // Line 0: flat texels, every exponent case (0 black, 1 subnormal scale, large).
+    for t in [
+        [10, 20, 30, 0],
+        [255, 128, 1, 1],
+        [1, 2, 3, 128],
+        [200, 100, 50, 140],
+        [9, 9, 9, 255],
+    ] {
+        bytes.extend_from_slice(&t);
+    }
+    // Line 1: a texel, then a repeat marker for 3 more, then one texel.
+    bytes.extend_from_slice(&[7, 8, 9, 130]);
+    bytes.extend_from_slice(&[1, 1, 1, 3]);
+    bytes.extend_from_slice(&[4, 5, 6, 129]);
+    // Line 2: new-style run-length channels, though the width is under 8.
+    bytes.extend_from_slice(&[2, 2, 0, 5]);
+    for c in 0..4u8 {
+        bytes.extend_from_slice(&[128 + 3, 10 + c, 2, 40 + c, 41 + c]);
+    }
+    let got = ours(&bytes).expect("our reader takes these lines");
+    assert_eq!(got, crate_decode(&bytes));
+    assert_eq!(
+        got.get(2, 1),
+        got.get(0, 1),
+        "the marker repeats the previous texel"
+    );
+}
+
+#[test]
+fn real_flat_files_match_the_crate() {
+    let Some(dir) = common::real_dir() else {
+        eprintln!("skipped: ../shared/fixtures/real is absent");
+        return;
+    };
+    for name in ["esplanade", "park", "studio", "venice"] {
+        let bytes = std::fs::read(dir.join("hdr").join(format!("{name}.hdr"))).unwrap();
+        let got = ours(&bytes).expect("our reader takes the real files");
+        assert_eq!(got, crate_decode(&bytes), "{name}");
+    }
+}
+
+#[test]
+fn malformed_files_go_to_the_crate() {
+    let img = Image::filled(64, 4, Vec4::new(0.5, 2.0, 8.0, 1.0));
+    let good = io::encode_image(Path::new("a.hdr"), &img, &WriteOptions::default()).unwrap();
+    // Truncated pixel data, a run past the end of a line, a leading repeat marker.
+    let truncated = good[..good.len() - 3].to_vec();
+    let mut overrun = header(4, 1);
+    overrun.extend_from_slice(&[2, 2, 0, 4, 128 + 9, 1]);
+    let mut leading_marker = header(2, 1);
+    leading_marker.extend_from_slice(&[1, 1, 1, 2, 5, 5, 5, 5]);
+    for (what, bytes) in [
+        ("truncated", &truncated),
+        ("overrun", &overrun),
+        ("marker", &leading_marker),
+    ] {
+        assert!(ours(bytes).is_none(), "{what}: ours should decline");
+        let err = raster::decode(
+            bytes,
+            FileFormat::Hdr,
+            Path::new("x.hdr"),
+            &ReadOptions::default(),
+        );
+        assert!(err.is_err(), "{what}: the crate reports it");
+    }
+    // The size limit is checked from the header before any pixel memory.
+    let huge = header(200_000, 100_000);
+    let r = rgbe::decode(&huge, Path::new("x.hdr"), &ReadOptions::default()).expect("a verdict");
+    assert!(r.unwrap_err().to_string().contains("over the limit"));
+}
