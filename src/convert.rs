@@ -55,11 +55,8 @@ impl Loaded {
         match &self.source {
             Source::Cube(c) => {
                 // Box mips of level 0 (stored levels may be prefiltered, not plain mips).
-                let base = CubeMap {
-                    levels: vec![c.levels[0].clone()],
-                };
                 let angle = std::f32::consts::FRAC_PI_2 / c.size() as f32;
-                Box::new(CubeSampler::new(&base.with_box_mips(levels(angle))))
+                Box::new(CubeSampler::with_box_mips(&c.levels[0], levels(angle)))
             }
             Source::Projection(p, img) => {
                 let angle = ImageEnv::new(*p, img, Some(1)).texel_angle();

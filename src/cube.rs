@@ -296,6 +296,24 @@ impl CubeSampler {
         CubeSampler { levels }
     }
 
+    /// Prepares `faces` as level 0 and `count` plain box mips below it (None: the full
+    /// chain), as `new(&cube.with_box_mips(count))` would, without copying level 0 first.
+    pub fn with_box_mips(faces: &Faces, count: Option<usize>) -> CubeSampler {
+        let n = faces[0].width;
+        let full = CubeMap::full_chain_len(n);
+        let count = count.unwrap_or(full).clamp(1, full);
+        let mut levels = vec![(n, bordered(faces))];
+        if count > 1 {
+            let first: Faces = std::array::from_fn(|f| box_reduce_face(&faces[f], n));
+            let rest = CubeMap {
+                levels: vec![first],
+            }
+            .with_box_mips(Some(count - 1));
+            levels.extend(rest.levels.iter().map(|l| (l[0].width, bordered(l))));
+        }
+        CubeSampler { levels }
+    }
+
     /// Face edge of level 0.
     pub fn size(&self) -> usize {
         self.levels[0].0
@@ -347,7 +365,127 @@ impl CubeSampler {
     }
 }
 
+impl CubeSampler {
+    /// `bilinear` for a whole batch: face selection and texel coordinates in vector lanes
+    /// (every branch of `dir_face` as a select), prefetches for every tap, then the reads.
+    /// Gives `bilinear`'s values bit for bit.
+    fn bilinear_many(&self, dirs: &Dirs, level: usize, out: &mut [Vec4]) {
+        let (n, faces) = &self.levels[level];
+        let w = faces[0].width;
+        let count = dirs.len;
+        let mut face = [0u8; BATCH];
+        let mut row = [0u32; BATCH];
+        let mut col = [0u32; BATCH];
+        let mut fx = [0.0f32; BATCH];
+        let mut fy = [0.0f32; BATCH];
+        let nf = *n as f32;
+        let last = (w - 2) as f32;
+        for i in 0..count {
+            let (x, y, z) = (dirs.x[i], dirs.y[i], dirs.z[i]);
+            let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
+            let xmaj = ax >= ay && ax >= az;
+            let ymaj = !xmaj && ay >= az;
+            let f = if xmaj {
+                if x >= 0.0 {
+                    0
+                } else {
+                    1
+                }
+            } else if ymaj {
+                if y >= 0.0 {
+                    2
+                } else {
+                    3
+                }
+            } else if z >= 0.0 {
+                4
+            } else {
+                5
+            };
+            let sc = if xmaj {
+                if x >= 0.0 {
+                    -z
+                } else {
+                    z
+                }
+            } else if ymaj || z >= 0.0 {
+                x
+            } else {
+                -x
+            };
+            let tc = if ymaj {
+                if y >= 0.0 {
+                    z
+                } else {
+                    -z
+                }
+            } else {
+                -y
+            };
+            let ma = if xmaj {
+                ax
+            } else if ymaj {
+                ay
+            } else {
+                az
+            };
+            let inv = if ma > 0.0 { 0.5 / ma } else { 0.0 };
+            let (s, t) = (sc * inv + 0.5, tc * inv + 0.5);
+            // As in `bilinear`: coordinates minus half a texel, never below 0.
+            let px = (s * nf + (BORDER as f32 - 0.5)).max(0.0);
+            let py = (t * nf + (BORDER as f32 - 0.5)).max(0.0);
+            let (xi, yi) = (trunc_small(px), trunc_small(py));
+            fx[i] = px - xi;
+            fy[i] = py - yi;
+            face[i] = f;
+            // SAFETY: both lie in 0..=w-2 (non-negative, clamped above).
+            row[i] = unsafe { yi.min(last).to_int_unchecked::<u32>() };
+            col[i] = unsafe { xi.min(last).to_int_unchecked::<u32>() };
+        }
+        let mut index = [0usize; BATCH];
+        for i in 0..count {
+            index[i] = row[i] as usize * w + col[i] as usize;
+        }
+        #[cfg(target_arch = "x86_64")]
+        for i in 0..count {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let p = faces[face[i] as usize].pixels.as_ptr();
+            // SAFETY: the index lies inside the bordered face (clamped above); a prefetch
+            // never faults and brings nothing into the program.
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T0>(p.add(index[i]) as *const i8);
+                _mm_prefetch::<_MM_HINT_T0>(p.add(index[i] + w) as *const i8);
+            }
+        }
+        for (i, o) in out.iter_mut().enumerate().take(count) {
+            let p = &faces[face[i] as usize].pixels;
+            let k = index[i];
+            let top = p[k].lerp(p[k + 1], fx[i]);
+            let bottom = p[k + w].lerp(p[k + w + 1], fx[i]);
+            *o = top.lerp(bottom, fy[i]);
+        }
+    }
+}
+
+/// The integer part of a non-negative value, as a float, without the saturating cast that
+/// keeps a loop scalar (values here are texel coordinates, far below 2^23).
+#[inline(always)]
+fn trunc_small(v: f32) -> f32 {
+    // SAFETY: `v` >= 0 after the callers' max (which also drops NaN) and clamped below 2^23.
+    (unsafe { v.min(8_388_608.0).to_int_unchecked::<i32>() }) as f32
+}
+
 impl Environment for CubeSampler {
+    fn sample_many(&self, dirs: &Dirs, level: usize, interp: Interp, out: &mut [Vec4]) {
+        let level = level.min(self.levels.len() - 1);
+        if interp == Interp::Bilinear {
+            return self.bilinear_many(dirs, level, out);
+        }
+        for (i, o) in out.iter_mut().enumerate().take(dirs.len) {
+            *o = self.sample(dirs.get(i), level, interp);
+        }
+    }
+
     #[inline]
     fn sample(&self, d: Vec3, level: usize, interp: Interp) -> Vec4 {
         let level = level.min(self.levels.len() - 1);
@@ -371,29 +509,35 @@ impl Environment for CubeSampler {
 /// Copies each face into the middle of a larger image and fills the border from the faces
 /// the extended face plane runs into (bilinear there, so the continuation is smooth).
 fn bordered(faces: &Faces) -> [Image; 6] {
+    use rayon::prelude::*;
     let n = faces[0].width;
     let m = n + 2 * BORDER;
     let inv = 1.0 / n as f32;
-    std::array::from_fn(|face| {
-        let mut out = Image::new(m, m);
-        out.paste(&faces[face], BORDER, BORDER);
-        for y in 0..m {
-            for x in 0..m {
-                let inside = (BORDER..BORDER + n).contains(&x) && (BORDER..BORDER + n).contains(&y);
-                if inside {
-                    continue;
+    let out: Vec<Image> = (0..6usize)
+        .into_par_iter()
+        .map(|face| {
+            let mut out = Image::new(m, m);
+            out.paste(&faces[face], BORDER, BORDER);
+            for y in 0..m {
+                for x in 0..m {
+                    let inside =
+                        (BORDER..BORDER + n).contains(&x) && (BORDER..BORDER + n).contains(&y);
+                    if inside {
+                        continue;
+                    }
+                    let s = (x as f32 - BORDER as f32 + 0.5) * inv;
+                    let t = (y as f32 - BORDER as f32 + 0.5) * inv;
+                    let (f2, s2, t2) = dir_face(face_dir(face, s, t));
+                    // Clamp half a texel inside so the tap stays on the neighbour face.
+                    let px = (s2 * n as f32).clamp(0.5, n as f32 - 0.5);
+                    let py = (t2 * n as f32).clamp(0.5, n as f32 - 0.5);
+                    out.set(x, y, faces[f2].bilinear(px, py, false));
                 }
-                let s = (x as f32 - BORDER as f32 + 0.5) * inv;
-                let t = (y as f32 - BORDER as f32 + 0.5) * inv;
-                let (f2, s2, t2) = dir_face(face_dir(face, s, t));
-                // Clamp half a texel inside so the tap stays on the neighbour face.
-                let px = (s2 * n as f32).clamp(0.5, n as f32 - 0.5);
-                let py = (t2 * n as f32).clamp(0.5, n as f32 - 0.5);
-                out.set(x, y, faces[f2].bilinear(px, py, false));
             }
-        }
-        out
-    })
+            out
+        })
+        .collect();
+    out.try_into().expect("six faces")
 }
 
 /// Reads a cube map from six same-size images, naming the file of a face that does not fit.

@@ -3,7 +3,7 @@
 
 use crate::cube::{dir_face, face_dir, CubeMap, Dirs, Environment, Interp, BATCH};
 use crate::image::Image;
-use crate::layout::Projection;
+use crate::layout::{equirect, Projection};
 use glam::{Mat3, Vec3, Vec4};
 
 /// A rotation of the environment (degrees) and an optional handedness flip.
@@ -91,26 +91,33 @@ impl Resampler {
         h: usize,
     ) -> Image {
         let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
-        let dir = move |x: f32, y: f32| proj.to_dir(x * iw, y * ih);
-        let footprint = move |x: f32, y: f32| match proj {
-            Projection::Equirect => std::f32::consts::PI * ih,
-            _ => {
-                // Measured: the angle between directions half a pixel either side.
-                let c = dir(x, y);
-                let span = |a: Option<Vec3>, b: Option<Vec3>| match (a, b) {
-                    (Some(a), Some(b)) => a.angle_between(b),
-                    _ => 0.0,
-                };
-                let sx = span(dir(x - 0.5, y), dir(x + 0.5, y));
-                let sy = span(dir(x, y - 0.5), dir(x, y + 0.5));
-                if c.is_none() {
+        let at = move |p: Projection| move |x: f32, y: f32| p.to_dir(x * iw, y * ih);
+        // The angle one texel spans, from each layout's formula (the larger of its radial and
+        // tangential rates times the texel's size in disc radii, 2 / w). One render per
+        // layout, so each inlines its own direction maths.
+        match proj {
+            Projection::Equirect => {
+                let rows = std::f32::consts::PI * ih;
+                let dir = move |x: f32, y: f32| Some(equirect::uv_to_dir(x * iw, y * ih));
+                self.render(env, w, h, dir, move |_, _| rows)
+            }
+            // The angle from -Z is pi r: pi per unit radius, across and around.
+            Projection::Angular => {
+                let texel = std::f32::consts::TAU * iw;
+                self.render(env, w, h, at(proj), move |_, _| texel)
+            }
+            // The angle from -Z is 2 asin r: 2 / sqrt(1 - r^2) across the rings, more than the
+            // 2 sqrt(1 - r^2) around them. Outside the ball nothing is sampled.
+            Projection::Sphere => self.render(env, w, h, at(proj), move |x, y| {
+                let (sx, sy) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
+                let rr = sx * sx + sy * sy;
+                if rr >= 1.0 {
                     0.0
                 } else {
-                    sx.max(sy)
+                    4.0 * iw / (1.0 - rr).sqrt()
                 }
-            }
-        };
-        self.render(env, w, h, dir, footprint)
+            }),
+        }
     }
 
     /// The shared loop: `dir(x, y)` gives the direction at continuous pixel coordinates

@@ -121,3 +121,70 @@ fn batch_transform_and_normalize_match_glam() {
         }
     }
 }
+
+#[test]
+fn cube_sample_many_matches_sample() {
+    let n = 24;
+    let cube = cubeforge::cube::CubeMap {
+        levels: vec![std::array::from_fn(|f| {
+            let img = busy(n, n);
+            Image::from_fn(n, n, |x, y| img.get(x, y) + Vec4::splat(f as f32))
+        })],
+    }
+    .with_box_mips(None);
+    let sampler = cubeforge::cube::CubeSampler::new(&cube);
+    let mut dirs = directions();
+    // Face edges and corners, where the face choice ties.
+    for d in [
+        Vec3::new(1.0, 1.0, 0.3),
+        Vec3::new(-1.0, 0.2, -1.0),
+        Vec3::ONE,
+        Vec3::NEG_ONE,
+    ] {
+        dirs.push(d.normalize());
+    }
+    for level in 0..sampler.levels() {
+        for interp in [Interp::Bilinear, Interp::Bicubic] {
+            for chunk in dirs.chunks(BATCH) {
+                let mut batch = Dirs::default();
+                for d in chunk {
+                    batch.push(*d);
+                }
+                let mut out = vec![Vec4::ZERO; chunk.len()];
+                sampler.sample_many(&batch, level, interp, &mut out);
+                for (d, got) in chunk.iter().zip(&out) {
+                    assert_eq!(
+                        *got,
+                        sampler.sample(*d, level, interp),
+                        "level {level} {interp:?} along {d}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn sampler_with_box_mips_matches_the_copying_route() {
+    let n = 20;
+    let faces: cubeforge::cube::Faces = std::array::from_fn(|f| {
+        let img = busy(n, n);
+        Image::from_fn(n, n, |x, y| img.get(x, y) * (f + 1) as f32)
+    });
+    let cube = cubeforge::cube::CubeMap {
+        levels: vec![faces.clone()],
+    };
+    for count in [Some(1), Some(3), None] {
+        let direct = cubeforge::cube::CubeSampler::with_box_mips(&faces, count);
+        let copied = cubeforge::cube::CubeSampler::new(&cube.clone().with_box_mips(count));
+        assert_eq!(direct.levels(), copied.levels());
+        for level in 0..direct.levels() {
+            for d in directions() {
+                assert_eq!(
+                    direct.sample(d, level, Interp::Bilinear),
+                    copied.sample(d, level, Interp::Bilinear)
+                );
+            }
+        }
+    }
+}

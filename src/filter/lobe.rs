@@ -262,8 +262,5 @@ pub fn filter_level(
 
 /// The source prepared for filtering: its box mips, seamless.
 pub fn source_sampler(base: &CubeMap) -> CubeSampler {
-    let b = CubeMap {
-        levels: vec![base.levels[0].clone()],
-    };
-    CubeSampler::new(&b.with_box_mips(None))
+    CubeSampler::with_box_mips(&base.levels[0], None)
 }
