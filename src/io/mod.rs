@@ -363,6 +363,7 @@ pub fn encode_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<Vec
     let format = FileFormat::from_extension(path).ok_or_else(|| unknown_ext(path))?;
     match format {
         FileFormat::Exr => exr::encode(img).map_err(|e| Error::file(path, e)),
+        FileFormat::Hdr => Ok(rgbe::encode(img)),
         FileFormat::Ktx2 | FileFormat::Dds => Err(Error::file(
             path,
             "KTX2 and DDS hold cube maps: write them with --to ktx2 or --to dds",
