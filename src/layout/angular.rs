@@ -7,8 +7,9 @@ use std::f32::consts::PI;
 /// (s, t) of a unit direction, t pointing up (row 0 is t = 1).
 #[inline]
 pub fn dir_to_st(d: Vec3) -> Vec2 {
-    let a = (-d.z).clamp(-1.0, 1.0).acos();
     let len = (d.x * d.x + d.y * d.y).sqrt();
+    // acos(-z) as atan2 (inlined, and better conditioned near the centre and the rim).
+    let a = super::equirect::atan2(len, -d.z);
     if len <= 1e-12 {
         // -Z (centre) or +Z (any rim point).
         return if d.z < 0.0 {
@@ -33,6 +34,6 @@ pub fn st_to_dir(s: f32, t: f32) -> Option<Vec3> {
     if rho <= 1e-12 {
         return Some(Vec3::NEG_Z);
     }
-    let (sa, ca) = (rho * PI).sin_cos();
+    let (sa, ca) = super::equirect::sin_cos(rho * PI);
     Some(Vec3::new(sa * x / rho, sa * y / rho, -ca))
 }
