@@ -166,12 +166,75 @@ pub fn frame(n: Vec3) -> (Vec3, Vec3) {
     (t, n.cross(t))
 }
 
+impl Lobe {
+    /// The cosine below which the lobe's weight stays under 1e-10 of its peak: bright texels
+    /// further out are skipped (a 10^5 sun then moves an output by under 1e-3).
+    pub fn cutoff_cos(&self) -> f32 {
+        let floor = self.weight(1.0) * 1e-10;
+        // The weights fall with the angle: bisect for where they cross the floor.
+        let (mut lo, mut hi) = (-1.0f32, 1.0f32);
+        if self.weight(lo) >= floor {
+            return -1.0;
+        }
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if self.weight(mid) >= floor {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        lo
+    }
+}
+
 /// Texels too bright to importance-sample without fireflies (an HDR sun), split off the
 /// source: their excess over a threshold is convolved exactly, texel by texel.
 #[derive(Clone, Debug, Default)]
 pub struct Bright {
     /// Direction, solid angle and excess radiance of each bright texel.
     pub texels: Vec<(Vec3, f32, Vec4)>,
+    /// The texels in patches (8 x 8 source texels of one face), each with a bounding cone, so
+    /// an output texel skips whole patches beyond its lobe's reach.
+    pub patches: Vec<Patch>,
+}
+
+/// Bright texels close together: indices into `Bright::texels` and the cone around them.
+#[derive(Clone, Debug)]
+pub struct Patch {
+    pub axis: Vec3,
+    /// Angle from the axis to the furthest member.
+    pub radius: f32,
+    pub members: Vec<usize>,
+}
+
+impl Bright {
+    /// Groups the texels (found at `keys`: face and texel position) into patches.
+    fn with_patches(texels: Vec<(Vec3, f32, Vec4)>, keys: &[(usize, usize, usize)]) -> Bright {
+        let mut groups: std::collections::BTreeMap<(usize, usize, usize), Vec<usize>> =
+            Default::default();
+        for (i, &(face, x, y)) in keys.iter().enumerate() {
+            groups.entry((face, x / 8, y / 8)).or_default().push(i);
+        }
+        let patches = groups
+            .into_values()
+            .map(|members| {
+                let sum: Vec3 = members.iter().map(|&i| texels[i].0).sum();
+                let axis = sum.normalize_or(texels[members[0]].0);
+                let radius = members
+                    .iter()
+                    .map(|&i| axis.dot(texels[i].0).clamp(-1.0, 1.0).acos())
+                    .fold(0.0f32, f32::max);
+                Patch {
+                    axis,
+                    // A little margin for the rounding of the cosines.
+                    radius: radius + 1e-4,
+                    members,
+                }
+            })
+            .collect();
+        Bright { texels, patches }
+    }
 }
 
 /// Most texels handled exactly; beyond that the threshold rises.
@@ -200,7 +263,8 @@ pub fn split_bright(base: &CubeMap, ratio: f32) -> (CubeMap, Bright) {
         lums.sort_by(|a, b| b.total_cmp(a));
         threshold = lums[MAX_BRIGHT];
     }
-    let mut bright = Bright::default();
+    let mut texels = Vec::new();
+    let mut keys = Vec::new();
     let mut residual = base.levels[0].clone();
     for (face, img) in residual.iter_mut().enumerate() {
         for (i, p) in img.pixels.iter_mut().enumerate() {
@@ -209,7 +273,8 @@ pub fn split_bright(base: &CubeMap, ratio: f32) -> (CubeMap, Bright) {
                 let kept = (*p * (threshold / l)).truncate().extend(p.w);
                 let excess = (*p - kept).truncate().extend(0.0);
                 let (d, sa) = table[face * n * n + i];
-                bright.texels.push((d, sa, excess));
+                texels.push((d, sa, excess));
+                keys.push((face, i % n, i / n));
                 *p = kept;
             }
         }
@@ -218,7 +283,7 @@ pub fn split_bright(base: &CubeMap, ratio: f32) -> (CubeMap, Bright) {
         CubeMap {
             levels: vec![residual],
         },
-        bright,
+        Bright::with_patches(texels, &keys),
     )
 }
 
@@ -239,6 +304,20 @@ pub fn filter_level(
     } else {
         (1.0 / lobe.integral()) as f32
     };
+    // A patch can reach an output texel only within its radius plus the lobe's cutoff.
+    let reach = lobe.cutoff_cos().clamp(-1.0, 1.0).acos();
+    let limits: Vec<f32> = bright
+        .patches
+        .iter()
+        .map(|p| {
+            let a = p.radius + reach;
+            if a >= PI {
+                -2.0
+            } else {
+                a.cos()
+            }
+        })
+        .collect();
     std::array::from_fn(|face| {
         Image::from_fn(size, size, |x, y| {
             let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
@@ -249,10 +328,16 @@ pub fn filter_level(
                 acc += src.sample_split(d, tap.level, tap.frac) * tap.weight;
             }
             let mut out = acc / wsum;
-            for (d, sa, excess) in &bright.texels {
-                let w = lobe.weight(n.dot(*d));
-                if w > 0.0 {
-                    out += *excess * (w * sa * norm);
+            for (patch, &limit) in bright.patches.iter().zip(&limits) {
+                if n.dot(patch.axis) <= limit {
+                    continue;
+                }
+                for &i in &patch.members {
+                    let (d, sa, excess) = &bright.texels[i];
+                    let w = lobe.weight(n.dot(*d));
+                    if w > 0.0 {
+                        out += *excess * (w * sa * norm);
+                    }
                 }
             }
             out
@@ -263,4 +348,50 @@ pub fn filter_level(
 /// The source prepared for filtering: its box mips, seamless.
 pub fn source_sampler(base: &CubeMap) -> CubeSampler {
     CubeSampler::with_box_mips(&base.levels[0], None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Skipping patches beyond a lobe's reach changes no output by more than 1e-6 of it.
+    #[test]
+    fn patch_culling_keeps_the_exact_convolution() {
+        let sun = Vec3::new(-0.3, 0.5, 0.8).normalize();
+        let lamp = Vec3::new(0.6, -0.2, -0.7).normalize();
+        let base = CubeMap::from_fn(32, |d| {
+            let v = if d.dot(sun) > 0.98 || d.dot(lamp) > 0.995 {
+                1e5
+            } else {
+                0.2 + 0.1 * d.y
+            };
+            Vec4::new(v, v * 0.5, v, 1.0)
+        });
+        let (residual, bright) = split_bright(&base, 64.0);
+        assert!(bright.patches.len() > 1, "the sun spans several patches");
+        let all = Bright {
+            texels: bright.texels.clone(),
+            patches: vec![Patch {
+                axis: Vec3::Z,
+                radius: PI,
+                members: (0..bright.texels.len()).collect(),
+            }],
+        };
+        let src = source_sampler(&residual);
+        for lobe in [
+            Lobe::CosinePower { power: 2049.0 },
+            Lobe::CosinePower { power: 40.0 },
+            Lobe::Ggx { alpha: 0.05 },
+        ] {
+            let k = Kernel::new(lobe, 16, 32);
+            let culled = filter_level(&src, &k, 32, lobe, &bright);
+            let full = filter_level(&src, &k, 32, lobe, &all);
+            for (a, b) in culled.iter().zip(&full) {
+                for (p, q) in a.pixels.iter().zip(&b.pixels) {
+                    let d = (*p - *q).abs().max_element();
+                    assert!(d <= 1e-6 * q.max_element() + 1e-6, "{lobe:?}: {p} vs {q}");
+                }
+            }
+        }
+    }
 }
