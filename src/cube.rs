@@ -336,19 +336,27 @@ impl CubeSampler {
     /// Trilinear lookup with the level already split into integer level and fraction.
     #[inline]
     pub fn sample_split(&self, d: Vec3, level: usize, frac: f32) -> Vec4 {
-        let a = self.bilinear(d, level);
+        // One face selection for both levels.
+        let (face, s, t) = dir_face(d);
+        let a = self.bilinear_at(face, s, t, level);
         if frac <= 0.0 || level + 1 >= self.levels.len() {
             return a;
         }
-        a.lerp(self.bilinear(d, level + 1), frac)
+        a.lerp(self.bilinear_at(face, s, t, level + 1), frac)
     }
 
     /// Bilinear lookup in one level. The border makes every tap land inside the bordered
     /// face, so no clamping or wrapping is needed: the hot path of every filter.
     #[inline(always)]
     pub fn bilinear(&self, d: Vec3, level: usize) -> Vec4 {
-        let (n, faces) = &self.levels[level];
         let (face, s, t) = dir_face(d);
+        self.bilinear_at(face, s, t, level)
+    }
+
+    /// Bilinear lookup at face coordinates (s, t) of `face`.
+    #[inline(always)]
+    fn bilinear_at(&self, face: usize, s: f32, t: f32, level: usize) -> Vec4 {
+        let (n, faces) = &self.levels[level];
         // Continuous coordinates minus half a texel; always >= BORDER - 0.5 > 0, so the
         // truncating cast is a floor.
         let x = (s * *n as f32 + (BORDER as f32 - 0.5)).max(0.0);
