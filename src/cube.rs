@@ -54,14 +54,41 @@ pub fn dir_face(d: Vec3) -> (usize, f32, f32) {
 /// Solid angle of texel (x, y) on a face of edge `n` (exact, from the area of a projected
 /// rectangle), so averages over the sphere weight texels by the part of the sphere they cover.
 pub fn texel_solid_angle(n: usize, x: usize, y: usize) -> f32 {
-    fn area(x: f64, y: f64) -> f64 {
-        (x * y).atan2((x * x + y * y + 1.0).sqrt())
+    let c = |i: usize| corner(n, i);
+    (corner_area(c(x), c(y)) - corner_area(c(x), c(y + 1)) - corner_area(c(x + 1), c(y))
+        + corner_area(c(x + 1), c(y + 1))) as f32
+}
+
+/// `texel_solid_angle` for every texel of a face (the same on all six), row by row: one
+/// arctangent per texel corner instead of four per texel.
+pub fn solid_angle_table(n: usize) -> Vec<f32> {
+    let row = |j: usize| -> Vec<f64> {
+        (0..=n)
+            .map(|i| corner_area(corner(n, i), corner(n, j)))
+            .collect()
+    };
+    let mut out = Vec::with_capacity(n * n);
+    let mut above = row(0);
+    for y in 0..n {
+        let below = row(y + 1);
+        for x in 0..n {
+            out.push((above[x] - below[x] - above[x + 1] + below[x + 1]) as f32);
+        }
+        above = below;
     }
-    let inv = 2.0 / n as f64;
-    let x0 = x as f64 * inv - 1.0;
-    let y0 = y as f64 * inv - 1.0;
-    let (x1, y1) = (x0 + inv, y0 + inv);
-    (area(x0, y0) - area(x0, y1) - area(x1, y0) + area(x1, y1)) as f32
+    out
+}
+
+/// Face-plane coordinate (-1..1) of texel corner `i` on a face of edge `n`.
+#[inline]
+fn corner(n: usize, i: usize) -> f64 {
+    i as f64 * (2.0 / n as f64) - 1.0
+}
+
+/// Solid angle of the face-plane rectangle from the face centre to (x, y).
+#[inline]
+fn corner_area(x: f64, y: f64) -> f64 {
+    (x * y).atan2((x * x + y * y + 1.0).sqrt())
 }
 
 /// Six square faces of one size.
@@ -131,7 +158,8 @@ impl CubeMap {
         while self.levels.len() < count {
             let prev = self.levels.last().unwrap();
             let n = prev[0].width;
-            let next = std::array::from_fn(|f| box_reduce_face(&prev[f], n));
+            let weights = solid_angle_table(n);
+            let next = std::array::from_fn(|f| box_reduce_face(&prev[f], n, &weights));
             self.levels.push(next);
         }
         self
@@ -148,15 +176,13 @@ impl CubeMap {
     }
 }
 
-fn box_reduce_face(src: &Image, n: usize) -> Image {
+/// Each texel the mean of the 2x2 above it, weighted by their solid angles (`weights`, one
+/// face's table) so the mean radiance over the sphere is kept.
+fn box_reduce_face(src: &Image, n: usize, weights: &[f32]) -> Image {
     let m = (n / 2).max(1);
     if n == 1 {
         return src.clone();
     }
-    // Weights of the 2x2 children by solid angle keep the mean radiance over the sphere.
-    let weights: Vec<f32> = (0..n * n)
-        .map(|i| texel_solid_angle(n, i % n, i / n))
-        .collect();
     Image::from_fn(m, m, |x, y| {
         let mut acc = Vec4::ZERO;
         let mut wsum = 0.0;
@@ -304,7 +330,8 @@ impl CubeSampler {
         let count = count.unwrap_or(full).clamp(1, full);
         let mut levels = vec![(n, bordered(faces))];
         if count > 1 {
-            let first: Faces = std::array::from_fn(|f| box_reduce_face(&faces[f], n));
+            let weights = solid_angle_table(n);
+            let first: Faces = std::array::from_fn(|f| box_reduce_face(&faces[f], n, &weights));
             let rest = CubeMap {
                 levels: vec![first],
             }
@@ -389,56 +416,7 @@ impl CubeSampler {
         let nf = *n as f32;
         let last = (w - 2) as f32;
         for i in 0..count {
-            let (x, y, z) = (dirs.x[i], dirs.y[i], dirs.z[i]);
-            let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
-            let xmaj = ax >= ay && ax >= az;
-            let ymaj = !xmaj && ay >= az;
-            let f = if xmaj {
-                if x >= 0.0 {
-                    0
-                } else {
-                    1
-                }
-            } else if ymaj {
-                if y >= 0.0 {
-                    2
-                } else {
-                    3
-                }
-            } else if z >= 0.0 {
-                4
-            } else {
-                5
-            };
-            let sc = if xmaj {
-                if x >= 0.0 {
-                    -z
-                } else {
-                    z
-                }
-            } else if ymaj || z >= 0.0 {
-                x
-            } else {
-                -x
-            };
-            let tc = if ymaj {
-                if y >= 0.0 {
-                    z
-                } else {
-                    -z
-                }
-            } else {
-                -y
-            };
-            let ma = if xmaj {
-                ax
-            } else if ymaj {
-                ay
-            } else {
-                az
-            };
-            let inv = if ma > 0.0 { 0.5 / ma } else { 0.0 };
-            let (s, t) = (sc * inv + 0.5, tc * inv + 0.5);
+            let (f, s, t) = dir_face_lanes(dirs.x[i], dirs.y[i], dirs.z[i]);
             // As in `bilinear`: coordinates minus half a texel, never below 0.
             let px = (s * nf + (BORDER as f32 - 0.5)).max(0.0);
             let py = (t * nf + (BORDER as f32 - 0.5)).max(0.0);
@@ -473,6 +451,84 @@ impl CubeSampler {
             *o = top.lerp(bottom, fy[i]);
         }
     }
+}
+
+impl CubeSampler {
+    /// `sample_split(dirs[i], level[i], frac[i])` for a batch: the face selection in vector
+    /// lanes, then the reads of each tap's two levels. Bit for bit `sample_split`'s values.
+    pub fn trilinear_many(&self, dirs: &Dirs, level: &[usize], frac: &[f32], out: &mut [Vec4]) {
+        let count = dirs.len;
+        let mut face = [0u8; BATCH];
+        let mut fs = [0.0f32; BATCH];
+        let mut ft = [0.0f32; BATCH];
+        for i in 0..count {
+            (face[i], fs[i], ft[i]) = dir_face_lanes(dirs.x[i], dirs.y[i], dirs.z[i]);
+        }
+        let top = self.levels.len() - 1;
+        for i in 0..count {
+            let (f, s, t, l) = (face[i] as usize, fs[i], ft[i], level[i]);
+            let a = self.bilinear_at(f, s, t, l);
+            out[i] = if frac[i] <= 0.0 || l >= top {
+                a
+            } else {
+                a.lerp(self.bilinear_at(f, s, t, l + 1), frac[i])
+            };
+        }
+    }
+}
+
+/// `dir_face` with every branch a select, for loops over batches that should vectorise.
+#[inline(always)]
+fn dir_face_lanes(x: f32, y: f32, z: f32) -> (u8, f32, f32) {
+    let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
+    let xmaj = ax >= ay && ax >= az;
+    let ymaj = !xmaj && ay >= az;
+    let f = if xmaj {
+        if x >= 0.0 {
+            0
+        } else {
+            1
+        }
+    } else if ymaj {
+        if y >= 0.0 {
+            2
+        } else {
+            3
+        }
+    } else if z >= 0.0 {
+        4
+    } else {
+        5
+    };
+    let sc = if xmaj {
+        if x >= 0.0 {
+            -z
+        } else {
+            z
+        }
+    } else if ymaj || z >= 0.0 {
+        x
+    } else {
+        -x
+    };
+    let tc = if ymaj {
+        if y >= 0.0 {
+            z
+        } else {
+            -z
+        }
+    } else {
+        -y
+    };
+    let ma = if xmaj {
+        ax
+    } else if ymaj {
+        ay
+    } else {
+        az
+    };
+    let inv = if ma > 0.0 { 0.5 / ma } else { 0.0 };
+    (f, sc * inv + 0.5, tc * inv + 0.5)
 }
 
 /// The integer part of a non-negative value, as a float, without the saturating cast that
@@ -576,4 +632,25 @@ pub fn faces_from_images(images: Vec<Image>, names: &[std::path::PathBuf]) -> Re
         .try_into()
         .map_err(|_| Error::usage("a cube map needs exactly six faces"))?;
     CubeMap::from_faces(faces).map_err(|e| Error::file(&names[0], e))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn solid_angle_table_matches_texel_solid_angle() {
+        for n in [1, 2, 5, 64] {
+            let table = super::solid_angle_table(n);
+            let mut sum = 0.0f64;
+            for y in 0..n {
+                for x in 0..n {
+                    assert_eq!(table[y * n + x], super::texel_solid_angle(n, x, y));
+                    sum += table[y * n + x] as f64;
+                }
+            }
+            assert!(
+                (sum - 4.0 * std::f64::consts::PI / 6.0).abs() < 1e-5,
+                "{n}: {sum}"
+            );
+        }
+    }
 }

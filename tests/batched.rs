@@ -188,3 +188,36 @@ fn sampler_with_box_mips_matches_the_copying_route() {
         }
     }
 }
+
+#[test]
+fn trilinear_many_matches_sample_split() {
+    let n = 16;
+    let cube = cubeforge::cube::CubeMap {
+        levels: vec![std::array::from_fn(|f| {
+            let img = busy(n, n);
+            Image::from_fn(n, n, |x, y| img.get(x, y) - Vec4::splat(f as f32))
+        })],
+    };
+    let sampler = cubeforge::cube::CubeSampler::with_box_mips(&cube.levels[0], None);
+    let dirs = directions();
+    let top = sampler.levels();
+    for chunk in dirs.chunks(BATCH) {
+        let mut batch = Dirs::default();
+        let mut levels = Vec::new();
+        let mut fracs = Vec::new();
+        for (i, d) in chunk.iter().enumerate() {
+            batch.push(*d * 2.5);
+            levels.push(i % top);
+            fracs.push([0.0, 0.25, 0.9][i % 3]);
+        }
+        let mut out = vec![Vec4::ZERO; chunk.len()];
+        sampler.trilinear_many(&batch, &levels, &fracs, &mut out);
+        for (i, d) in chunk.iter().enumerate() {
+            assert_eq!(
+                out[i],
+                sampler.sample_split(*d * 2.5, levels[i], fracs[i]),
+                "along {d}"
+            );
+        }
+    }
+}

@@ -3,19 +3,20 @@
 //! reference the fast filters are measured against, and the irradiance default at small sizes.
 
 use super::lobe::Lobe;
-use crate::cube::{face_dir, texel_solid_angle, CubeMap};
+use crate::cube::{face_dir, solid_angle_table, CubeMap};
 use crate::image::Image;
 use glam::{Vec3, Vec4};
 
 /// Directions and solid angles of every texel of a face size, in face order.
 pub fn texel_table(n: usize) -> Vec<(Vec3, f32)> {
     let inv = 1.0 / n as f32;
+    let angles = solid_angle_table(n);
     let mut out = Vec::with_capacity(6 * n * n);
     for face in 0..6 {
         for y in 0..n {
             for x in 0..n {
                 let d = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
-                out.push((d, texel_solid_angle(n, x, y)));
+                out.push((d, angles[y * n + x]));
             }
         }
     }

@@ -2,7 +2,7 @@
 //! one precomputed set of (local direction, weight, source lod) per level, rotated into every
 //! texel's frame and looked up trilinearly in a box-mipmapped, seamless source.
 
-use crate::cube::{face_dir, CubeMap, CubeSampler};
+use crate::cube::{face_dir, CubeMap, CubeSampler, Dirs, BATCH};
 use crate::image::Image;
 use glam::{Vec3, Vec4};
 use std::f32::consts::{PI, TAU};
@@ -318,29 +318,63 @@ pub fn filter_level(
             }
         })
         .collect();
+    // The kernel as separate arrays, so each texel's taps are turned and looked up in
+    // batches (the face selection of a whole batch vectorises).
+    let taps = &kernel.taps;
+    let (kx, ky, kz): (Vec<f32>, Vec<f32>, Vec<f32>) = (
+        taps.iter().map(|t| t.dir.x).collect(),
+        taps.iter().map(|t| t.dir.y).collect(),
+        taps.iter().map(|t| t.dir.z).collect(),
+    );
+    let levels: Vec<usize> = taps.iter().map(|t| t.level).collect();
+    let fracs: Vec<f32> = taps.iter().map(|t| t.frac).collect();
+    let filter_texel = |n: Vec3, dirs: &mut Dirs, values: &mut [Vec4; BATCH]| -> Vec4 {
+        let (t, b) = frame(n);
+        let mut acc = Vec4::ZERO;
+        for start in (0..taps.len()).step_by(BATCH) {
+            let end = (start + BATCH).min(taps.len());
+            let k = end - start;
+            // Same arithmetic as t * x + b * y + n * z.
+            for i in 0..k {
+                let j = start + i;
+                dirs.x[i] = t.x * kx[j] + b.x * ky[j] + n.x * kz[j];
+                dirs.y[i] = t.y * kx[j] + b.y * ky[j] + n.y * kz[j];
+                dirs.z[i] = t.z * kx[j] + b.z * ky[j] + n.z * kz[j];
+            }
+            dirs.len = k;
+            src.trilinear_many(
+                dirs,
+                &levels[start..end],
+                &fracs[start..end],
+                &mut values[..k],
+            );
+            for (v, tap) in values[..k].iter().zip(&taps[start..end]) {
+                acc += *v * tap.weight;
+            }
+        }
+        let mut out = acc / wsum;
+        for (patch, &limit) in bright.patches.iter().zip(&limits) {
+            if n.dot(patch.axis) <= limit {
+                continue;
+            }
+            for &i in &patch.members {
+                let (d, sa, excess) = &bright.texels[i];
+                let w = lobe.weight(n.dot(*d));
+                if w > 0.0 {
+                    out += *excess * (w * sa * norm);
+                }
+            }
+        }
+        out
+    };
     std::array::from_fn(|face| {
-        Image::from_fn(size, size, |x, y| {
-            let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
-            let (t, b) = frame(n);
-            let mut acc = Vec4::ZERO;
-            for tap in &kernel.taps {
-                let d = t * tap.dir.x + b * tap.dir.y + n * tap.dir.z;
-                acc += src.sample_split(d, tap.level, tap.frac) * tap.weight;
+        Image::from_rows(size, size, |y, row| {
+            let mut dirs = Dirs::default();
+            let mut values = [Vec4::ZERO; BATCH];
+            for (x, texel) in row.iter_mut().enumerate() {
+                let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                *texel = filter_texel(n, &mut dirs, &mut values);
             }
-            let mut out = acc / wsum;
-            for (patch, &limit) in bright.patches.iter().zip(&limits) {
-                if n.dot(patch.axis) <= limit {
-                    continue;
-                }
-                for &i in &patch.members {
-                    let (d, sa, excess) = &bright.texels[i];
-                    let w = lobe.weight(n.dot(*d));
-                    if w > 0.0 {
-                        out += *excess * (w * sa * norm);
-                    }
-                }
-            }
-            out
         })
     })
 }
