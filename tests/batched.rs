@@ -77,22 +77,24 @@ fn sample_many_matches_sample() {
     ] {
         let img = busy(w, h);
         let env = ImageEnv::new(projection, &img, None);
-        for level in 0..env.levels() {
-            for interp in [Interp::Bilinear, Interp::Bicubic] {
-                for chunk in dirs.chunks(BATCH) {
-                    let mut batch = Dirs::default();
-                    for d in chunk {
-                        batch.push(*d);
-                    }
-                    let mut out = vec![Vec4::ZERO; chunk.len()];
-                    env.sample_many(&batch, level, interp, &mut out);
-                    for (d, got) in chunk.iter().zip(&out) {
-                        let want = env.sample(*d, level, interp);
-                        assert_eq!(
-                            *got, want,
-                            "{projection:?} level {level} {interp:?} along {d}"
-                        );
-                    }
+        assert_batches_match(&env, &dirs, &format!("{projection:?}"));
+    }
+}
+
+/// `sample_many` gives `sample`'s values at every level, both interpolations.
+fn assert_batches_match(env: &dyn Environment, dirs: &[Vec3], what: &str) {
+    for level in 0..env.levels() {
+        for interp in [Interp::Bilinear, Interp::Bicubic] {
+            for chunk in dirs.chunks(BATCH) {
+                let mut batch = Dirs::default();
+                for d in chunk {
+                    batch.push(*d);
+                }
+                let mut out = vec![Vec4::ZERO; chunk.len()];
+                env.sample_many(&batch, level, interp, &mut out);
+                for (d, got) in chunk.iter().zip(&out) {
+                    let want = env.sample(*d, level, interp);
+                    assert_eq!(*got, want, "{what} level {level} {interp:?} along {d}");
                 }
             }
         }
@@ -143,25 +145,7 @@ fn cube_sample_many_matches_sample() {
     ] {
         dirs.push(d.normalize());
     }
-    for level in 0..sampler.levels() {
-        for interp in [Interp::Bilinear, Interp::Bicubic] {
-            for chunk in dirs.chunks(BATCH) {
-                let mut batch = Dirs::default();
-                for d in chunk {
-                    batch.push(*d);
-                }
-                let mut out = vec![Vec4::ZERO; chunk.len()];
-                sampler.sample_many(&batch, level, interp, &mut out);
-                for (d, got) in chunk.iter().zip(&out) {
-                    assert_eq!(
-                        *got,
-                        sampler.sample(*d, level, interp),
-                        "level {level} {interp:?} along {d}"
-                    );
-                }
-            }
-        }
-    }
+    assert_batches_match(&sampler, &dirs, "cube");
 }
 
 #[test]
