@@ -3,7 +3,7 @@
 use super::{warn, Stages};
 use cubeforge::convert::{self, Output};
 use cubeforge::cube::{CubeMap, Faces, Interp, FACE_NAMES};
-use cubeforge::io::{self, FileFormat, GpuFormat, Limits, ReadOptions, WriteOptions};
+use cubeforge::io::{self, FileFormat, GpuFormat, WriteOptions};
 use cubeforge::layout::Kind;
 use cubeforge::resample::{Orientation, Resampler};
 use cubeforge::{Error, Result};
@@ -17,9 +17,6 @@ pub struct Args {
     /// Output file, or folder for --to faces.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Input layout (detected from the aspect ratio; square images need sphere or angular).
-    #[arg(long, value_enum)]
-    pub from: Option<Kind>,
     /// Output layout (default: from the output's extension; hcross for images, faces for a folder).
     #[arg(long, value_enum)]
     pub to: Option<Kind>,
@@ -47,9 +44,6 @@ pub struct Args {
     /// Flip handedness (mirror X) for engines with the other convention.
     #[arg(long)]
     pub mirror: bool,
-    /// 8- and 16-bit files hold data, not colour: no sRGB decode on read or encode on write.
-    #[arg(long)]
-    pub linear: bool,
     /// Write 16-bit PNG instead of 8-bit.
     #[arg(long)]
     pub png16: bool,
@@ -59,28 +53,21 @@ pub struct Args {
     /// Mip levels in KTX2 and DDS output (default: the full chain down to 1x1).
     #[arg(long)]
     pub levels: Option<usize>,
-    /// Refuse images with more pixels than this (checked before decoding).
-    #[arg(long, default_value_t = Limits::default().max_pixels)]
-    pub max_pixels: u64,
+    #[command(flatten)]
+    pub input: super::InputArgs,
 }
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
     let mut stages = Stages::new(verbose);
-    let limits = Limits {
-        max_pixels: a.max_pixels,
-        ..Limits::default()
-    };
-    let read = ReadOptions {
-        limits,
-        linear: a.linear,
-    };
+    let limits = a.input.limits();
+    let read = a.input.read_options();
     let to = output_kind(&a)?;
     // Check the options before the (possibly slow) decode.
     let face_format = match to {
         Kind::Faces => face_format(&a)?,
         _ => None,
     };
-    let loaded = convert::load(&a.inputs, a.from, &read)?;
+    let loaded = convert::load(&a.inputs, a.input.from, &read)?;
     stages.done("decode");
     if loaded.meta.replaced_values > 0 {
         warn(format!(
@@ -120,7 +107,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     stages.done("resample");
 
     let write = WriteOptions {
-        linear: a.linear,
+        linear: a.input.linear,
         png16: a.png16,
         gpu_format: a.gpu_format,
     };

@@ -3,7 +3,7 @@
 use super::{convert::encode_output, convert::output_kind_for, Stages};
 use cubeforge::convert::{self, Loaded, Output, Source};
 use cubeforge::filter::{self, sh, IrradianceMethod};
-use cubeforge::io::{self, FileFormat, GpuFormat, Limits, ReadOptions, WriteOptions};
+use cubeforge::io::{self, FileFormat, GpuFormat, WriteOptions};
 use cubeforge::layout::Kind;
 use cubeforge::resample::Resampler;
 use cubeforge::{Error, Result};
@@ -29,21 +29,14 @@ pub struct Args {
     /// brute: exact integral (default; right next to HDR suns); sh: from the 9 coefficients.
     #[arg(long, value_enum, default_value_t = IrradianceMethod::Brute)]
     pub method: IrradianceMethod,
-    /// Input layout for square images (sphere or angular).
-    #[arg(long, value_enum)]
-    pub from: Option<Kind>,
     /// File type of face images (default exr).
     #[arg(long, default_value = "exr")]
     pub format: String,
     /// Texel format of KTX2 and DDS output.
     #[arg(long, value_enum, default_value_t = GpuFormat::Rgba16f)]
     pub gpu_format: GpuFormat,
-    /// 8- and 16-bit files hold data, not colour.
-    #[arg(long)]
-    pub linear: bool,
-    /// Refuse images with more pixels than this.
-    #[arg(long, default_value_t = Limits::default().max_pixels)]
-    pub max_pixels: u64,
+    #[command(flatten)]
+    pub input: super::InputArgs,
 }
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
@@ -60,14 +53,8 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     if a.size == 0 || a.size > 4096 {
         return Err(Error::usage(format!("--size {}: use 1 to 4096", a.size)));
     }
-    let read = ReadOptions {
-        limits: Limits {
-            max_pixels: a.max_pixels,
-            ..Limits::default()
-        },
-        linear: a.linear,
-    };
-    let loaded = convert::load(&a.inputs, a.from, &read)?;
+    let read = a.input.read_options();
+    let loaded = convert::load(&a.inputs, a.input.from, &read)?;
     stages.done("decode");
     // 256 faces hold everything the integral and the SH can see.
     let base_size = loaded.face_size().min(256);
@@ -94,7 +81,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         }
     };
     let write = WriteOptions {
-        linear: a.linear,
+        linear: a.input.linear,
         gpu_format: a.gpu_format,
         ..WriteOptions::default()
     };

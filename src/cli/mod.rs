@@ -51,6 +51,36 @@ pub enum Command {
     Fixtures(fixtures::Args),
 }
 
+/// How the inputs are read: shared by the commands that take environment maps.
+#[derive(clap::Args, Debug)]
+pub struct InputArgs {
+    /// Input layout (detected from the aspect ratio; square images need sphere or angular).
+    #[arg(long, value_enum)]
+    pub from: Option<cubeforge::layout::Kind>,
+    /// 8- and 16-bit files hold data, not colour: no sRGB decode on read or encode on write.
+    #[arg(long)]
+    pub linear: bool,
+    /// Refuse images with more pixels than this (checked before decoding).
+    #[arg(long, default_value_t = cubeforge::io::Limits::default().max_pixels)]
+    pub max_pixels: u64,
+}
+
+impl InputArgs {
+    pub fn limits(&self) -> cubeforge::io::Limits {
+        cubeforge::io::Limits {
+            max_pixels: self.max_pixels,
+            ..Default::default()
+        }
+    }
+
+    pub fn read_options(&self) -> cubeforge::io::ReadOptions {
+        cubeforge::io::ReadOptions {
+            limits: self.limits(),
+            linear: self.linear,
+        }
+    }
+}
+
 /// Times stages and prints them with -v.
 pub struct Stages {
     verbose: bool,

@@ -3,7 +3,7 @@
 use super::{convert::encode_faces, convert::refuse_inputs, Stages};
 use cubeforge::convert::{self, Output};
 use cubeforge::filter::{self, ChainOptions, FilterKind, LevelInfo, LightingModel};
-use cubeforge::io::{self, FileFormat, GpuFormat, Limits, ReadOptions, WriteOptions};
+use cubeforge::io::{self, FileFormat, GpuFormat, WriteOptions};
 use cubeforge::layout::Kind;
 use cubeforge::resample::Resampler;
 use cubeforge::{Error, Result};
@@ -43,21 +43,14 @@ pub struct Args {
     /// cosine: cmft's lighting model (phongbrdf: power + 1, blinn: power / 4, blinnbrdf: / 4 + 1).
     #[arg(long, value_enum, default_value_t = LightingModel::Phong)]
     pub lighting: LightingModel,
-    /// Input layout for square images (sphere or angular).
-    #[arg(long, value_enum)]
-    pub from: Option<Kind>,
     /// File type of the level images in a folder output (default exr).
     #[arg(long, default_value = "exr")]
     pub format: String,
     /// Texel format of KTX2 and DDS output.
     #[arg(long, value_enum, default_value_t = GpuFormat::Rgba16f)]
     pub gpu_format: GpuFormat,
-    /// 8- and 16-bit files hold data, not colour.
-    #[arg(long)]
-    pub linear: bool,
-    /// Refuse images with more pixels than this.
-    #[arg(long, default_value_t = Limits::default().max_pixels)]
-    pub max_pixels: u64,
+    #[command(flatten)]
+    pub input: super::InputArgs,
 }
 
 /// levels.json: what each level holds.
@@ -95,14 +88,8 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     if a.samples == 0 {
         return Err(Error::usage("--samples must be at least 1"));
     }
-    let read = ReadOptions {
-        limits: Limits {
-            max_pixels: a.max_pixels,
-            ..Limits::default()
-        },
-        linear: a.linear,
-    };
-    let loaded = convert::load(&a.inputs, a.from, &read)?;
+    let read = a.input.read_options();
+    let loaded = convert::load(&a.inputs, a.input.from, &read)?;
     stages.done("decode");
     if loaded.meta.replaced_values > 0 {
         super::warn(format!(
@@ -187,7 +174,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         }
         None => {
             let write = WriteOptions {
-                linear: a.linear,
+                linear: a.input.linear,
                 ..WriteOptions::default()
             };
             for (m, faces) in chain.levels.iter().enumerate() {
