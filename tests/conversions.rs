@@ -1,8 +1,10 @@
 //! Conversions checked texel by texel against environments defined as functions of direction,
 //! plus the fixed conventions, orientation markers, seams, rotation and antialiasing.
 
+mod common;
+
 use cubeforge::convert::{self, Loaded, Output, Source};
-use cubeforge::cube::{dir_face, face_dir, CubeMap, CubeSampler, Environment, Interp};
+use cubeforge::cube::{dir_face, face_dir, CubeMap, Environment, Interp};
 use cubeforge::image::Image;
 use cubeforge::io::{FileFormat, Meta};
 use cubeforge::layout::{self, angular, cross, equirect, sphere, Kind, Projection};
@@ -321,36 +323,7 @@ fn seams_are_continuous() {
     let Output::Cube(cube) = convert::convert(&input, Kind::Faces, n, &Resampler::default()) else {
         panic!()
     };
-    let sampler = CubeSampler::new(&cube);
-    let step = 1.0 / n as f32;
-    let mut worst_cross: f32 = 0.0;
-    let mut worst_inside: f32 = 0.0;
-    for face in 0..6 {
-        for i in 0..n {
-            let a = (i as f32 + 0.5) * step;
-            for (s, t, ds, dt) in [
-                (0.5 * step, a, -step, 0.0),
-                (1.0 - 0.5 * step, a, step, 0.0),
-                (a, 0.5 * step, 0.0, -step),
-                (a, 1.0 - 0.5 * step, 0.0, step),
-            ] {
-                let here = face_dir(face, s, t).normalize();
-                let across = face_dir(face, s + ds, t + dt).normalize();
-                let inside = face_dir(face, s - ds, t - dt).normalize();
-                let v = sampler.sample(here, 0, Interp::Bilinear);
-                worst_cross = worst_cross.max(
-                    (sampler.sample(across, 0, Interp::Bilinear) - v)
-                        .abs()
-                        .max_element(),
-                );
-                worst_inside = worst_inside.max(
-                    (sampler.sample(inside, 0, Interp::Bilinear) - v)
-                        .abs()
-                        .max_element(),
-                );
-            }
-        }
-    }
+    let (worst_cross, worst_inside) = common::seam_steps(&cube, 0);
     assert!(
         worst_cross <= 1.5 * worst_inside + 1e-4,
         "step across a seam {worst_cross} vs inside a face {worst_inside}"

@@ -1,7 +1,9 @@
 //! Prefiltered chains measured against brute-force integrals of their lobes, seams at every
 //! level, the Gaussian's stated sigma, box means, SH closed forms, HDR suns without fireflies.
 
-use cubeforge::cube::{face_dir, CubeMap, CubeSampler, Environment, Interp};
+mod common;
+
+use cubeforge::cube::{face_dir, CubeMap, CubeSampler, Environment};
 use cubeforge::filter::{self, brute, lobe::Lobe, sh, ChainOptions, FilterKind};
 use cubeforge::image::Image;
 use cubeforge::synthetic;
@@ -72,38 +74,13 @@ fn ggx_and_cosine_match_brute_force() {
 /// The largest step between texels either side of any face edge, against the largest step
 /// between neighbours inside a face, over every level of a chain.
 fn seam_ratio(cube: &CubeMap) -> f32 {
-    let sampler = CubeSampler::new(cube);
-    let mut worst = 0.0f32;
-    for (m, level) in cube.levels.iter().enumerate() {
-        let n = level[0].width;
-        if n < 4 {
-            continue;
-        }
-        let step = 1.0 / n as f32;
-        let (mut across_max, mut inside_max) = (0.0f32, 0.0f32);
-        for face in 0..6 {
-            for i in 0..n {
-                let a = (i as f32 + 0.5) * step;
-                for (s, t, ds, dt) in [
-                    (0.5 * step, a, -step, 0.0),
-                    (1.0 - 0.5 * step, a, step, 0.0),
-                    (a, 0.5 * step, 0.0, -step),
-                    (a, 1.0 - 0.5 * step, 0.0, step),
-                ] {
-                    let here = face_dir(face, s, t).normalize();
-                    let across = face_dir(face, s + ds, t + dt).normalize();
-                    let inside = face_dir(face, s - ds, t - dt).normalize();
-                    let v = sampler.sample(here, m, Interp::Bilinear);
-                    let step_across = (sampler.sample(across, m, Interp::Bilinear) - v).abs();
-                    let step_inside = (sampler.sample(inside, m, Interp::Bilinear) - v).abs();
-                    across_max = across_max.max(step_across.max_element());
-                    inside_max = inside_max.max(step_inside.max_element());
-                }
-            }
-        }
-        worst = worst.max(across_max / inside_max.max(1e-4));
-    }
-    worst
+    (0..cube.levels.len())
+        .filter(|&m| cube.levels[m][0].width >= 4)
+        .map(|m| {
+            let (across, inside) = common::seam_steps(cube, m);
+            across / inside.max(1e-4)
+        })
+        .fold(0.0f32, f32::max)
 }
 
 #[test]

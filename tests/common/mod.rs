@@ -2,6 +2,7 @@
 //! fixtures. Not every test file uses every helper.
 #![allow(dead_code)]
 
+use cubeforge::cube::{face_dir, CubeMap, CubeSampler, Environment, Interp};
 use cubeforge::image::Image;
 use cubeforge::io::{self, ReadOptions, WriteOptions};
 use std::ffi::OsStr;
@@ -120,4 +121,35 @@ pub fn read_image(path: &Path) -> Image {
 pub fn write_image(path: &Path, img: &Image) {
     let bytes = io::encode_image(path, img, &WriteOptions::default()).expect("encodes");
     std::fs::write(path, bytes).expect("writes");
+}
+
+/// Seam continuity of one level of a cube map: the largest step between the texels either
+/// side of any face edge, and the largest step from an edge texel to its neighbour inside
+/// the face, as (across, inside).
+pub fn seam_steps(cube: &CubeMap, level: usize) -> (f32, f32) {
+    let sampler = CubeSampler::new(cube);
+    let n = cube.levels[level][0].width;
+    let step = 1.0 / n as f32;
+    let (mut across_max, mut inside_max) = (0.0f32, 0.0f32);
+    for face in 0..6 {
+        for i in 0..n {
+            let a = (i as f32 + 0.5) * step;
+            for (s, t, ds, dt) in [
+                (0.5 * step, a, -step, 0.0),
+                (1.0 - 0.5 * step, a, step, 0.0),
+                (a, 0.5 * step, 0.0, -step),
+                (a, 1.0 - 0.5 * step, 0.0, step),
+            ] {
+                let here = face_dir(face, s, t).normalize();
+                let across = face_dir(face, s + ds, t + dt).normalize();
+                let inside = face_dir(face, s - ds, t - dt).normalize();
+                let v = sampler.sample(here, level, Interp::Bilinear);
+                let step_across = (sampler.sample(across, level, Interp::Bilinear) - v).abs();
+                let step_inside = (sampler.sample(inside, level, Interp::Bilinear) - v).abs();
+                across_max = across_max.max(step_across.max_element());
+                inside_max = inside_max.max(step_inside.max_element());
+            }
+        }
+    }
+    (across_max, inside_max)
 }
