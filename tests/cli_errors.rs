@@ -123,6 +123,15 @@ fn truncated_png() {
 }
 
 #[test]
+fn truncated_hdr() {
+    let s = Scratch::new();
+    let bytes = encode("a.hdr", &equirect(64, 32));
+    let p = s.write("trunc.hdr", &bytes[..bytes.len() / 2]);
+    let line = convert_fails(&s, &p, "o.exr", &[], "trunc.hdr");
+    assert!(line.contains("truncated or malformed"), "{line}");
+}
+
+#[test]
 fn truncated_exr() {
     let s = Scratch::new();
     let bytes = encode("a.exr", &equirect(64, 32));

@@ -1,6 +1,6 @@
 //! The parallel Radiance HDR reader gives the image crate's values bit for bit, on every kind
-//! of scanline (run-length channels, flat texels, old-style repeat markers), and leaves every
-//! malformed file to the crate's reader and its error messages.
+//! of scanline (run-length channels, flat texels, old-style repeat markers), and refuses broken
+//! pixel data itself, before allocating the image.
 
 mod common;
 
@@ -97,7 +97,7 @@ fn real_flat_files_match_the_crate() {
 }
 
 #[test]
-fn malformed_files_go_to_the_crate() {
+fn malformed_files_are_refused_before_allocation() {
     let img = Image::filled(64, 4, Vec4::new(0.5, 2.0, 8.0, 1.0));
     let good = io::encode_image(Path::new("a.hdr"), &img, &WriteOptions::default()).unwrap();
     // Truncated pixel data, a run past the end of a line, a leading repeat marker.
@@ -111,15 +111,23 @@ fn malformed_files_go_to_the_crate() {
         ("overrun", &overrun),
         ("marker", &leading_marker),
     ] {
-        assert!(ours(bytes).is_none(), "{what}: ours should decline");
+        let r =
+            rgbe::decode(bytes, Path::new("x.hdr"), &ReadOptions::default()).expect("a verdict");
+        let msg = r.unwrap_err().to_string();
+        assert!(
+            msg.contains("x.hdr") && msg.contains("truncated or malformed"),
+            "{what}: {msg}"
+        );
         let err = raster::decode(
             bytes,
             FileFormat::Hdr,
             Path::new("x.hdr"),
             &ReadOptions::default(),
         );
-        assert!(err.is_err(), "{what}: the crate reports it");
+        assert!(err.is_err(), "{what}: the crate agrees it is broken");
     }
+    // A header the crate rejects stays the crate's to report.
+    assert!(ours(b"#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 2 +X 2\n").is_none());
     // The size limit is checked from the header before any pixel memory.
     let huge = header(200_000, 100_000);
     let r = rgbe::decode(&huge, Path::new("x.hdr"), &ReadOptions::default()).expect("a verdict");

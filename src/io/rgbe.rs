@@ -1,13 +1,12 @@
 //! Radiance .hdr pixels, decoded and encoded a row per task. The image crate reads the header
-//! (and stays the reader of anything this path does not take: odd orientations, malformed
-//! data, for its error messages), but it works one scanline at a time through an RGB f32
+//! (and stays the reader of anything this path does not take, for its error messages), but it works one scanline at a time through an RGB f32
 //! copy, with a log2 and divisions per texel when writing: at 4K, half of a conversion's
 //! decode time and 100 MB of memory, and the slowest encoder of all. Here one pass finds where
 //! each scanline starts, then rows decode in parallel, to the crate's values bit for bit; rows
 //! encode in parallel to the same run-length scanlines any Radiance reader takes.
 
 use super::{FileFormat, Meta, ReadOptions};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::image::{ColorSpace, Image};
 use ::image::codecs::hdr::HdrDecoder;
 use ::image::ImageDecoder;
@@ -16,7 +15,8 @@ use rayon::prelude::*;
 use std::io::Cursor;
 use std::path::Path;
 
-/// The image, or None when the image crate should read this file instead.
+/// The image, or None when the image crate should read this file instead (a header it
+/// rejects, with its error message, or an empty image).
 pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(Image, Meta)>> {
     let mut cursor = Cursor::new(bytes);
     let (w, h) = HdrDecoder::new(&mut cursor).ok()?.dimensions();
@@ -27,9 +27,22 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(I
     // The header reader stops right after the dimensions line: the pixels start there.
     let mut starts = Vec::with_capacity(h);
     let mut p = cursor.position() as usize;
-    for _ in 0..h {
+    for y in 0..h {
         starts.push(p);
-        p = scanline(bytes, p, w, None)?;
+        match scanline(bytes, p, w, None) {
+            Some(next) => p = next,
+            // Said here, before any pixel memory: the crate's reader would allocate the whole
+            // image first.
+            None => {
+                return Some(Err(Error::file(
+                    path,
+                    format!(
+                        "cannot decode Radiance HDR: scanline {} of {h} is truncated or malformed",
+                        y + 1
+                    ),
+                )))
+            }
+        }
     }
     let mut img = Image::new(w, h);
     img.pixels
