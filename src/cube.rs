@@ -458,20 +458,55 @@ impl CubeSampler {
     /// lanes, then the reads of each tap's two levels. Bit for bit `sample_split`'s values.
     pub fn trilinear_many(&self, dirs: &Dirs, level: &[usize], frac: &[f32], out: &mut [Vec4]) {
         let count = dirs.len;
+        let top = self.levels.len() - 1;
         let mut face = [0u8; BATCH];
         let mut fs = [0.0f32; BATCH];
         let mut ft = [0.0f32; BATCH];
         for i in 0..count {
             (face[i], fs[i], ft[i]) = dir_face_lanes(dirs.x[i], dirs.y[i], dirs.z[i]);
         }
-        let top = self.levels.len() - 1;
+        // Each tap reads two levels (the second only when it blends): their face edges.
+        let mut edge = [[0.0f32; BATCH]; 2];
         for i in 0..count {
-            let (f, s, t, l) = (face[i] as usize, fs[i], ft[i], level[i]);
-            let a = self.bilinear_at(f, s, t, l);
+            edge[0][i] = self.levels[level[i]].0 as f32;
+            edge[1][i] = self.levels[(level[i] + 1).min(top)].0 as f32;
+        }
+        // As in `bilinear_at`, in vector lanes: coordinates minus half a texel, their integer
+        // parts (the row and column, clamped to w - 2) and fractions.
+        let mut col = [[0u32; BATCH]; 2];
+        let mut row = [[0u32; BATCH]; 2];
+        let mut fx = [[0.0f32; BATCH]; 2];
+        let mut fy = [[0.0f32; BATCH]; 2];
+        for k in 0..2 {
+            for i in 0..count {
+                let n = edge[k][i];
+                let last = n + (2 * BORDER - 2) as f32;
+                let x = (fs[i] * n + (BORDER as f32 - 0.5)).max(0.0);
+                let y = (ft[i] * n + (BORDER as f32 - 0.5)).max(0.0);
+                let (xi, yi) = (trunc_small(x), trunc_small(y));
+                fx[k][i] = x - xi;
+                fy[k][i] = y - yi;
+                // SAFETY: both lie in 0..=w-2 (non-negative, clamped).
+                col[k][i] = unsafe { xi.min(last).to_int_unchecked::<u32>() };
+                row[k][i] = unsafe { yi.min(last).to_int_unchecked::<u32>() };
+            }
+        }
+        let read = |k: usize, i: usize, l: usize| {
+            let img = &self.levels[l].1[face[i] as usize];
+            let w = img.width;
+            let j = row[k][i] as usize * w + col[k][i] as usize;
+            let p = &img.pixels;
+            let upper = p[j].lerp(p[j + 1], fx[k][i]);
+            let lower = p[j + w].lerp(p[j + w + 1], fx[k][i]);
+            upper.lerp(lower, fy[k][i])
+        };
+        for i in 0..count {
+            let l = level[i];
+            let a = read(0, i, l);
             out[i] = if frac[i] <= 0.0 || l >= top {
                 a
             } else {
-                a.lerp(self.bilinear_at(f, s, t, l + 1), frac[i])
+                a.lerp(read(1, i, l + 1), frac[i])
             };
         }
     }
