@@ -27,28 +27,10 @@ pub fn face_dir(face: usize, s: f32, t: f32) -> Vec3 {
 }
 
 /// The face a direction selects (largest component; ties go to X, then Y) and its (s, t).
-#[inline]
+#[inline(always)]
 pub fn dir_face(d: Vec3) -> (usize, f32, f32) {
-    let a = d.abs();
-    let (face, sc, tc, ma) = if a.x >= a.y && a.x >= a.z {
-        if d.x >= 0.0 {
-            (0, -d.z, -d.y, a.x)
-        } else {
-            (1, d.z, -d.y, a.x)
-        }
-    } else if a.y >= a.z {
-        if d.y >= 0.0 {
-            (2, d.x, d.z, a.y)
-        } else {
-            (3, d.x, -d.z, a.y)
-        }
-    } else if d.z >= 0.0 {
-        (4, d.x, -d.y, a.z)
-    } else {
-        (5, -d.x, -d.y, a.z)
-    };
-    let inv = if ma > 0.0 { 0.5 / ma } else { 0.0 };
-    (face, sc * inv + 0.5, tc * inv + 0.5)
+    let (face, s, t) = dir_face_lanes(d.x, d.y, d.z);
+    (face as usize, s, t)
 }
 
 /// Solid angle of texel (x, y) on a face of edge `n` (exact, from the area of a projected
@@ -384,78 +366,42 @@ impl CubeSampler {
     #[inline(always)]
     fn bilinear_at(&self, face: usize, s: f32, t: f32, level: usize) -> Vec4 {
         let (n, faces) = &self.levels[level];
-        // Continuous coordinates minus half a texel; always >= BORDER - 0.5 > 0, so the
-        // truncating cast is a floor.
-        let x = (s * *n as f32 + (BORDER as f32 - 0.5)).max(0.0);
-        let y = (t * *n as f32 + (BORDER as f32 - 0.5)).max(0.0);
-        let (xi, yi) = (x as usize, y as usize);
-        let (ax, ay) = (x - xi as f32, y - yi as f32);
         let img = &faces[face];
-        let w = img.width;
-        let i = (yi.min(w - 2)) * w + xi.min(w - 2);
-        let p = &img.pixels;
-        let top = p[i].lerp(p[i + 1], ax);
-        let bottom = p[i + w].lerp(p[i + w + 1], ax);
-        top.lerp(bottom, ay)
+        read_bilinear(img, texel_at(s, t, *n as f32))
     }
-}
 
-impl CubeSampler {
-    /// `bilinear` for a whole batch: face selection and texel coordinates in vector lanes
-    /// (every branch of `dir_face` as a select), prefetches for every tap, then the reads.
-    /// Gives `bilinear`'s values bit for bit.
+    /// `bilinear` for a whole batch: face selection and texel coordinates in vector lanes,
+    /// prefetches for every tap, then the reads. Gives `bilinear`'s values bit for bit.
     fn bilinear_many(&self, dirs: &Dirs, level: usize, out: &mut [Vec4]) {
         let (n, faces) = &self.levels[level];
-        let w = faces[0].width;
         let count = dirs.len;
         let mut face = [0u8; BATCH];
-        let mut row = [0u32; BATCH];
-        let mut col = [0u32; BATCH];
-        let mut fx = [0.0f32; BATCH];
-        let mut fy = [0.0f32; BATCH];
-        let nf = *n as f32;
-        let last = (w - 2) as f32;
+        let mut at = [TexelAt::default(); BATCH];
         for i in 0..count {
             let (f, s, t) = dir_face_lanes(dirs.x[i], dirs.y[i], dirs.z[i]);
-            // As in `bilinear`: coordinates minus half a texel, never below 0.
-            let px = (s * nf + (BORDER as f32 - 0.5)).max(0.0);
-            let py = (t * nf + (BORDER as f32 - 0.5)).max(0.0);
-            let (xi, yi) = (trunc_small(px), trunc_small(py));
-            fx[i] = px - xi;
-            fy[i] = py - yi;
             face[i] = f;
-            // SAFETY: both lie in 0..=w-2 (non-negative, clamped above).
-            row[i] = unsafe { yi.min(last).to_int_unchecked::<u32>() };
-            col[i] = unsafe { xi.min(last).to_int_unchecked::<u32>() };
-        }
-        let mut index = [0usize; BATCH];
-        for i in 0..count {
-            index[i] = row[i] as usize * w + col[i] as usize;
+            at[i] = texel_at(s, t, *n as f32);
         }
         #[cfg(target_arch = "x86_64")]
         for i in 0..count {
             use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            let p = faces[face[i] as usize].pixels.as_ptr();
-            // SAFETY: the index lies inside the bordered face (clamped above); a prefetch
-            // never faults and brings nothing into the program.
+            let img = &faces[face[i] as usize];
+            let k = at[i].row as usize * img.width + at[i].col as usize;
+            let p = img.pixels.as_ptr();
+            // SAFETY: the index lies inside the bordered face (clamped in `texel_at`); a
+            // prefetch never faults and brings nothing into the program.
             unsafe {
-                _mm_prefetch::<_MM_HINT_T0>(p.add(index[i]) as *const i8);
-                _mm_prefetch::<_MM_HINT_T0>(p.add(index[i] + w) as *const i8);
+                _mm_prefetch::<_MM_HINT_T0>(p.add(k) as *const i8);
+                _mm_prefetch::<_MM_HINT_T0>(p.add(k + img.width) as *const i8);
             }
         }
         for (i, o) in out.iter_mut().enumerate().take(count) {
-            let p = &faces[face[i] as usize].pixels;
-            let k = index[i];
-            let top = p[k].lerp(p[k + 1], fx[i]);
-            let bottom = p[k + w].lerp(p[k + w + 1], fx[i]);
-            *o = top.lerp(bottom, fy[i]);
+            *o = read_bilinear(&faces[face[i] as usize], at[i]);
         }
     }
-}
 
-impl CubeSampler {
-    /// `sample_split(dirs[i], level[i], frac[i])` for a batch: the face selection in vector
-    /// lanes, then the reads of each tap's two levels. Bit for bit `sample_split`'s values.
+    /// `sample_split(dirs[i], level[i], frac[i])` for a batch: the face selection and both
+    /// levels' texel coordinates in vector lanes, then the reads. Bit for bit `sample_split`.
     pub fn trilinear_many(&self, dirs: &Dirs, level: &[usize], frac: &[f32], out: &mut [Vec4]) {
         let count = dirs.len;
         let top = self.levels.len() - 1;
@@ -471,34 +417,14 @@ impl CubeSampler {
             edge[0][i] = self.levels[level[i]].0 as f32;
             edge[1][i] = self.levels[(level[i] + 1).min(top)].0 as f32;
         }
-        // As in `bilinear_at`, in vector lanes: coordinates minus half a texel, their integer
-        // parts (the row and column, clamped to w - 2) and fractions.
-        let mut col = [[0u32; BATCH]; 2];
-        let mut row = [[0u32; BATCH]; 2];
-        let mut fx = [[0.0f32; BATCH]; 2];
-        let mut fy = [[0.0f32; BATCH]; 2];
+        let mut at = [[TexelAt::default(); BATCH]; 2];
         for k in 0..2 {
             for i in 0..count {
-                let n = edge[k][i];
-                let last = n + (2 * BORDER - 2) as f32;
-                let x = (fs[i] * n + (BORDER as f32 - 0.5)).max(0.0);
-                let y = (ft[i] * n + (BORDER as f32 - 0.5)).max(0.0);
-                let (xi, yi) = (trunc_small(x), trunc_small(y));
-                fx[k][i] = x - xi;
-                fy[k][i] = y - yi;
-                // SAFETY: both lie in 0..=w-2 (non-negative, clamped).
-                col[k][i] = unsafe { xi.min(last).to_int_unchecked::<u32>() };
-                row[k][i] = unsafe { yi.min(last).to_int_unchecked::<u32>() };
+                at[k][i] = texel_at(fs[i], ft[i], edge[k][i]);
             }
         }
         let read = |k: usize, i: usize, l: usize| {
-            let img = &self.levels[l].1[face[i] as usize];
-            let w = img.width;
-            let j = row[k][i] as usize * w + col[k][i] as usize;
-            let p = &img.pixels;
-            let upper = p[j].lerp(p[j + 1], fx[k][i]);
-            let lower = p[j + w].lerp(p[j + w + 1], fx[k][i]);
-            upper.lerp(lower, fy[k][i])
+            read_bilinear(&self.levels[l].1[face[i] as usize], at[k][i])
         };
         for i in 0..count {
             let l = level[i];
@@ -512,7 +438,46 @@ impl CubeSampler {
     }
 }
 
-/// `dir_face` with every branch a select, for loops over batches that should vectorise.
+/// Where a bilinear tap reads in a bordered face: the top-left texel and the weights.
+#[derive(Clone, Copy, Default)]
+struct TexelAt {
+    col: u32,
+    row: u32,
+    fx: f32,
+    fy: f32,
+}
+
+/// The bilinear tap at face coordinates (s, t) of a bordered face of edge `n` (width
+/// n + 2 BORDER): coordinates minus half a texel, always >= BORDER - 0.5 > 0, their integer
+/// parts clamped to width - 2 and their fractions. Float arithmetic only, so it vectorises.
+#[inline(always)]
+fn texel_at(s: f32, t: f32, n: f32) -> TexelAt {
+    let last = n + (2 * BORDER - 2) as f32;
+    let x = (s * n + (BORDER as f32 - 0.5)).max(0.0);
+    let y = (t * n + (BORDER as f32 - 0.5)).max(0.0);
+    let (xi, yi) = (trunc_small(x), trunc_small(y));
+    TexelAt {
+        // SAFETY: both lie in 0..=width-2 (non-negative, clamped).
+        col: unsafe { xi.min(last).to_int_unchecked::<u32>() },
+        row: unsafe { yi.min(last).to_int_unchecked::<u32>() },
+        fx: x - xi,
+        fy: y - yi,
+    }
+}
+
+/// Reads and blends the 2x2 texels of a tap.
+#[inline(always)]
+fn read_bilinear(img: &Image, at: TexelAt) -> Vec4 {
+    let w = img.width;
+    let k = at.row as usize * w + at.col as usize;
+    let p = &img.pixels;
+    let upper = p[k].lerp(p[k + 1], at.fx);
+    let lower = p[k + w].lerp(p[k + w + 1], at.fx);
+    upper.lerp(lower, at.fy)
+}
+
+/// `dir_face`, written with every branch a select so loops over batches vectorise (the face
+/// as a byte keeps the lanes narrow).
 #[inline(always)]
 fn dir_face_lanes(x: f32, y: f32, z: f32) -> (u8, f32, f32) {
     let (ax, ay, az) = (x.abs(), y.abs(), z.abs());

@@ -156,8 +156,8 @@ impl Image {
     pub fn bilinear(&self, x: f32, y: f32, wrap_x: bool) -> Vec4 {
         let fx = x - 0.5;
         let fy = y - 0.5;
-        let x0 = fast_floor(fx);
-        let y0 = fast_floor(fy);
+        let x0 = floor_small(fx);
+        let y0 = floor_small(fy);
         let ax = fx - x0;
         let ay = fy - y0;
         let (xa, xb) = self.cols(x0 as isize, wrap_x);
@@ -288,20 +288,9 @@ impl Image {
     }
 }
 
-/// floor() without a libm call (the baseline x86-64 target has no rounding instruction);
-/// exact for the pixel coordinates used here (|v| < 2^23).
-#[inline]
-fn fast_floor(v: f32) -> f32 {
-    let t = v as i32 as f32;
-    if t > v {
-        t - 1.0
-    } else {
-        t
-    }
-}
-
-/// `fast_floor` for vector lanes: the same value for |v| < 4e6 (far beyond any image
-/// coordinate), without the saturating integer cast that keeps a loop scalar.
+/// floor() for pixel coordinates (|v| < 4e6, far beyond any image), without a libm call (the
+/// baseline x86-64 target has no rounding instruction) and without the saturating integer
+/// cast that keeps a loop scalar.
 #[inline(always)]
 #[allow(clippy::manual_clamp)] // clamp keeps NaN; max/min drop it, which the cast needs
 fn floor_small(v: f32) -> f32 {

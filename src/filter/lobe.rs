@@ -4,7 +4,7 @@
 
 use crate::cube::{face_dir, CubeMap, CubeSampler, Dirs, BATCH};
 use crate::image::Image;
-use glam::{Vec3, Vec4};
+use glam::{Mat3, Vec3, Vec4};
 use std::f32::consts::{PI, TAU};
 
 /// A lobe around the direction being filtered, as a function of the angle to it.
@@ -318,37 +318,37 @@ pub fn filter_level(
             }
         })
         .collect();
-    // The kernel as separate arrays, so each texel's taps are turned and looked up in
-    // batches (the face selection of a whole batch vectorises).
+    // The kernel in batches of directions, turned into each texel's frame and looked up a
+    // batch at a time (the face selection of a whole batch vectorises).
     let taps = &kernel.taps;
-    let (kx, ky, kz): (Vec<f32>, Vec<f32>, Vec<f32>) = (
-        taps.iter().map(|t| t.dir.x).collect(),
-        taps.iter().map(|t| t.dir.y).collect(),
-        taps.iter().map(|t| t.dir.z).collect(),
-    );
+    let batches: Vec<Dirs> = taps
+        .chunks(BATCH)
+        .map(|chunk| {
+            let mut d = Dirs::default();
+            for tap in chunk {
+                d.push(tap.dir);
+            }
+            d
+        })
+        .collect();
     let levels: Vec<usize> = taps.iter().map(|t| t.level).collect();
     let fracs: Vec<f32> = taps.iter().map(|t| t.frac).collect();
     let filter_texel = |n: Vec3, dirs: &mut Dirs, values: &mut [Vec4; BATCH]| -> Vec4 {
         let (t, b) = frame(n);
+        // The same arithmetic as t * x + b * y + n * z.
+        let to_world = Mat3::from_cols(t, b, n);
         let mut acc = Vec4::ZERO;
-        for start in (0..taps.len()).step_by(BATCH) {
-            let end = (start + BATCH).min(taps.len());
-            let k = end - start;
-            // Same arithmetic as t * x + b * y + n * z.
-            for i in 0..k {
-                let j = start + i;
-                dirs.x[i] = t.x * kx[j] + b.x * ky[j] + n.x * kz[j];
-                dirs.y[i] = t.y * kx[j] + b.y * ky[j] + n.y * kz[j];
-                dirs.z[i] = t.z * kx[j] + b.z * ky[j] + n.z * kz[j];
-            }
-            dirs.len = k;
+        for (batch, start) in batches.iter().zip((0..).step_by(BATCH)) {
+            let end = start + batch.len;
+            dirs.clone_from(batch);
+            dirs.transform(&to_world);
             src.trilinear_many(
                 dirs,
                 &levels[start..end],
                 &fracs[start..end],
-                &mut values[..k],
+                &mut values[..batch.len],
             );
-            for (v, tap) in values[..k].iter().zip(&taps[start..end]) {
+            for (v, tap) in values.iter().zip(&taps[start..end]) {
                 acc += *v * tap.weight;
             }
         }
