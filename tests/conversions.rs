@@ -484,20 +484,7 @@ fn bicubic_is_sharper_and_never_rings() {
 fn box_mips_preserve_the_mean() {
     let cube = CubeMap::from_fn(32, synthetic::marker).with_box_mips(None);
     assert_eq!(cube.levels.len(), 6);
-    let mean = |level: usize| {
-        let faces = &cube.levels[level];
-        let n = faces[0].width;
-        let mut acc = 0.0f64;
-        for f in faces {
-            for y in 0..n {
-                for x in 0..n {
-                    acc +=
-                        f.get(x, y).x as f64 * cubeforge::cube::texel_solid_angle(n, x, y) as f64;
-                }
-            }
-        }
-        acc / (4.0 * std::f64::consts::PI)
-    };
+    let mean = |level: usize| common::sphere_mean(&cube.levels[level], 0);
     let m0 = mean(0);
     for l in 1..6 {
         assert!(

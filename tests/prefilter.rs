@@ -131,19 +131,7 @@ fn gaussian_levels_have_the_stated_sigma() {
 fn box_chain_preserves_the_mean() {
     let base = CubeMap::from_fn(32, sky);
     let (out, _) = chain(FilterKind::Box, &base, 1);
-    let mean = |faces: &[Image; 6]| {
-        let n = faces[0].width;
-        let mut acc = 0.0f64;
-        for f in faces {
-            for y in 0..n {
-                for x in 0..n {
-                    acc +=
-                        f.get(x, y).y as f64 * cubeforge::cube::texel_solid_angle(n, x, y) as f64;
-                }
-            }
-        }
-        acc / (4.0 * std::f64::consts::PI)
-    };
+    let mean = |faces: &[Image; 6]| common::sphere_mean(faces, 1);
     let m0 = mean(&out.levels[0]);
     for level in &out.levels {
         assert!((mean(level) - m0).abs() <= 1e-5 * m0);

@@ -153,3 +153,16 @@ pub fn seam_steps(cube: &CubeMap, level: usize) -> (f32, f32) {
     }
     (across_max, inside_max)
 }
+
+/// The mean of one channel over the sphere: each texel weighted by its solid angle.
+pub fn sphere_mean(faces: &[Image; 6], channel: usize) -> f64 {
+    let n = faces[0].width;
+    let table = cubeforge::cube::solid_angle_table(n);
+    let mut acc = 0.0f64;
+    for f in faces {
+        for (p, sa) in f.pixels.iter().zip(&table) {
+            acc += p[channel] as f64 * *sa as f64;
+        }
+    }
+    acc / (4.0 * std::f64::consts::PI)
+}
