@@ -3,6 +3,8 @@
 //! internal reflection, the Fresnel clamp, per-vertex converging to per-fragment, both
 //! parallax modes, LOD bias, control maps, orientation, determinism and the command line.
 
+mod common;
+
 use cubeforge::cube::{CubeMap, CubeSampler};
 use cubeforge::image::Image;
 use cubeforge::io::{self, ReadOptions, WriteOptions};
@@ -15,7 +17,6 @@ use cubeforge::preview::{
 use cubeforge::synthetic;
 use glam::{DVec3, Vec3, Vec4};
 use std::path::Path;
-use std::process::Command;
 
 // ---------------------------------------------------------------------------------------
 // The geometry and the texts' formulas, written out again here (f64).
@@ -1032,20 +1033,12 @@ fn prefilter_folder_chains_load_level_by_level() {
     assert!(e.contains("m2") && e.contains("2x2"), "{e}");
 }
 
-fn cubeforge(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_cubeforge"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap()
-}
-
 #[test]
 fn command_line_renders_png_exr_and_grids() {
     let dir = tempfile::tempdir().unwrap();
     let out = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
     let png = out("ball.png");
-    let r = cubeforge(&[
+    let r = common::run([
         "preview",
         "fixtures/sky.exr",
         "-o",
@@ -1064,7 +1057,7 @@ fn command_line_renders_png_exr_and_grids() {
     assert_eq!((img.width, img.height), (48, 48));
     // EXR: linear radiance, one sample through each pixel centre, as the library renders it.
     let exr = out("ball.exr");
-    let r = cubeforge(&[
+    let r = common::run([
         "preview",
         "fixtures/sky.exr",
         "-o",
@@ -1075,12 +1068,7 @@ fn command_line_renders_png_exr_and_grids() {
         "-40",
     ]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let io::Decoded::Image(got) = io::read(Path::new(&exr), &ReadOptions::default())
-        .unwrap()
-        .0
-    else {
-        panic!()
-    };
+    let got = common::read_image(Path::new(&exr));
     let env = preview::load_environment(
         Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.exr")),
         None,
@@ -1110,7 +1098,7 @@ fn command_line_renders_png_exr_and_grids() {
     );
     // A grid: three cells side by side with labels below.
     let grid = out("grid.png");
-    let r = cubeforge(&[
+    let r = common::run([
         "preview",
         "fixtures/sky.exr",
         "-o",
@@ -1121,12 +1109,7 @@ fn command_line_renders_png_exr_and_grids() {
         "chrome,glass,crystal",
     ]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let io::Decoded::Image(g) = io::read(Path::new(&grid), &ReadOptions::default())
-        .unwrap()
-        .0
-    else {
-        panic!()
-    };
+    let g = common::read_image(Path::new(&grid));
     assert!(g.width > 3 * 40 && g.width < 3 * 40 + 20 && g.height > 40 + 7);
     let label_rows = (40..g.height).flat_map(|y| (0..g.width).map(move |x| (x, y)));
     assert!(
@@ -1134,7 +1117,7 @@ fn command_line_renders_png_exr_and_grids() {
         "labels are drawn"
     );
     // --grid-bias on a one-level map: rendered, with a warning that blur needs a chain.
-    let r = cubeforge(&[
+    let r = common::run([
         "preview",
         "fixtures/sky.exr",
         "-o",
@@ -1151,7 +1134,7 @@ fn command_line_renders_png_exr_and_grids() {
         "{err}"
     );
     // --material list prints every preset.
-    let r = cubeforge(&["preview", "--material", "list"]);
+    let r = common::run(["preview", "--material", "list"]);
     let text = String::from_utf8_lossy(&r.stdout);
     for name in [
         "chrome",
@@ -1271,7 +1254,7 @@ fn command_line_errors_are_one_line_naming_the_file() {
         (vec!["preview", "fixtures/sky.exr"], "-o OUTPUT"),
     ];
     for (args, needle) in cases {
-        let r = cubeforge(&args);
+        let r = common::run(&args);
         let err = String::from_utf8_lossy(&r.stderr);
         assert_eq!(r.status.code(), Some(1), "{args:?}: {err}");
         assert!(err.starts_with("cubeforge: error: "), "{args:?}: {err}");
