@@ -122,7 +122,7 @@ fn png_ihdr_size(bytes: &[u8]) -> Option<(u32, u32)> {
     Some((be(16)?, be(20)?))
 }
 
-fn pixel_format_name(c: ColorType, f: FileFormat) -> String {
+pub(super) fn pixel_format_name(c: ColorType, f: FileFormat) -> String {
     if f == FileFormat::Hdr {
         return "RGBE (shared exponent)".into();
     }

@@ -1,9 +1,10 @@
 //! Radiance .hdr pixels, decoded and encoded a row per task. The image crate reads the header
-//! (and stays the reader of anything this path does not take, for its error messages), but it works one scanline at a time through an RGB f32
-//! copy, with a log2 and divisions per texel when writing: at 4K, half of a conversion's
-//! decode time and 100 MB of memory, and the slowest encoder of all. Here one pass finds where
-//! each scanline starts, then rows decode in parallel, to the crate's values bit for bit; rows
-//! encode in parallel to the same run-length scanlines any Radiance reader takes.
+//! (and stays the reader of anything this path does not take, for its error messages), but it
+//! works one scanline at a time through an RGB f32 copy, with a log2 and divisions per texel
+//! when writing: at 4K, half of a conversion's decode time and 100 MB of memory, and the
+//! slowest encoder of all. Here one pass finds where each scanline starts, then rows decode in
+//! parallel, to the crate's values bit for bit; rows encode in parallel to the same run-length
+//! scanlines any Radiance reader takes.
 
 use super::{FileFormat, Meta, ReadOptions};
 use crate::error::{Error, Result};
@@ -60,7 +61,7 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(I
         );
     let meta = Meta {
         file_format: FileFormat::Hdr,
-        pixel_format: "RGBE (shared exponent)".into(),
+        pixel_format: super::raster::pixel_format_name(::image::ColorType::Rgb32F, FileFormat::Hdr),
         color_space: ColorSpace::Linear,
         hdr: true,
         replaced_values: 0,
