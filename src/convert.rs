@@ -5,10 +5,12 @@ use crate::cube::{
     faces_from_images, CubeMap, CubeSampler, Environment, FACE_LONG_NAMES, FACE_NAMES,
 };
 use crate::error::{Error, Result};
+use crate::flux::{Grid, Peaks, Split};
 use crate::image::Image;
 use crate::io::{self, Decoded, FileFormat, Meta, ReadOptions};
 use crate::layout::{self, cross, ImageEnv, Kind};
 use crate::resample::Resampler;
+use glam::Vec4;
 use std::path::{Path, PathBuf};
 
 /// A loaded input: a cube map (faces, cross, strip, container) or a single-image projection.
@@ -43,26 +45,65 @@ impl Loaded {
         let levels = |texel_angle: f32| {
             max_footprint.map(|f| {
                 // The deepest level the resampler picks for that footprint (it reads level 0
-                // up to 1.5 texels, then a level where the footprint spans at most 4).
+                // up to 1.5 texels).
                 let ratio = f / texel_angle;
                 if ratio <= 1.5 {
                     1
                 } else {
-                    (ratio / 4.0).log2().ceil().max(0.0) as usize + 1
+                    crate::resample::footprint_level(ratio) + 1
                 }
             })
         };
+        // Lookups see the input below its peaks' ceiling; the resampler splats the peaks.
+        fn split<'a, E: Environment + 'a>(
+            env: E,
+            peaks: Option<Peaks>,
+        ) -> Box<dyn Environment + 'a> {
+            match peaks {
+                Some(peaks) => Box::new(Split { env, peaks }),
+                None => Box::new(env),
+            }
+        }
+        let peaks = self.peaks();
+        let ceiling = peaks.as_ref().map_or(Vec4::INFINITY, Peaks::ceiling_vec);
         match &self.source {
             Source::Cube(c) => {
                 // Box mips of level 0 (stored levels may be prefiltered, not plain mips).
                 let angle = std::f32::consts::FRAC_PI_2 / c.size() as f32;
-                Box::new(CubeSampler::with_box_mips(&c.levels[0], levels(angle)))
+                let env = CubeSampler::with_box_mips_below(&c.levels[0], levels(angle), ceiling);
+                split(env, peaks)
             }
             Source::Projection(p, img) => {
                 let angle = ImageEnv::new(*p, img, Some(1)).texel_angle();
-                Box::new(ImageEnv::new(*p, img, levels(angle)))
+                split(ImageEnv::below(*p, img, levels(angle), ceiling), peaks)
             }
         }
+    }
+
+    /// The texel grid of the input (level 0 of a cube).
+    pub fn grid(&self) -> Grid {
+        match &self.source {
+            Source::Cube(c) => Grid::Cube(c.size()),
+            Source::Projection(p, img) => Grid::Projection(*p, img.width, img.height),
+        }
+    }
+
+    /// The input's images on its grid: six faces, or the one image.
+    pub fn images(&self) -> Vec<&Image> {
+        match &self.source {
+            Source::Cube(c) => c.levels[0].iter().collect(),
+            Source::Projection(_, img) => vec![img],
+        }
+    }
+
+    /// The input's texels above `flux::PEAK_RATIO` times its mean luminance, if any.
+    pub fn peaks(&self) -> Option<Peaks> {
+        Peaks::find(self.grid(), &self.images())
+    }
+
+    /// The input's flux: solid-angle-weighted mean radiance per channel.
+    pub fn mean_radiance(&self) -> [f64; 3] {
+        crate::flux::mean_radiance(self.grid(), &self.images())
     }
 }
 

@@ -141,7 +141,8 @@ impl CubeMap {
             let prev = self.levels.last().unwrap();
             let n = prev[0].width;
             let weights = solid_angle_table(n);
-            let next = std::array::from_fn(|f| box_reduce_face(&prev[f], n, &weights));
+            let next =
+                std::array::from_fn(|f| box_reduce_face(&prev[f], n, &weights, Vec4::INFINITY));
             self.levels.push(next);
         }
         self
@@ -158,9 +159,9 @@ impl CubeMap {
     }
 }
 
-/// Each texel the mean of the 2x2 above it, weighted by their solid angles (`weights`, one
-/// face's table) so the mean radiance over the sphere is kept.
-fn box_reduce_face(src: &Image, n: usize, weights: &[f32]) -> Image {
+/// Each texel the mean of the 2x2 above it (each first clamped to `ceiling`), weighted by
+/// their solid angles (`weights`, one face's table) so the mean radiance over the sphere is kept.
+fn box_reduce_face(src: &Image, n: usize, weights: &[f32], ceiling: Vec4) -> Image {
     let m = (n / 2).max(1);
     if n == 1 {
         return src.clone();
@@ -172,7 +173,7 @@ fn box_reduce_face(src: &Image, n: usize, weights: &[f32]) -> Image {
             for dx in 0..2 {
                 let (sx, sy) = (2 * x + dx, 2 * y + dy);
                 let w = weights[sy * n + sx];
-                acc += src.get(sx, sy) * w;
+                acc += src.get(sx, sy).min(ceiling) * w;
                 wsum += w;
             }
         }
@@ -205,6 +206,11 @@ pub trait Environment: Sync {
         for (i, o) in out.iter_mut().enumerate().take(dirs.len) {
             *o = self.sample(dirs.get(i), level, interp);
         }
+    }
+    /// The input's peaks above the ceiling its lookups are clamped to, which a resampler
+    /// splats on top of what it rendered (see [`crate::flux`]); None for a plain environment.
+    fn peaks(&self) -> Option<&crate::flux::Peaks> {
+        None
     }
 }
 
@@ -299,7 +305,7 @@ impl CubeSampler {
         let levels = cube
             .levels
             .iter()
-            .map(|faces| (faces[0].width, bordered(faces)))
+            .map(|faces| (faces[0].width, bordered(faces, Vec4::INFINITY)))
             .collect();
         CubeSampler { levels }
     }
@@ -307,18 +313,29 @@ impl CubeSampler {
     /// Prepares `faces` as level 0 and `count` plain box mips below it (None: the full
     /// chain), as `new(&cube.with_box_mips(count))` would, without copying level 0 first.
     pub fn with_box_mips(faces: &Faces, count: Option<usize>) -> CubeSampler {
+        Self::with_box_mips_below(faces, count, Vec4::INFINITY)
+    }
+
+    /// `with_box_mips` with every texel first clamped to `ceiling` (per channel), so lookups
+    /// see the bounded part of an input whose peaks are splatted (see [`crate::flux`]).
+    pub fn with_box_mips_below(faces: &Faces, count: Option<usize>, ceiling: Vec4) -> CubeSampler {
         let n = faces[0].width;
         let full = CubeMap::full_chain_len(n);
         let count = count.unwrap_or(full).clamp(1, full);
-        let mut levels = vec![(n, bordered(faces))];
+        let mut levels = vec![(n, bordered(faces, ceiling))];
         if count > 1 {
             let weights = solid_angle_table(n);
-            let first: Faces = std::array::from_fn(|f| box_reduce_face(&faces[f], n, &weights));
+            let first: Faces =
+                std::array::from_fn(|f| box_reduce_face(&faces[f], n, &weights, ceiling));
             let rest = CubeMap {
                 levels: vec![first],
             }
             .with_box_mips(Some(count - 1));
-            levels.extend(rest.levels.iter().map(|l| (l[0].width, bordered(l))));
+            levels.extend(
+                rest.levels
+                    .iter()
+                    .map(|l| (l[0].width, bordered(l, Vec4::INFINITY))),
+            );
         }
         CubeSampler { levels }
     }
@@ -571,8 +588,9 @@ impl Environment for CubeSampler {
 }
 
 /// Copies each face into the middle of a larger image and fills the border from the faces
-/// the extended face plane runs into (bilinear there, so the continuation is smooth).
-fn bordered(faces: &Faces) -> [Image; 6] {
+/// the extended face plane runs into (bilinear there, so the continuation is smooth); every
+/// texel at most `ceiling`.
+fn bordered(faces: &Faces, ceiling: Vec4) -> [Image; 6] {
     use rayon::prelude::*;
     let n = faces[0].width;
     let m = n + 2 * BORDER;
@@ -596,6 +614,11 @@ fn bordered(faces: &Faces) -> [Image; 6] {
                     let px = (s2 * n as f32).clamp(0.5, n as f32 - 0.5);
                     let py = (t2 * n as f32).clamp(0.5, n as f32 - 0.5);
                     out.set(x, y, faces[f2].bilinear(px, py, false));
+                }
+            }
+            if ceiling.x.is_finite() {
+                for p in &mut out.pixels {
+                    *p = p.min(ceiling);
                 }
             }
             out

@@ -131,6 +131,41 @@ impl Image {
         })
     }
 
+    /// `downsample_2x` with each texel above weighted by `weight(x, y)` (the part of the
+    /// sphere it covers, so a pyramid keeps the flux) and first clamped to `ceiling`.
+    pub fn downsample_2x_weighted(
+        &self,
+        weight: impl Fn(usize, usize) -> f32 + Sync,
+        ceiling: Vec4,
+    ) -> Image {
+        let w = (self.width / 2).max(1);
+        let h = (self.height / 2).max(1);
+        let sx = self.width as f32 / w as f32;
+        let sy = self.height as f32 / h as f32;
+        Image::from_fn(w, h, |x, y| {
+            let x0 = (x as f32 * sx) as usize;
+            let x1 = (((x + 1) as f32 * sx) as usize).min(self.width).max(x0 + 1);
+            let y0 = (y as f32 * sy) as usize;
+            let y1 = (((y + 1) as f32 * sy) as usize)
+                .min(self.height)
+                .max(y0 + 1);
+            let mut acc = Vec4::ZERO;
+            let mut total = 0.0;
+            for yy in y0..y1 {
+                for xx in x0..x1 {
+                    let a = weight(xx, yy);
+                    acc += self.get(xx, yy).min(ceiling) * a;
+                    total += a;
+                }
+            }
+            if total > 0.0 {
+                acc / total
+            } else {
+                Vec4::ZERO
+            }
+        })
+    }
+
     /// Replaces NaN, infinite and negative values by 0 and returns how many were replaced.
     pub fn sanitize(&mut self) -> usize {
         use rayon::prelude::*;
@@ -154,6 +189,12 @@ impl Image {
     /// `wrap_x` repeats horizontally (panoramas); otherwise edges clamp.
     #[inline]
     pub fn bilinear(&self, x: f32, y: f32, wrap_x: bool) -> Vec4 {
+        self.bilinear_below(x, y, wrap_x, Vec4::INFINITY)
+    }
+
+    /// `bilinear` of the image with every texel first clamped to `ceiling` (per channel).
+    #[inline]
+    pub fn bilinear_below(&self, x: f32, y: f32, wrap_x: bool, ceiling: Vec4) -> Vec4 {
         let fx = x - 0.5;
         let fy = y - 0.5;
         let x0 = floor_small(fx);
@@ -163,16 +204,29 @@ impl Image {
         let (xa, xb) = self.cols(x0 as isize, wrap_x);
         let ya = clampi(y0 as isize, self.height);
         let yb = clampi(y0 as isize + 1, self.height);
-        let r0 = self.pixels[ya * self.width + xa].lerp(self.pixels[ya * self.width + xb], ax);
-        let r1 = self.pixels[yb * self.width + xa].lerp(self.pixels[yb * self.width + xb], ax);
+        let p = |y: usize, x: usize| self.pixels[y * self.width + x].min(ceiling);
+        let r0 = p(ya, xa).lerp(p(ya, xb), ax);
+        let r1 = p(yb, xa).lerp(p(yb, xb), ax);
         r0.lerp(r1, ay)
     }
 
-    /// `out[i]` = `bilinear(x[i], y[i], wrap_x)` for coordinates within one image width of
-    /// the image (all a projection produces), in three passes: the coordinate arithmetic in
-    /// vector lanes, prefetches for every tap so many cache misses are in flight at once (a
-    /// lookup at a time was bound by one miss at a time), then the texel reads.
+    /// `out[i]` = `bilinear(x[i], y[i], wrap_x)` for a batch: see `bilinear_many_below`.
     pub fn bilinear_many(&self, x: &[f32], y: &[f32], wrap_x: bool, out: &mut [Vec4]) {
+        self.bilinear_many_below(x, y, wrap_x, Vec4::INFINITY, out)
+    }
+
+    /// `out[i]` = `bilinear_below(x[i], y[i], wrap_x, ceiling)` for coordinates within one
+    /// image width of the image (all a projection produces), in three passes: the coordinate
+    /// arithmetic in vector lanes, prefetches for every tap so many cache misses are in flight
+    /// at once (a lookup at a time was bound by one miss at a time), then the texel reads.
+    pub fn bilinear_many_below(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        wrap_x: bool,
+        ceiling: Vec4,
+        out: &mut [Vec4],
+    ) {
         const CHUNK: usize = 64;
         for ((x, y), out) in x
             .chunks(CHUNK)
@@ -221,11 +275,11 @@ impl Image {
                 }
             }
             for (i, o) in out.iter_mut().enumerate() {
-                let p = &self.pixels;
+                let p = |k: usize| self.pixels[k].min(ceiling);
                 let (ra, rb) = (row[0][i], row[1][i]);
                 let (ca, cb) = (col[0][i], col[1][i]);
-                let r0 = p[at(ra, ca)].lerp(p[at(ra, cb)], ax[i]);
-                let r1 = p[at(rb, ca)].lerp(p[at(rb, cb)], ax[i]);
+                let r0 = p(at(ra, ca)).lerp(p(at(ra, cb)), ax[i]);
+                let r1 = p(at(rb, ca)).lerp(p(at(rb, cb)), ax[i]);
                 *o = r0.lerp(r1, ay[i]);
             }
         }
@@ -255,6 +309,11 @@ impl Image {
     /// Catmull-Rom bicubic sample, clamped to the range of the 2x2 texels around the point so it
     /// sharpens without ringing (never below zero, never past the local extremes).
     pub fn bicubic(&self, x: f32, y: f32, wrap_x: bool) -> Vec4 {
+        self.bicubic_below(x, y, wrap_x, Vec4::INFINITY)
+    }
+
+    /// `bicubic` of the image with every texel first clamped to `ceiling` (per channel).
+    pub fn bicubic_below(&self, x: f32, y: f32, wrap_x: bool, ceiling: Vec4) -> Vec4 {
         let fx = x - 0.5;
         let fy = y - 0.5;
         let x0 = fx.floor();
@@ -275,7 +334,7 @@ impl Image {
                 } else {
                     clampi(xi, self.width)
                 };
-                let p = self.pixels[yy * self.width + xx];
+                let p = self.pixels[yy * self.width + xx].min(ceiling);
                 if (1..=2).contains(&i) && (1..=2).contains(&j) {
                     lo = lo.min(p);
                     hi = hi.max(p);

@@ -1,6 +1,7 @@
 //! What a file holds: layout, sizes, levels, pixel format, colour space and value statistics.
 
 use crate::error::Result;
+use crate::flux;
 use crate::image::{luminance, Image};
 use crate::io::{self, Decoded, ReadOptions};
 use crate::layout::{self, Kind};
@@ -34,6 +35,10 @@ pub struct Report {
     pub pixel_format: String,
     pub color_space: crate::image::ColorSpace,
     pub stats: Stats,
+    /// Solid-angle-weighted mean radiance per channel (R, G, B) over the sphere: what every
+    /// conversion keeps (see [`crate::flux`]). None where the layout is unknown.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flux: Option<[f64; 3]>,
     /// What each level of a prefiltered chain holds (KTX2 metadata, or a DDS's
     /// `NAME.dds.levels.json` sidecar), as `cubeforge prefilter` wrote it.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -98,6 +103,20 @@ pub fn stats<'a>(images: impl IntoIterator<Item = &'a Image>) -> Stats {
     s
 }
 
+/// The flux of a single image laid out as `kind`: a panorama, ball or angular map as it is,
+/// a cross or strip through its faces.
+fn image_flux(kind: Kind, img: &Image) -> Option<[f64; 3]> {
+    if let Some(p) = kind.projection() {
+        let grid = flux::Grid::Projection(p, img.width, img.height);
+        return Some(flux::mean_radiance(grid, &[img]));
+    }
+    kind.is_cells().then(|| {
+        let faces = layout::cross::extract(kind, img);
+        let grid = flux::Grid::Cube(faces[0].width);
+        flux::mean_radiance(grid, &faces.iter().collect::<Vec<_>>())
+    })
+}
+
 /// Reads a file as stored (no value replacement) and describes it.
 pub fn describe(path: &Path, opts: &ReadOptions) -> Result<Report> {
     let (decoded, meta) = io::read_raw(path, opts)?;
@@ -121,6 +140,10 @@ pub fn describe(path: &Path, opts: &ReadOptions) -> Result<Report> {
                 pixel_format: meta.pixel_format,
                 color_space: meta.color_space,
                 stats: stats(cube.levels[0].iter()),
+                flux: Some(flux::mean_radiance(
+                    flux::Grid::Cube(n),
+                    &cube.levels[0].iter().collect::<Vec<_>>(),
+                )),
                 levels: levels_description(path, meta.file_format),
             }
         }
@@ -144,6 +167,7 @@ pub fn describe(path: &Path, opts: &ReadOptions) -> Result<Report> {
                 pixel_format: meta.pixel_format,
                 color_space: meta.color_space,
                 stats: stats([&img]),
+                flux: kind.and_then(|k| image_flux(k, &img)),
                 levels: None,
             }
         }
@@ -184,6 +208,12 @@ impl std::fmt::Display for Report {
             "  bad values:   {} NaN, {} Inf, {} negative",
             s.nan, s.inf, s.negative
         )?;
+        if let Some([r, g, b]) = self.flux {
+            write!(
+                f,
+                "\n  flux:         {r:.6} {g:.6} {b:.6} (mean radiance over the sphere)"
+            )?;
+        }
         if let Some(levels) = self
             .levels
             .as_ref()

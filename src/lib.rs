@@ -9,6 +9,7 @@ pub mod convert;
 pub mod cube;
 pub mod error;
 pub mod filter;
+pub mod flux;
 pub mod image;
 pub mod info;
 pub mod io;

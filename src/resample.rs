@@ -2,6 +2,7 @@
 //! Coarse outputs are antialiased by supersampling the texel's footprint on a pyramid level.
 
 use crate::cube::{dir_face, face_dir, CubeMap, Dirs, Environment, Interp, BATCH};
+use crate::flux::Grid;
 use crate::image::Image;
 use crate::layout::{equirect, Projection};
 use glam::{Mat3, Vec3, Vec4};
@@ -55,14 +56,25 @@ impl Default for Resampler {
     }
 }
 
-/// Largest number of subsamples per axis of one output texel.
-const MAX_SUB: usize = 4;
+/// Largest number of subsamples per axis of one output texel: enough that the taps, one per
+/// texel of the level they read, cover its footprint evenly, so a shrunk map keeps its flux.
+const MAX_SUB: usize = 16;
+
+/// Subsamples per axis of a texel a ball's rim cuts (its centre outside the ball).
+const RIM_SUB: usize = 4;
+
+/// The pyramid level a coarse output texel spanning `ratio` source texels reads: the
+/// sharpest where it spans at most MAX_SUB texels.
+pub fn footprint_level(ratio: f32) -> usize {
+    (ratio / MAX_SUB as f32).log2().ceil().max(0.0) as usize
+}
 
 impl Resampler {
     /// A cube map of face edge `size` from any environment.
     pub fn to_cube(&self, env: &dyn Environment, size: usize) -> CubeMap {
         let inv = 1.0 / size as f32;
-        let faces = std::array::from_fn(|face| {
+        let grid = Grid::Cube(size);
+        let mut faces = std::array::from_fn(|face| {
             self.render(
                 env,
                 size,
@@ -75,10 +87,20 @@ impl Resampler {
                     let q = 1.0 + sc * sc + tc * tc;
                     2.0 * inv * (1.0 + sc.abs().max(tc.abs()).powi(2)).sqrt() / q
                 },
+                |x, y| grid.density(face, x, y),
             )
         });
+        self.splat(env, grid, &mut faces);
         CubeMap {
             levels: vec![faces],
+        }
+    }
+
+    /// Adds the environment's peaks, if it has any, to an output rendered from it.
+    fn splat(&self, env: &dyn Environment, grid: Grid, images: &mut [Image]) {
+        if let Some(peaks) = env.peaks() {
+            let turn = (!self.orientation.is_identity()).then(|| self.orientation.lookup_matrix());
+            peaks.splat(grid, turn, images);
         }
     }
 
@@ -92,38 +114,45 @@ impl Resampler {
     ) -> Image {
         let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
         let at = move |p: Projection| move |x: f32, y: f32| p.to_dir(x * iw, y * ih);
+        let grid = Grid::Projection(proj, w, h);
+        let density = move |x: f32, y: f32| grid.density(0, x, y);
         // The angle one texel spans, from each layout's formula (the larger of its radial and
         // tangential rates times the texel's size in disc radii, 2 / w). One render per
         // layout, so each inlines its own direction maths.
-        match proj {
+        let mut image = match proj {
             Projection::Equirect => {
                 let rows = std::f32::consts::PI * ih;
                 let dir = move |x: f32, y: f32| Some(equirect::uv_to_dir(x * iw, y * ih));
-                self.render(env, w, h, dir, move |_, _| rows)
+                self.render(env, w, h, dir, move |_, _| rows, density)
             }
             // The angle from -Z is pi r: pi per unit radius, across and around.
             Projection::Angular => {
                 let texel = std::f32::consts::TAU * iw;
-                self.render(env, w, h, at(proj), move |_, _| texel)
+                self.render(env, w, h, at(proj), move |_, _| texel, density)
             }
             // The angle from -Z is 2 asin r: 2 / sqrt(1 - r^2) across the rings, more than the
-            // 2 sqrt(1 - r^2) around them. Outside the ball nothing is sampled.
-            Projection::Sphere => self.render(env, w, h, at(proj), move |x, y| {
-                let (sx, sy) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
-                let rr = sx * sx + sy * sy;
-                if rr >= 1.0 {
-                    0.0
-                } else {
+            // 2 sqrt(1 - r^2) around them; taken half a texel inside the rim for the texels
+            // the rim cuts.
+            Projection::Sphere => {
+                let rim = 1.0 - iw;
+                let footprint = move |x: f32, y: f32| {
+                    let (sx, sy) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
+                    let rr = (sx * sx + sy * sy).min(rim * rim);
                     4.0 * iw / (1.0 - rr).sqrt()
-                }
-            }),
-        }
+                };
+                self.render(env, w, h, at(proj), footprint, density)
+            }
+        };
+        self.splat(env, grid, std::slice::from_mut(&mut image));
+        image
     }
 
     /// The shared loop: `dir(x, y)` gives the direction at continuous pixel coordinates
-    /// (None where the layout shows nothing), `footprint` the angle one texel spans there.
+    /// (None where the layout shows nothing), `footprint` the angle one texel spans there and
+    /// `density` the solid angle per unit of texel area, which weights the taps of a texel.
     /// Texels are worked in short runs of a row: every tap of a run (one per texel, or up to
-    /// MAX_SUB x MAX_SUB for coarse texels) is queued and looked up in batches.
+    /// MAX_SUB x MAX_SUB for coarse texels and for texels a ball's rim cuts) is queued and
+    /// looked up in batches.
     pub fn render(
         &self,
         env: &dyn Environment,
@@ -131,6 +160,7 @@ impl Resampler {
         h: usize,
         dir: impl Fn(f32, f32) -> Option<Vec3> + Sync,
         footprint: impl Fn(f32, f32) -> f32 + Sync,
+        density: impl Fn(f32, f32) -> f32 + Sync,
     ) -> Image {
         let turn = (!self.orientation.is_identity()).then(|| self.orientation.lookup_matrix());
         let src_angle = env.texel_angle();
@@ -143,11 +173,14 @@ impl Resampler {
                 level: 0,
                 dirs: Dirs::default(),
                 slot: [0; BATCH],
+                weight: [0.0; BATCH],
             };
             for (run, out) in row.chunks_mut(RUN).enumerate() {
                 let mut acc = [Vec4::ZERO; RUN];
-                let mut count = [0u32; RUN];
-                for (i, n_taps) in count.iter_mut().enumerate().take(out.len()) {
+                // Sum of a texel's tap weights; 0 for a single tap (weight 1, no division).
+                let mut total = [0.0f32; RUN];
+                let mut empty = [true; RUN];
+                for i in 0..out.len() {
                     let x = run * RUN + i;
                     let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
                     let ratio = if self.antialias {
@@ -155,36 +188,49 @@ impl Resampler {
                     } else {
                         0.0
                     };
-                    if ratio <= 1.5 {
-                        if let Some(d) = dir(cx, cy) {
-                            taps.push(d, 0, i, &mut acc);
-                            *n_taps = 1;
+                    let centre = dir(cx, cy);
+                    if ratio <= 1.5 && (centre.is_some() || !self.antialias) {
+                        if let Some(d) = centre {
+                            taps.push(d, 0, i, 1.0, &mut acc);
+                            empty[i] = false;
                         }
                         continue;
                     }
-                    // A pyramid level where the footprint spans at most ~4 texels, then up to
-                    // MAX_SUB x MAX_SUB bilinear taps spread over the texel.
-                    let level = ((ratio / 4.0).log2().ceil().max(0.0) as usize).min(levels - 1);
+                    // A pyramid level where the footprint spans at most MAX_SUB texels, then a
+                    // bilinear tap per texel of that level spread over the texel, each weighted
+                    // by the solid angle it stands for. A texel whose centre lies outside a
+                    // ball gets the taps inside it.
+                    let level = footprint_level(ratio).min(levels - 1);
                     let rest = ratio / (1u32 << level) as f32;
-                    let n = ((rest / 1.5).ceil() as usize).clamp(1, MAX_SUB);
+                    let n = if centre.is_none() {
+                        RIM_SUB
+                    } else {
+                        (rest.ceil() as usize).clamp(1, MAX_SUB)
+                    };
                     let step = 1.0 / n as f32;
                     for j in 0..n {
                         for k in 0..n {
                             let sx = x as f32 + (k as f32 + 0.5) * step;
                             let sy = y as f32 + (j as f32 + 0.5) * step;
                             if let Some(d) = dir(sx, sy) {
-                                taps.push(d, level, i, &mut acc);
-                                *n_taps += 1;
+                                let wgt = density(sx, sy);
+                                if wgt > 0.0 {
+                                    taps.push(d, level, i, wgt, &mut acc);
+                                    total[i] += wgt;
+                                    empty[i] = false;
+                                }
                             }
                         }
                     }
                 }
                 taps.flush(&mut acc);
-                for ((o, a), &c) in out.iter_mut().zip(acc).zip(&count) {
-                    *o = match c {
-                        0 => Vec4::ZERO,
-                        1 => a,
-                        _ => a / c as f32,
+                for (((o, a), &t), &e) in out.iter_mut().zip(acc).zip(&total).zip(&empty) {
+                    *o = if e {
+                        Vec4::ZERO
+                    } else if t > 0.0 {
+                        a / t
+                    } else {
+                        a
                     };
                 }
             }
@@ -204,16 +250,18 @@ struct Taps<'a> {
     level: usize,
     dirs: Dirs,
     slot: [u8; BATCH],
+    weight: [f32; BATCH],
 }
 
 impl Taps<'_> {
     #[inline]
-    fn push(&mut self, d: Vec3, level: usize, slot: usize, acc: &mut [Vec4; RUN]) {
+    fn push(&mut self, d: Vec3, level: usize, slot: usize, weight: f32, acc: &mut [Vec4; RUN]) {
         if self.dirs.is_full() || (level != self.level && self.dirs.len > 0) {
             self.flush(acc);
         }
         self.level = level;
         self.slot[self.dirs.len] = slot as u8;
+        self.weight[self.dirs.len] = weight;
         self.dirs.push(d);
     }
 
@@ -229,8 +277,8 @@ impl Taps<'_> {
         let mut out = [Vec4::ZERO; BATCH];
         self.env
             .sample_many(&self.dirs, self.level, self.interp, &mut out[..n]);
-        for (&s, v) in self.slot[..n].iter().zip(&out[..n]) {
-            acc[s as usize] += *v;
+        for ((&s, &w), v) in self.slot[..n].iter().zip(&self.weight[..n]).zip(&out[..n]) {
+            acc[s as usize] += *v * w;
         }
         self.dirs.len = 0;
     }

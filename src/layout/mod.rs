@@ -187,11 +187,25 @@ pub struct ImageEnv<'a> {
     base: &'a Image,
     /// Levels 1 and up.
     pyramid: Vec<Image>,
+    /// Each colour channel of level 0 is read clamped to this (see [`crate::flux`]).
+    ceiling: Vec4,
 }
 
 impl<'a> ImageEnv<'a> {
     /// Prepares `levels` pyramid levels (None: down to 8 texels high).
     pub fn new(projection: Projection, base: &'a Image, levels: Option<usize>) -> ImageEnv<'a> {
+        Self::below(projection, base, levels, Vec4::INFINITY)
+    }
+
+    /// `new`, with every texel read clamped to `ceiling` (per channel). Each pyramid texel is
+    /// the mean of the four above weighted by the solid angles they cover, so the pyramid
+    /// keeps the flux (plain means overweight a panorama's polar rows and a ball's rim).
+    pub fn below(
+        projection: Projection,
+        base: &'a Image,
+        levels: Option<usize>,
+        ceiling: Vec4,
+    ) -> ImageEnv<'a> {
         let mut pyramid: Vec<Image> = Vec::new();
         let want = levels.unwrap_or(usize::MAX);
         loop {
@@ -199,13 +213,21 @@ impl<'a> ImageEnv<'a> {
             if last.height <= 8 || pyramid.len() + 1 >= want {
                 break;
             }
-            let next = last.downsample_2x();
+            let grid = crate::flux::Grid::Projection(projection, last.width, last.height);
+            let weight = |x: usize, y: usize| grid.density(0, x as f32 + 0.5, y as f32 + 0.5);
+            let clamp = if pyramid.is_empty() {
+                ceiling
+            } else {
+                Vec4::INFINITY
+            };
+            let next = last.downsample_2x_weighted(weight, clamp);
             pyramid.push(next);
         }
         ImageEnv {
             projection,
             base,
             pyramid,
+            ceiling,
         }
     }
 
@@ -234,9 +256,14 @@ impl ImageEnv<'_> {
         }
         let x = uv.x * img.width as f32;
         let y = uv.y * img.height as f32;
+        let ceiling = if level == 0 {
+            self.ceiling
+        } else {
+            Vec4::INFINITY
+        };
         match interp {
-            Interp::Bilinear => img.bilinear(x, y, wrap),
-            Interp::Bicubic => img.bicubic(x, y, wrap),
+            Interp::Bilinear => img.bilinear_below(x, y, wrap, ceiling),
+            Interp::Bicubic => img.bicubic_below(x, y, wrap, ceiling),
         }
     }
 }
@@ -266,7 +293,12 @@ impl Environment for ImageEnv<'_> {
                 *u *= w;
                 *v *= h;
             }
-            img.bilinear_many(&u[..n], &v[..n], true, &mut out[..n]);
+            let ceiling = if level == 0 {
+                self.ceiling
+            } else {
+                Vec4::INFINITY
+            };
+            img.bilinear_many_below(&u[..n], &v[..n], true, ceiling, &mut out[..n]);
             return;
         }
         for ((o, &u), &v) in out[..n].iter_mut().zip(&u[..n]).zip(&v[..n]) {

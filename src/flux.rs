@@ -1,0 +1,526 @@
+//! Light conservation. The flux of a map (its solid-angle-weighted mean radiance, per channel)
+//! must survive every resampling, HDR suns included.
+//!
+//! Filtered lookups are exact enough on bounded radiance, but a sun a few texels wide is hit or
+//! missed by a tap, and each hit stands for a different solid angle than the sun has (43% off
+//! at some sizes). So an input is split in two, exactly: a bounded part, each channel at most
+//! [`PEAK_RATIO`] times its mean over the sphere, which the resampler looks up as before, and the
+//! excess above that ceiling (the peaks: a sun, a lamp), which is splatted. Each peak texel's
+//! excess radiance times its solid angle is cut into sub-cells, each sub-cell's share is added
+//! to the output texel its direction lands in, and each output texel divides what it received
+//! by its own solid angle. The peaks' flux arrives whole, whatever the two sizes; only a few
+//! texels pay for it, so the common path keeps its speed.
+
+use crate::cube::{dir_face, face_dir, solid_angle_table, texel_solid_angle};
+use crate::cube::{Dirs, Environment, Interp};
+use crate::image::Image;
+use crate::layout::Projection;
+use glam::{Mat3, Vec3, Vec4};
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Texels with a channel above this multiple of its mean hold peaks. Low enough that the
+/// bounded part's lookup error is far under the 0.5% flux budget on real panoramas, high
+/// enough that peaks stay a small share of the texels (at most 1/8 of the sphere).
+pub const PEAK_RATIO: f32 = 8.0;
+
+/// The texel grid of a layout: where each texel looks and how much of the sphere it covers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Grid {
+    /// Six faces of edge n.
+    Cube(usize),
+    /// One w x h image.
+    Projection(Projection, usize, usize),
+}
+
+impl Grid {
+    /// Number of images (6 faces or 1).
+    pub fn faces(self) -> usize {
+        match self {
+            Grid::Cube(_) => 6,
+            Grid::Projection(..) => 1,
+        }
+    }
+
+    /// Width and height of each image.
+    pub fn dims(self) -> (usize, usize) {
+        match self {
+            Grid::Cube(n) => (n, n),
+            Grid::Projection(_, w, h) => (w, h),
+        }
+    }
+
+    /// The unit direction at continuous texel coordinates (x, y) of `face`, None where the
+    /// layout shows nothing (outside a ball).
+    #[inline]
+    pub fn dir(self, face: usize, x: f32, y: f32) -> Option<Vec3> {
+        match self {
+            Grid::Cube(n) => {
+                let inv = 1.0 / n as f32;
+                Some(face_dir(face, x * inv, y * inv).normalize())
+            }
+            Grid::Projection(p, w, h) => p.to_dir(x / w as f32, y / h as f32),
+        }
+    }
+
+    /// The texel a unit direction falls in. On a ball the point is kept half a texel inside
+    /// the rim, so the texel it names always covers some of the sphere.
+    #[inline]
+    pub fn locate(self, d: Vec3) -> (usize, usize, usize) {
+        let (f, x, y) = self.position(d);
+        let (w, h) = self.dims();
+        (f, (x as usize).min(w - 1), (y as usize).min(h - 1))
+    }
+
+    /// Continuous texel coordinates of a unit direction (see `locate`).
+    #[inline]
+    pub fn position(self, d: Vec3) -> (usize, f32, f32) {
+        match self {
+            Grid::Cube(n) => {
+                let (f, s, t) = dir_face(d);
+                (f, s * n as f32, t * n as f32)
+            }
+            Grid::Projection(p, w, h) => {
+                let mut uv = p.to_image(d);
+                if p != Projection::Equirect {
+                    let c = uv * 2.0 - glam::Vec2::ONE;
+                    let max = 1.0 - 1.0 / w.max(h) as f32;
+                    let len = c.length();
+                    if len > max {
+                        uv = (c * (max / len) + glam::Vec2::ONE) * 0.5;
+                    }
+                }
+                (0, uv.x * w as f32, uv.y * h as f32)
+            }
+        }
+    }
+
+    /// A mirror ball or angular map: a disc in a square.
+    fn is_ball(self) -> bool {
+        matches!(self, Grid::Projection(p, ..) if p != Projection::Equirect)
+    }
+
+    /// The texels along one axis (of `n`) that a span of `side` texels centred on `at`
+    /// overlaps, with the fraction of the span each gets. The span is kept inside the image
+    /// (a panorama's columns wrap).
+    fn spans(self, at: f32, side: f32, n: usize) -> [Option<(usize, f32)>; 2] {
+        let wraps = matches!(self, Grid::Projection(Projection::Equirect, w, _) if w == n);
+        let half = 0.5 * side;
+        let c = if wraps {
+            at
+        } else {
+            at.clamp(half, n as f32 - half)
+        };
+        let (lo, hi) = (c - half, c + half);
+        let first = lo.floor();
+        let index = |v: f32| {
+            if wraps {
+                (v as i64).rem_euclid(n as i64) as usize
+            } else {
+                (v.max(0.0) as usize).min(n - 1)
+            }
+        };
+        if side <= 0.0 || hi <= first + 1.0 {
+            return [Some((index(first), 1.0)), None];
+        }
+        let a = (first + 1.0 - lo) / side;
+        [Some((index(first), a)), Some((index(first + 1.0), 1.0 - a))]
+    }
+
+    /// Solid angle per unit texel area at continuous texel coordinates (0 outside a ball):
+    /// the weight of a point when a texel is cut into sub-cells.
+    #[inline]
+    pub fn density(self, face: usize, x: f32, y: f32) -> f32 {
+        let _ = face;
+        match self {
+            Grid::Cube(n) => {
+                let inv = 2.0 / n as f32;
+                let (sc, tc) = (x * inv - 1.0, y * inv - 1.0);
+                let q = 1.0 + sc * sc + tc * tc;
+                inv * inv / (q * q.sqrt())
+            }
+            Grid::Projection(p, w, h) => {
+                let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
+                match p {
+                    Projection::Equirect => {
+                        let lat = (0.5 - y * ih) * std::f32::consts::PI;
+                        std::f32::consts::TAU * iw * std::f32::consts::PI * ih * lat.cos().max(0.0)
+                    }
+                    Projection::Sphere | Projection::Angular => {
+                        let (sx, sy) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
+                        let r = (sx * sx + sy * sy).sqrt();
+                        if r > 1.0 {
+                            return 0.0;
+                        }
+                        // Texel area in units of the disc radius squared.
+                        let area = 4.0 * iw * ih;
+                        area * if p == Projection::Sphere {
+                            // A mirror ball is equal-area: the angle from -Z is 2 asin r.
+                            4.0
+                        } else if r < 1e-6 {
+                            std::f32::consts::PI * std::f32::consts::PI
+                        } else {
+                            // Angle pi r: sin(pi r) / r times pi per unit of r.
+                            std::f32::consts::PI * (std::f32::consts::PI * r).sin() / r
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Solid angle of texel (x, y) of `face`: exact for cube faces and panoramas (closed
+    /// forms), a fine midpoint sum on balls (16 x 16 on the rim, where the disc cuts texels).
+    pub fn solid_angle(self, face: usize, x: usize, y: usize) -> f64 {
+        match self {
+            Grid::Cube(n) => texel_solid_angle(n, x, y) as f64,
+            Grid::Projection(Projection::Equirect, w, h) => equirect_row(w, h, y),
+            Grid::Projection(_, w, h) => {
+                let corner_in = |cx: usize, cy: usize| {
+                    let sx = 2.0 * cx as f64 / w as f64 - 1.0;
+                    let sy = 2.0 * cy as f64 / h as f64 - 1.0;
+                    sx * sx + sy * sy < 1.0
+                };
+                let inside = corner_in(x, y)
+                    && corner_in(x + 1, y)
+                    && corner_in(x, y + 1)
+                    && corner_in(x + 1, y + 1);
+                let k = if inside { 4 } else { 16 };
+                let mut sum = 0.0f64;
+                for j in 0..k {
+                    for i in 0..k {
+                        let px = x as f32 + (i as f32 + 0.5) / k as f32;
+                        let py = y as f32 + (j as f32 + 0.5) / k as f32;
+                        sum += self.density(face, px, py) as f64;
+                    }
+                }
+                sum / (k * k) as f64
+            }
+        }
+    }
+
+    /// Every texel's solid angle, face by face, row by row.
+    pub fn solid_angles(self) -> Vec<f64> {
+        let (w, h) = self.dims();
+        match self {
+            Grid::Cube(n) => {
+                let one: Vec<f64> = solid_angle_table(n).iter().map(|&a| a as f64).collect();
+                (0..6).flat_map(|_| one.iter().copied()).collect()
+            }
+            _ => (0..h)
+                .into_par_iter()
+                .flat_map_iter(|y| (0..w).map(move |x| self.solid_angle(0, x, y)))
+                .collect(),
+        }
+    }
+}
+
+/// Solid angle of one texel of row `y` of a w x h panorama: its longitude span times the
+/// difference of the sines of its edges' latitudes.
+fn equirect_row(w: usize, h: usize, y: usize) -> f64 {
+    let lat = |v: usize| (0.5 - v as f64 / h as f64) * PI;
+    2.0 * PI / w as f64 * (lat(y).sin() - lat(y + 1).sin())
+}
+
+/// The flux of a map: solid-angle-weighted mean radiance per channel (R, G, B). Sums run in
+/// f64, row by row, then in a fixed order, so the figure does not depend on thread count.
+pub fn mean_radiance(grid: Grid, images: &[&Image]) -> [f64; 3] {
+    let (w, h) = grid.dims();
+    let omega = grid.solid_angles();
+    let rows: Vec<([f64; 3], f64)> = (0..grid.faces() * h)
+        .into_par_iter()
+        .map(|fy| {
+            let (face, y) = (fy / h, fy % h);
+            let img = images[face];
+            let mut acc = [0.0f64; 3];
+            let mut total = 0.0;
+            for x in 0..w {
+                let a = omega[(face * h + y) * w + x];
+                let p = img.get(x, y);
+                for c in 0..3 {
+                    acc[c] += p[c] as f64 * a;
+                }
+                total += a;
+            }
+            (acc, total)
+        })
+        .collect();
+    let mut acc = [0.0f64; 3];
+    let mut total = 0.0;
+    for (r, t) in rows {
+        for c in 0..3 {
+            acc[c] += r[c];
+        }
+        total += t;
+    }
+    acc.map(|v| if total > 0.0 { v / total } else { 0.0 })
+}
+
+/// One texel above the ceiling: where it is and by how much each channel exceeds it.
+#[derive(Clone, Copy, Debug)]
+struct Peak {
+    face: u8,
+    x: u32,
+    y: u32,
+    excess: Vec3,
+}
+
+/// The part of an input above its ceiling, to be splatted into outputs.
+#[derive(Clone, Debug)]
+pub struct Peaks {
+    /// Each colour channel of the bounded part is at most its entry here.
+    pub ceiling: Vec3,
+    grid: Grid,
+    texels: Vec<Peak>,
+}
+
+impl Peaks {
+    /// Finds the texels of `images` (laid out on `grid`) with a channel above `PEAK_RATIO`
+    /// times that channel's mean, or None when there are none. One pass for the means and
+    /// each row's maxima, then only the rows that hold a peak are read again.
+    pub fn find(grid: Grid, images: &[&Image]) -> Option<Peaks> {
+        let (w, h) = grid.dims();
+        let rows: Vec<([f64; 3], f64, Vec3)> = (0..grid.faces() * h)
+            .into_par_iter()
+            .map(|fy| {
+                let (face, y) = (fy / h, fy % h);
+                let row = &images[face].pixels[y * w..(y + 1) * w];
+                let mut sum = [0.0f64; 3];
+                let mut weight = 0.0f64;
+                let mut max = Vec3::ZERO;
+                // The weight at each texel's centre: close enough to choose a ceiling.
+                let row_weight = matches!(grid, Grid::Projection(Projection::Equirect, ..))
+                    .then(|| grid.density(face, 0.5, y as f32 + 0.5));
+                for (x, p) in row.iter().enumerate() {
+                    let a = row_weight
+                        .unwrap_or_else(|| grid.density(face, x as f32 + 0.5, y as f32 + 0.5));
+                    if a > 0.0 {
+                        for (c, s) in sum.iter_mut().enumerate() {
+                            *s += (p[c] * a) as f64;
+                        }
+                        weight += a as f64;
+                        max = max.max(p.truncate());
+                    }
+                }
+                (sum, weight, max)
+            })
+            .collect();
+        let (mut sum, mut weight) = ([0.0f64; 3], 0.0);
+        for (s, t, _) in &rows {
+            for c in 0..3 {
+                sum[c] += s[c];
+            }
+            weight += t;
+        }
+        if weight <= 0.0 {
+            return None;
+        }
+        // A channel that is black everywhere has no peaks.
+        let ceiling =
+            Vec3::from_array(sum.map(|s| match (PEAK_RATIO as f64 * s / weight) as f32 {
+                c if c > 0.0 => c,
+                _ => f32::INFINITY,
+            }));
+        let texels: Vec<Peak> = rows
+            .par_iter()
+            .enumerate()
+            .filter(|(_, r)| r.2.cmpgt(ceiling).any())
+            .flat_map_iter(|(fy, _)| {
+                let (face, y) = (fy / h, fy % h);
+                let row = &images[face].pixels[y * w..(y + 1) * w];
+                row.iter().enumerate().filter_map(move |(x, p)| {
+                    let excess = (p.truncate() - ceiling).max(Vec3::ZERO);
+                    let covers = grid.solid_angle(face, x, y) > 0.0;
+                    (excess != Vec3::ZERO && covers).then_some(Peak {
+                        face: face as u8,
+                        x: x as u32,
+                        y: y as u32,
+                        excess,
+                    })
+                })
+            })
+            .collect();
+        (!texels.is_empty()).then_some(Peaks {
+            ceiling,
+            grid,
+            texels,
+        })
+    }
+
+    /// Number of peak texels.
+    pub fn len(&self) -> usize {
+        self.texels.len()
+    }
+
+    /// Whether there are none (never, for a `Peaks` that `find` returned).
+    pub fn is_empty(&self) -> bool {
+        self.texels.is_empty()
+    }
+
+    /// Each colour channel clamped to the ceiling (alpha untouched): the bounded part.
+    pub fn ceiling_vec(&self) -> Vec4 {
+        self.ceiling.extend(f32::INFINITY)
+    }
+
+    /// Adds the peaks to `images`, an output laid out on `out`. `lookup` takes an output
+    /// direction to the input direction shown there (the resampler's orientation), so input
+    /// directions go back through its transpose. Sub-cells are a quarter of an output texel
+    /// or finer; their shares are summed per output texel in the peaks' own order, so the
+    /// result does not depend on thread count.
+    pub fn splat(&self, out: Grid, lookup: Option<Mat3>, images: &mut [Image]) {
+        let back = lookup.map(|m| m.transpose());
+        let (ow, oh) = out.dims();
+        let key = |(f, x, y): (usize, usize, usize)| ((f * oh + y) * ow + x) as u64;
+        let shares: Vec<Vec<(u64, Vec3)>> = self
+            .texels
+            .par_chunks(64)
+            .map(|chunk| {
+                let mut shares = Vec::new();
+                let mut cells: Vec<(Vec3, f32)> = Vec::new();
+                for p in chunk {
+                    let (face, x, y) = (p.face as usize, p.x as f32, p.y as f32);
+                    let to_out = |d: Vec3| back.map_or(d, |m| (m * d).normalize());
+                    let Some(centre) = self.grid.dir(face, x + 0.5, y + 0.5) else {
+                        continue;
+                    };
+                    // Sub-cells per texel edge: four per output texel there (one where the
+                    // output texel spans four input texels or more).
+                    let (cf, cx, cy) = out.locate(to_out(centre));
+                    let a_in = self.grid.density(face, x + 0.5, y + 0.5).sqrt();
+                    let a_out = out.density(cf, cx as f32 + 0.5, cy as f32 + 0.5).sqrt();
+                    let k = (4.0 * a_in / a_out.max(1e-12)).ceil().clamp(1.0, 64.0) as usize;
+                    cells.clear();
+                    let mut total = 0.0f32;
+                    for j in 0..k {
+                        for i in 0..k {
+                            let sx = x + (i as f32 + 0.5) / k as f32;
+                            let sy = y + (j as f32 + 0.5) / k as f32;
+                            let wgt = self.grid.density(face, sx, sy);
+                            if wgt <= 0.0 {
+                                continue;
+                            }
+                            if let Some(d) = self.grid.dir(face, sx, sy) {
+                                cells.push((to_out(d), wgt));
+                                total += wgt;
+                            }
+                        }
+                    }
+                    if total <= 0.0 {
+                        continue;
+                    }
+                    let flux = p.excess
+                        * self.grid.solid_angle(face, p.x as usize, p.y as usize) as f32
+                        / total;
+                    // Each sub-cell covers a square of its own area around where it lands,
+                    // shared by overlap between the (at most 2 x 2) output texels under it,
+                    // so the peak arrives smooth; on a ball (whose outside covers nothing)
+                    // it goes whole to the texel it lands in. Neighbouring sub-cells mostly
+                    // land together: one share per run.
+                    let side = if out.is_ball() {
+                        0.0
+                    } else {
+                        (a_in / a_out.max(1e-12) / k as f32).min(1.0)
+                    };
+                    let start = shares.len();
+                    for &(d, wgt) in &cells {
+                        let (f, fx, fy) = out.position(d);
+                        let (xs, ys) = (out.spans(fx, side, ow), out.spans(fy, side, oh));
+                        for &(x, wx) in xs.iter().flatten() {
+                            for &(y, wy) in ys.iter().flatten() {
+                                let k = key((f, x, y));
+                                let share = flux * (wgt * wx * wy);
+                                let open = shares.len() > start;
+                                match shares.last_mut() {
+                                    Some((last, s)) if open && *last == k => *s += share,
+                                    _ => shares.push((k, share)),
+                                }
+                            }
+                        }
+                    }
+                }
+                shares
+            })
+            .collect();
+        let mut shares: Vec<(u64, Vec3)> = shares.into_iter().flatten().collect();
+        // Stable: equal keys keep the peaks' order, so each texel's sum has one order.
+        shares.par_sort_by_key(|s| s.0);
+        let mut i = 0;
+        while i < shares.len() {
+            let k = shares[i].0;
+            let mut sum = [0.0f64; 3];
+            while i < shares.len() && shares[i].0 == k {
+                for (c, s) in sum.iter_mut().enumerate() {
+                    *s += shares[i].1[c] as f64;
+                }
+                i += 1;
+            }
+            let k = k as usize;
+            let (face, y, x) = (k / (ow * oh), (k / ow) % oh, k % ow);
+            let omega = out.solid_angle(face, x, y);
+            if omega <= 0.0 {
+                continue;
+            }
+            let add = Vec3::from_array(sum.map(|s| (s / omega) as f32));
+            let img = &mut images[face];
+            let p = img.get(x, y);
+            img.set(x, y, (p.truncate() + add).extend(p.w));
+        }
+    }
+}
+
+/// An environment whose lookups see the bounded part of an input, with the peaks that go on
+/// top of whatever is rendered from it.
+pub struct Split<E: Environment> {
+    pub env: E,
+    pub peaks: Peaks,
+}
+
+impl<E: Environment> Environment for Split<E> {
+    fn sample(&self, d: Vec3, level: usize, interp: Interp) -> Vec4 {
+        self.env.sample(d, level, interp)
+    }
+    fn sample_many(&self, dirs: &Dirs, level: usize, interp: Interp, out: &mut [Vec4]) {
+        self.env.sample_many(dirs, level, interp, out)
+    }
+    fn texel_angle(&self) -> f32 {
+        self.env.texel_angle()
+    }
+    fn levels(&self) -> usize {
+        self.env.levels()
+    }
+    fn peaks(&self) -> Option<&Peaks> {
+        Some(&self.peaks)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solid_angles_cover_the_sphere() {
+        for grid in [
+            Grid::Cube(7),
+            Grid::Projection(Projection::Equirect, 64, 32),
+            Grid::Projection(Projection::Sphere, 64, 64),
+            Grid::Projection(Projection::Angular, 64, 64),
+            Grid::Projection(Projection::Angular, 257, 257),
+        ] {
+            let sum: f64 = grid.solid_angles().iter().sum();
+            assert!((sum / (4.0 * PI) - 1.0).abs() < 2e-4, "{grid:?}: {sum}");
+        }
+    }
+
+    #[test]
+    fn density_integrates_to_the_solid_angle() {
+        let grid = Grid::Projection(Projection::Equirect, 64, 32);
+        for y in [0, 5, 16, 31] {
+            let mid = grid.density(0, 3.5, y as f32 + 0.5) as f64;
+            let exact = grid.solid_angle(0, 3, y);
+            assert!(
+                (mid / exact - 1.0).abs() < 0.01,
+                "row {y}: {mid} vs {exact}"
+            );
+        }
+    }
+}
