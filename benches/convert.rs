@@ -6,7 +6,7 @@
 //! "photo" made from the real park panorama in ../shared/fixtures/real (skipped when absent),
 //! enlarged 8x with a fixed 8% grain so its files compress like a camera's.
 
-use cubeforge::convert::{self, Output};
+use cubeforge::convert::{self, Output, Source};
 use cubeforge::cube::FACE_NAMES;
 use cubeforge::image::Image;
 use cubeforge::io::{self, Decoded, ReadOptions, WriteOptions};
@@ -203,7 +203,34 @@ fn others(input: &Path, dir: &Path) {
             &turned,
         ),
     ];
+    // An 8K panorama (the photo enlarged again) shrunk to small faces: the footprint path.
+    let big = {
+        let Source::Projection(_, img) = &pano.source else {
+            unreachable!()
+        };
+        Image::from_fn(8192, 4096, |x, y| {
+            img.bilinear((x as f32 + 0.5) / 2.0, (y as f32 + 0.5) / 2.0, true)
+        })
+    };
+    let big = convert::Loaded {
+        source: Source::Projection(Projection::Equirect, big),
+        ..convert::load(&[input.to_path_buf()], None, &read).unwrap()
+    };
     println!("photo: resampling alone");
+    for size in [64, 256] {
+        let mut best = f64::MAX;
+        for _ in 0..RUNS {
+            let t = Instant::now();
+            std::hint::black_box(convert::convert(
+                &big,
+                Kind::Faces,
+                size,
+                &Resampler::default(),
+            ));
+            best = best.min(t.elapsed().as_secs_f64());
+        }
+        println!("  equirect 8192 -> faces {size:<4} (antialiased)         {best:7.3} s");
+    }
     for (name, src, to, size, r) in cases {
         let mut best = f64::MAX;
         for _ in 0..RUNS {

@@ -130,8 +130,7 @@ impl Grid {
     /// Solid angle per unit texel area at continuous texel coordinates (0 outside a ball):
     /// the weight of a point when a texel is cut into sub-cells.
     #[inline]
-    pub fn density(self, face: usize, x: f32, y: f32) -> f32 {
-        let _ = face;
+    pub fn density(self, x: f32, y: f32) -> f32 {
         match self {
             Grid::Cube(n) => {
                 let inv = 2.0 / n as f32;
@@ -169,9 +168,9 @@ impl Grid {
         }
     }
 
-    /// Solid angle of texel (x, y) of `face`: exact for cube faces and panoramas (closed
+    /// Solid angle of texel (x, y) (the same on every face of a cube): exact for cube faces and panoramas (closed
     /// forms), a fine midpoint sum on balls (16 x 16 on the rim, where the disc cuts texels).
-    pub fn solid_angle(self, face: usize, x: usize, y: usize) -> f64 {
+    pub fn solid_angle(self, x: usize, y: usize) -> f64 {
         match self {
             Grid::Cube(n) => texel_solid_angle(n, x, y) as f64,
             Grid::Projection(Projection::Equirect, w, h) => equirect_row(w, h, y),
@@ -191,7 +190,7 @@ impl Grid {
                     for i in 0..k {
                         let px = x as f32 + (i as f32 + 0.5) / k as f32;
                         let py = y as f32 + (j as f32 + 0.5) / k as f32;
-                        sum += self.density(face, px, py) as f64;
+                        sum += self.density(px, py) as f64;
                     }
                 }
                 sum / (k * k) as f64
@@ -209,7 +208,7 @@ impl Grid {
             }
             _ => (0..h)
                 .into_par_iter()
-                .flat_map_iter(|y| (0..w).map(move |x| self.solid_angle(0, x, y)))
+                .flat_map_iter(|y| (0..w).map(move |x| self.solid_angle(x, y)))
                 .collect(),
         }
     }
@@ -290,10 +289,10 @@ impl Peaks {
                 let mut max = Vec3::ZERO;
                 // The weight at each texel's centre: close enough to choose a ceiling.
                 let row_weight = matches!(grid, Grid::Projection(Projection::Equirect, ..))
-                    .then(|| grid.density(face, 0.5, y as f32 + 0.5));
+                    .then(|| grid.density(0.5, y as f32 + 0.5));
                 for (x, p) in row.iter().enumerate() {
-                    let a = row_weight
-                        .unwrap_or_else(|| grid.density(face, x as f32 + 0.5, y as f32 + 0.5));
+                    let a =
+                        row_weight.unwrap_or_else(|| grid.density(x as f32 + 0.5, y as f32 + 0.5));
                     if a > 0.0 {
                         for (c, s) in sum.iter_mut().enumerate() {
                             *s += (p[c] * a) as f64;
@@ -330,7 +329,7 @@ impl Peaks {
                 let row = &images[face].pixels[y * w..(y + 1) * w];
                 row.iter().enumerate().filter_map(move |(x, p)| {
                     let excess = (p.truncate() - ceiling).max(Vec3::ZERO);
-                    let covers = grid.solid_angle(face, x, y) > 0.0;
+                    let covers = grid.solid_angle(x, y) > 0.0;
                     (excess != Vec3::ZERO && covers).then_some(Peak {
                         face: face as u8,
                         x: x as u32,
@@ -385,9 +384,9 @@ impl Peaks {
                     };
                     // Sub-cells per texel edge: four per output texel there (one where the
                     // output texel spans four input texels or more).
-                    let (cf, cx, cy) = out.locate(to_out(centre));
-                    let a_in = self.grid.density(face, x + 0.5, y + 0.5).sqrt();
-                    let a_out = out.density(cf, cx as f32 + 0.5, cy as f32 + 0.5).sqrt();
+                    let (_, cx, cy) = out.locate(to_out(centre));
+                    let a_in = self.grid.density(x + 0.5, y + 0.5).sqrt();
+                    let a_out = out.density(cx as f32 + 0.5, cy as f32 + 0.5).sqrt();
                     let k = (4.0 * a_in / a_out.max(1e-12)).ceil().clamp(1.0, 64.0) as usize;
                     cells.clear();
                     let mut total = 0.0f32;
@@ -395,7 +394,7 @@ impl Peaks {
                         for i in 0..k {
                             let sx = x + (i as f32 + 0.5) / k as f32;
                             let sy = y + (j as f32 + 0.5) / k as f32;
-                            let wgt = self.grid.density(face, sx, sy);
+                            let wgt = self.grid.density(sx, sy);
                             if wgt <= 0.0 {
                                 continue;
                             }
@@ -408,9 +407,8 @@ impl Peaks {
                     if total <= 0.0 {
                         continue;
                     }
-                    let flux = p.excess
-                        * self.grid.solid_angle(face, p.x as usize, p.y as usize) as f32
-                        / total;
+                    let flux =
+                        p.excess * self.grid.solid_angle(p.x as usize, p.y as usize) as f32 / total;
                     // Each sub-cell covers a square of its own area around where it lands,
                     // shared by overlap between the (at most 2 x 2) output texels under it,
                     // so the peak arrives smooth; on a ball (whose outside covers nothing)
@@ -456,7 +454,7 @@ impl Peaks {
             }
             let k = k as usize;
             let (face, y, x) = (k / (ow * oh), (k / ow) % oh, k % ow);
-            let omega = out.solid_angle(face, x, y);
+            let omega = out.solid_angle(x, y);
             if omega <= 0.0 {
                 continue;
             }
@@ -515,8 +513,8 @@ mod tests {
     fn density_integrates_to_the_solid_angle() {
         let grid = Grid::Projection(Projection::Equirect, 64, 32);
         for y in [0, 5, 16, 31] {
-            let mid = grid.density(0, 3.5, y as f32 + 0.5) as f64;
-            let exact = grid.solid_angle(0, 3, y);
+            let mid = grid.density(3.5, y as f32 + 0.5) as f64;
+            let exact = grid.solid_angle(3, y);
             assert!(
                 (mid / exact - 1.0).abs() < 0.01,
                 "row {y}: {mid} vs {exact}"

@@ -87,7 +87,7 @@ impl Resampler {
                     let q = 1.0 + sc * sc + tc * tc;
                     2.0 * inv * (1.0 + sc.abs().max(tc.abs()).powi(2)).sqrt() / q
                 },
-                |x, y| grid.density(face, x, y),
+                |x, y| grid.density(x, y),
             )
         });
         self.splat(env, grid, &mut faces);
@@ -115,7 +115,7 @@ impl Resampler {
         let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
         let at = move |p: Projection| move |x: f32, y: f32| p.to_dir(x * iw, y * ih);
         let grid = Grid::Projection(proj, w, h);
-        let density = move |x: f32, y: f32| grid.density(0, x, y);
+        let density = move |x: f32, y: f32| grid.density(x, y);
         // The angle one texel spans, from each layout's formula (the larger of its radial and
         // tangential rates times the texel's size in disc radii, 2 / w). One render per
         // layout, so each inlines its own direction maths.

@@ -180,7 +180,7 @@ fn direct_sh(img: &Image) -> [[f64; 3]; 9] {
     let grid = Grid::Projection(Projection::Equirect, img.width, img.height);
     let mut c = [[0.0f64; 3]; 9];
     for y in 0..img.height {
-        let a = grid.solid_angle(0, 0, y);
+        let a = grid.solid_angle(0, y);
         for x in 0..img.width {
             let d = grid.dir(0, x as f32 + 0.5, y as f32 + 0.5).unwrap();
             let p = img.get(x, y);

@@ -214,7 +214,7 @@ impl<'a> ImageEnv<'a> {
                 break;
             }
             let grid = crate::flux::Grid::Projection(projection, last.width, last.height);
-            let weight = |x: usize, y: usize| grid.density(0, x as f32 + 0.5, y as f32 + 0.5);
+            let weight = |x: usize, y: usize| grid.density(x as f32 + 0.5, y as f32 + 0.5);
             let clamp = if pyramid.is_empty() {
                 ceiling
             } else {
