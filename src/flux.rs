@@ -382,12 +382,12 @@ impl Peaks {
                     let Some(centre) = self.grid.dir(face, x + 0.5, y + 0.5) else {
                         continue;
                     };
-                    // Sub-cells per texel edge: four per output texel there (one where the
-                    // output texel spans four input texels or more).
+                    // Sub-cells per texel edge: two per output texel there (one where the
+                    // output texel spans two input texels or more).
                     let (_, cx, cy) = out.locate(to_out(centre));
                     let a_in = self.grid.density(x + 0.5, y + 0.5).sqrt();
                     let a_out = out.density(cx as f32 + 0.5, cy as f32 + 0.5).sqrt();
-                    let k = (4.0 * a_in / a_out.max(1e-12)).ceil().clamp(1.0, 64.0) as usize;
+                    let k = (2.0 * a_in / a_out.max(1e-12)).ceil().clamp(1.0, 64.0) as usize;
                     cells.clear();
                     let mut total = 0.0f32;
                     for j in 0..k {

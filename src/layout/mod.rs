@@ -214,7 +214,18 @@ impl<'a> ImageEnv<'a> {
                 break;
             }
             let grid = crate::flux::Grid::Projection(projection, last.width, last.height);
-            let weight = |x: usize, y: usize| grid.density(x as f32 + 0.5, y as f32 + 0.5);
+            // A panorama's weights depend on the row only: one cosine a row, not a texel.
+            let rows: Vec<f32> = (0..last.height)
+                .map(|y| grid.density(0.5, y as f32 + 0.5))
+                .collect();
+            let equirect = projection == Projection::Equirect;
+            let weight = |x: usize, y: usize| {
+                if equirect {
+                    rows[y]
+                } else {
+                    grid.density(x as f32 + 0.5, y as f32 + 0.5)
+                }
+            };
             let clamp = if pyramid.is_empty() {
                 ceiling
             } else {
