@@ -110,25 +110,7 @@ impl Image {
     /// Half the size in each dimension, each pixel the mean of the 2x2 block above it
     /// (an odd last row or column is folded into its neighbour so nothing is dropped).
     pub fn downsample_2x(&self) -> Image {
-        let w = (self.width / 2).max(1);
-        let h = (self.height / 2).max(1);
-        let sx = self.width as f32 / w as f32;
-        let sy = self.height as f32 / h as f32;
-        Image::from_fn(w, h, |x, y| {
-            let x0 = (x as f32 * sx) as usize;
-            let x1 = (((x + 1) as f32 * sx) as usize).min(self.width).max(x0 + 1);
-            let y0 = (y as f32 * sy) as usize;
-            let y1 = (((y + 1) as f32 * sy) as usize)
-                .min(self.height)
-                .max(y0 + 1);
-            let mut acc = Vec4::ZERO;
-            for yy in y0..y1 {
-                for xx in x0..x1 {
-                    acc += self.get(xx, yy);
-                }
-            }
-            acc / ((x1 - x0) * (y1 - y0)) as f32
-        })
+        self.downsample_2x_weighted(|_, _| 1.0, Vec4::INFINITY)
     }
 
     /// `downsample_2x` with each texel above weighted by `weight(x, y)` (the part of the
