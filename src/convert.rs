@@ -50,7 +50,7 @@ impl Loaded {
                 if ratio <= 1.5 {
                     1
                 } else {
-                    crate::resample::footprint_level(ratio) + 1
+                    crate::resample::deepest_level(ratio) + 1
                 }
             })
         };
@@ -64,18 +64,28 @@ impl Loaded {
                 None => Box::new(env),
             }
         }
-        let peaks = self.peaks();
-        let ceiling = peaks.as_ref().map_or(Vec4::INFINITY, Peaks::ceiling_vec);
+        let ceiling =
+            |peaks: &Option<Peaks>| peaks.as_ref().map_or(Vec4::INFINITY, Peaks::ceiling_vec);
         match &self.source {
+            Source::Projection(p, img) => {
+                let angle = ImageEnv::new(*p, img, Some(1)).texel_angle();
+                if *p == layout::Projection::Equirect {
+                    let (env, peaks) = ImageEnv::split_panorama(img, levels(angle));
+                    return split(env, peaks);
+                }
+                let peaks = self.peaks();
+                split(
+                    ImageEnv::below(*p, img, levels(angle), ceiling(&peaks)),
+                    peaks,
+                )
+            }
             Source::Cube(c) => {
+                let peaks = self.peaks();
+                let ceiling = ceiling(&peaks);
                 // Box mips of level 0 (stored levels may be prefiltered, not plain mips).
                 let angle = std::f32::consts::FRAC_PI_2 / c.size() as f32;
                 let env = CubeSampler::with_box_mips_below(&c.levels[0], levels(angle), ceiling);
                 split(env, peaks)
-            }
-            Source::Projection(p, img) => {
-                let angle = ImageEnv::new(*p, img, Some(1)).texel_angle();
-                split(ImageEnv::below(*p, img, levels(angle), ceiling), peaks)
             }
         }
     }

@@ -273,43 +273,112 @@ pub struct Peaks {
     texels: Vec<Peak>,
 }
 
+/// One row's weighted sums (for the means) and maximum (to skip rows without peaks).
+#[derive(Clone, Copy)]
+struct RowStats {
+    sum: [f64; 3],
+    weight: f64,
+    max: Vec3,
+}
+
+impl RowStats {
+    fn of(grid: Grid, image: &Image, y: usize) -> RowStats {
+        let w = grid.dims().0;
+        let row = &image.pixels[y * w..(y + 1) * w];
+        let mut sum = [0.0f64; 3];
+        let mut weight = 0.0f64;
+        let mut max = Vec3::ZERO;
+        // The weight at each texel's centre: close enough to choose a ceiling.
+        let row_weight = matches!(grid, Grid::Projection(Projection::Equirect, ..))
+            .then(|| grid.density(0.5, y as f32 + 0.5));
+        if let Some(a) = row_weight {
+            // One weight for the row: sum blocks in f32 (SIMD), the blocks in f64.
+            let mut m = Vec4::ZERO;
+            for block in row.chunks(256) {
+                let mut s = Vec4::ZERO;
+                for &p in block {
+                    s += p;
+                    m = m.max(p);
+                }
+                for (c, t) in sum.iter_mut().enumerate() {
+                    *t += s[c] as f64 * a as f64;
+                }
+            }
+            let weight = a as f64 * w as f64;
+            return RowStats {
+                sum,
+                weight,
+                max: m.truncate(),
+            };
+        }
+        for (x, p) in row.iter().enumerate() {
+            let a = grid.density(x as f32 + 0.5, y as f32 + 0.5);
+            if a > 0.0 {
+                for (c, s) in sum.iter_mut().enumerate() {
+                    *s += (p[c] * a) as f64;
+                }
+                weight += a as f64;
+                max = max.max(p.truncate());
+            }
+        }
+        RowStats { sum, weight, max }
+    }
+}
+
 impl Peaks {
     /// Finds the texels of `images` (laid out on `grid`) with a channel above `PEAK_RATIO`
     /// times that channel's mean, or None when there are none. One pass for the means and
     /// each row's maxima, then only the rows that hold a peak are read again.
     pub fn find(grid: Grid, images: &[&Image]) -> Option<Peaks> {
-        let (w, h) = grid.dims();
-        let rows: Vec<([f64; 3], f64, Vec3)> = (0..grid.faces() * h)
+        let h = grid.dims().1;
+        let rows: Vec<RowStats> = (0..grid.faces() * h)
             .into_par_iter()
-            .map(|fy| {
-                let (face, y) = (fy / h, fy % h);
-                let row = &images[face].pixels[y * w..(y + 1) * w];
-                let mut sum = [0.0f64; 3];
-                let mut weight = 0.0f64;
-                let mut max = Vec3::ZERO;
-                // The weight at each texel's centre: close enough to choose a ceiling.
-                let row_weight = matches!(grid, Grid::Projection(Projection::Equirect, ..))
-                    .then(|| grid.density(0.5, y as f32 + 0.5));
-                for (x, p) in row.iter().enumerate() {
-                    let a =
-                        row_weight.unwrap_or_else(|| grid.density(x as f32 + 0.5, y as f32 + 0.5));
-                    if a > 0.0 {
-                        for (c, s) in sum.iter_mut().enumerate() {
-                            *s += (p[c] * a) as f64;
-                        }
-                        weight += a as f64;
-                        max = max.max(p.truncate());
-                    }
-                }
-                (sum, weight, max)
+            .map(|fy| RowStats::of(grid, images[fy / h], fy % h))
+            .collect();
+        Self::from_rows(grid, images, &rows)
+    }
+
+    /// `find` on a panorama, and in the same pass over it its 2x2 reduction below the
+    /// ceiling (`Image::downsample_2x_rows(row_weight, ceiling)`, the same bytes): a large
+    /// input is read once, not twice. Rows that hold a peak are reduced again with the ceiling.
+    pub fn find_reducing(grid: Grid, image: &Image, row_weight: &[f32]) -> (Option<Peaks>, Image) {
+        let (w, h) = image.half_size();
+        let mut half = Image::new(w, h);
+        let stats: Vec<Vec<RowStats>> = half
+            .pixels
+            .par_chunks_mut(w)
+            .enumerate()
+            .map(|(y, row)| {
+                image.reduce_row_by_rows(y, row, row_weight, Vec4::INFINITY);
+                image
+                    .half_rows(y)
+                    .map(|sy| RowStats::of(grid, image, sy))
+                    .collect()
             })
             .collect();
+        let rows: Vec<RowStats> = stats.iter().flatten().copied().collect();
+        let peaks = Self::from_rows(grid, &[image], &rows);
+        if let Some(p) = &peaks {
+            let ceiling = p.ceiling_vec();
+            half.pixels
+                .par_chunks_mut(w)
+                .zip(&stats)
+                .enumerate()
+                .filter(|(_, (_, s))| s.iter().any(|r| r.max.cmpgt(p.ceiling).any()))
+                .for_each(|(y, (row, _))| image.reduce_row_by_rows(y, row, row_weight, ceiling));
+        }
+        (peaks, half)
+    }
+
+    /// The ceiling from the rows' sums, and the peak texels of the rows whose maximum is above it.
+    fn from_rows(grid: Grid, images: &[&Image], rows: &[RowStats]) -> Option<Peaks> {
+        let (w, h) = grid.dims();
         let (mut sum, mut weight) = ([0.0f64; 3], 0.0);
-        for (s, t, _) in &rows {
-            for c in 0..3 {
-                sum[c] += s[c];
+        for r in rows {
+            for (s, v) in sum.iter_mut().zip(r.sum) {
+                *s += v;
             }
-            weight += t;
+            weight += r.weight;
         }
         if weight <= 0.0 {
             return None;
@@ -323,14 +392,14 @@ impl Peaks {
         let texels: Vec<Peak> = rows
             .par_iter()
             .enumerate()
-            .filter(|(_, r)| r.2.cmpgt(ceiling).any())
+            .filter(|(_, r)| r.max.cmpgt(ceiling).any())
             .flat_map_iter(|(fy, _)| {
                 let (face, y) = (fy / h, fy % h);
                 let row = &images[face].pixels[y * w..(y + 1) * w];
                 row.iter().enumerate().filter_map(move |(x, p)| {
                     let excess = (p.truncate() - ceiling).max(Vec3::ZERO);
-                    let covers = grid.solid_angle(x, y) > 0.0;
-                    (excess != Vec3::ZERO && covers).then_some(Peak {
+                    let covers = || grid.solid_angle(x, y) > 0.0;
+                    (excess != Vec3::ZERO && covers()).then_some(Peak {
                         face: face as u8,
                         x: x as u32,
                         y: y as u32,
@@ -370,9 +439,9 @@ impl Peaks {
         let back = lookup.map(|m| m.transpose());
         let (ow, oh) = out.dims();
         let key = |(f, x, y): (usize, usize, usize)| ((f * oh + y) * ow + x) as u64;
-        let shares: Vec<Vec<(u64, Vec3)>> = self
+        let shares: Vec<Vec<(u64, [f64; 3])>> = self
             .texels
-            .par_chunks(64)
+            .par_chunks(1024)
             .map(|chunk| {
                 let mut shares = Vec::new();
                 let mut cells: Vec<(Vec3, f32)> = Vec::new();
@@ -436,22 +505,19 @@ impl Peaks {
                         }
                     }
                 }
-                shares
+                // Stable sorts: equal keys keep the peaks' order, so each texel's sum has one
+                // order. Summed per chunk first: a small output gets few keys per chunk.
+                shares.sort_by_key(|s| s.0);
+                merge(
+                    shares
+                        .iter()
+                        .map(|&(k, v)| (k, v.to_array().map(f64::from))),
+                )
             })
             .collect();
-        let mut shares: Vec<(u64, Vec3)> = shares.into_iter().flatten().collect();
-        // Stable: equal keys keep the peaks' order, so each texel's sum has one order.
+        let mut shares: Vec<(u64, [f64; 3])> = shares.into_iter().flatten().collect();
         shares.par_sort_by_key(|s| s.0);
-        let mut i = 0;
-        while i < shares.len() {
-            let k = shares[i].0;
-            let mut sum = [0.0f64; 3];
-            while i < shares.len() && shares[i].0 == k {
-                for (c, s) in sum.iter_mut().enumerate() {
-                    *s += shares[i].1[c] as f64;
-                }
-                i += 1;
-            }
+        for (k, sum) in merge(shares.into_iter()) {
             let k = k as usize;
             let (face, y, x) = (k / (ow * oh), (k / ow) % oh, k % ow);
             let omega = out.solid_angle(x, y);
@@ -464,6 +530,22 @@ impl Peaks {
             img.set(x, y, (p.truncate() + add).extend(p.w));
         }
     }
+}
+
+/// Sums the values of equal consecutive keys, in order.
+fn merge(sorted: impl Iterator<Item = (u64, [f64; 3])>) -> Vec<(u64, [f64; 3])> {
+    let mut out: Vec<(u64, [f64; 3])> = Vec::new();
+    for (k, v) in sorted {
+        match out.last_mut() {
+            Some((last, s)) if *last == k => {
+                for c in 0..3 {
+                    s[c] += v[c];
+                }
+            }
+            _ => out.push((k, v)),
+        }
+    }
+    out
 }
 
 /// An environment whose lookups see the bounded part of an input, with the peaks that go on

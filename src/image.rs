@@ -28,7 +28,7 @@ impl Image {
             // Zeroed by the allocator (fresh pages come zeroed from the kernel):
             // `vec![Vec4::ZERO; n]` writes every byte first, doubling the memory traffic of
             // images that are filled right after.
-            pixels: bytemuck::zeroed_vec(width * height),
+            pixels: huge_zeroed(width * height),
         }
     }
 
@@ -120,32 +120,111 @@ impl Image {
         weight: impl Fn(usize, usize) -> f32 + Sync,
         ceiling: Vec4,
     ) -> Image {
-        let w = (self.width / 2).max(1);
-        let h = (self.height / 2).max(1);
-        let sx = self.width as f32 / w as f32;
+        let (w, h) = self.half_size();
+        Image::from_rows(w, h, |y, row| self.reduce_row(y, row, &weight, ceiling))
+    }
+
+    /// `downsample_2x_weighted` where the weight depends on the row only (a panorama's):
+    /// the two rows' weights folded into two factors, four texels summed in pairs.
+    pub fn downsample_2x_rows(&self, row_weight: &[f32], ceiling: Vec4) -> Image {
+        let (w, h) = self.half_size();
+        Image::from_rows(w, h, |y, out| {
+            self.reduce_row_by_rows(y, out, row_weight, ceiling)
+        })
+    }
+
+    /// Row `y` of `downsample_2x_rows` into `out`.
+    pub fn reduce_row_by_rows(
+        &self,
+        y: usize,
+        out: &mut [Vec4],
+        row_weight: &[f32],
+        ceiling: Vec4,
+    ) {
+        let src = self.width;
+        let rows = self.half_rows(y);
+        if src != 2 * out.len() || rows.len() != 2 {
+            return self.reduce_row(y, out, &|_, y| row_weight[y], ceiling);
+        }
+        let (a, b) = (rows.start, rows.start + 1);
+        let (wa, wb) = (row_weight[a], row_weight[b]);
+        let total = 2.0 * (wa + wb);
+        if total <= 0.0 {
+            return out.fill(Vec4::ZERO);
+        }
+        let (fa, fb) = (wa / total, wb / total);
+        let ra = &self.pixels[a * src..(a + 1) * src];
+        let rb = &self.pixels[b * src..(b + 1) * src];
+        for ((o, pa), pb) in out
+            .iter_mut()
+            .zip(ra.chunks_exact(2))
+            .zip(rb.chunks_exact(2))
+        {
+            *o = (pa[0].min(ceiling) + pa[1].min(ceiling)) * fa
+                + (pb[0].min(ceiling) + pb[1].min(ceiling)) * fb;
+        }
+    }
+
+    /// The size `downsample_2x*` gives.
+    pub fn half_size(&self) -> (usize, usize) {
+        ((self.width / 2).max(1), (self.height / 2).max(1))
+    }
+
+    /// The source rows `y0..y1` that row `y` of the half-size image averages.
+    pub fn half_rows(&self, y: usize) -> std::ops::Range<usize> {
+        let h = self.half_size().1;
         let sy = self.height as f32 / h as f32;
-        Image::from_fn(w, h, |x, y| {
+        let y0 = (y as f32 * sy) as usize;
+        let y1 = (((y + 1) as f32 * sy) as usize)
+            .min(self.height)
+            .max(y0 + 1);
+        y0..y1
+    }
+
+    /// Row `y` of `downsample_2x_weighted` into `out`.
+    pub fn reduce_row(
+        &self,
+        y: usize,
+        out: &mut [Vec4],
+        weight: &impl Fn(usize, usize) -> f32,
+        ceiling: Vec4,
+    ) {
+        let rows = self.half_rows(y);
+        if self.width == 2 * out.len() && rows.len() == 2 {
+            // The common case, 2 x 2 blocks, with no index arithmetic (same sums, same order).
+            let w = self.width;
+            let (a, b) = (rows.start, rows.start + 1);
+            let (ra, rb) = (
+                &self.pixels[a * w..(a + 1) * w],
+                &self.pixels[b * w..(b + 1) * w],
+            );
+            for (x, o) in out.iter_mut().enumerate() {
+                let (x0, x1) = (2 * x, 2 * x + 1);
+                let (w0, w1, w2, w3) = (weight(x0, a), weight(x1, a), weight(x0, b), weight(x1, b));
+                let acc = ra[x0].min(ceiling) * w0
+                    + ra[x1].min(ceiling) * w1
+                    + rb[x0].min(ceiling) * w2
+                    + rb[x1].min(ceiling) * w3;
+                let total = w0 + w1 + w2 + w3;
+                *o = if total > 0.0 { acc / total } else { Vec4::ZERO };
+            }
+            return;
+        }
+        let sx = self.width as f32 / out.len() as f32;
+        for (x, o) in out.iter_mut().enumerate() {
             let x0 = (x as f32 * sx) as usize;
             let x1 = (((x + 1) as f32 * sx) as usize).min(self.width).max(x0 + 1);
-            let y0 = (y as f32 * sy) as usize;
-            let y1 = (((y + 1) as f32 * sy) as usize)
-                .min(self.height)
-                .max(y0 + 1);
             let mut acc = Vec4::ZERO;
             let mut total = 0.0;
-            for yy in y0..y1 {
+            for yy in rows.clone() {
                 for xx in x0..x1 {
                     let a = weight(xx, yy);
                     acc += self.get(xx, yy).min(ceiling) * a;
                     total += a;
                 }
             }
-            if total > 0.0 {
-                acc / total
-            } else {
-                Vec4::ZERO
-            }
-        })
+            *o = if total > 0.0 { acc / total } else { Vec4::ZERO };
+        }
     }
 
     /// Replaces NaN, infinite and negative values by 0 and returns how many were replaced.
@@ -394,4 +473,29 @@ pub fn linear_to_srgb(v: f32) -> f32 {
 #[inline]
 pub fn luminance(p: Vec4) -> f32 {
     0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z
+}
+
+/// A zeroed vector of `n` texels. Large ones ask the kernel for 2 MiB pages before their first
+/// touch: filling a fresh 128 MB level otherwise costs 32768 page faults, as much time as the
+/// arithmetic that fills it.
+fn huge_zeroed(n: usize) -> Vec<Vec4> {
+    let v: Vec<Vec4> = bytemuck::zeroed_vec(n);
+    #[cfg(target_os = "linux")]
+    {
+        const HUGE: usize = 2 << 20;
+        let bytes = n * std::mem::size_of::<Vec4>();
+        if bytes >= 4 * HUGE {
+            let start = v.as_ptr() as usize;
+            let first = start.next_multiple_of(HUGE);
+            let end = (start + bytes) / HUGE * HUGE;
+            if end > first {
+                // SAFETY: advice on whole pages inside this vector's own allocation; it
+                // changes how the kernel backs them, never their contents (all zero).
+                unsafe {
+                    libc::madvise(first as *mut libc::c_void, end - first, libc::MADV_HUGEPAGE);
+                }
+            }
+        }
+    }
+    v
 }

@@ -206,34 +206,8 @@ impl<'a> ImageEnv<'a> {
         levels: Option<usize>,
         ceiling: Vec4,
     ) -> ImageEnv<'a> {
-        let mut pyramid: Vec<Image> = Vec::new();
-        let want = levels.unwrap_or(usize::MAX);
-        loop {
-            let last = pyramid.last().unwrap_or(base);
-            if last.height <= 8 || pyramid.len() + 1 >= want {
-                break;
-            }
-            let grid = crate::flux::Grid::Projection(projection, last.width, last.height);
-            // A panorama's weights depend on the row only: one cosine a row, not a texel.
-            let rows: Vec<f32> = (0..last.height)
-                .map(|y| grid.density(0.5, y as f32 + 0.5))
-                .collect();
-            let equirect = projection == Projection::Equirect;
-            let weight = |x: usize, y: usize| {
-                if equirect {
-                    rows[y]
-                } else {
-                    grid.density(x as f32 + 0.5, y as f32 + 0.5)
-                }
-            };
-            let clamp = if pyramid.is_empty() {
-                ceiling
-            } else {
-                Vec4::INFINITY
-            };
-            let next = last.downsample_2x_weighted(weight, clamp);
-            pyramid.push(next);
-        }
+        let mut pyramid = Vec::new();
+        grow(projection, base, &mut pyramid, levels, ceiling);
         ImageEnv {
             projection,
             base,
@@ -242,12 +216,77 @@ impl<'a> ImageEnv<'a> {
         }
     }
 
+    /// `below` for a panorama whose peaks are not known yet: finds them in the same pass that
+    /// makes level 1 (when `levels` asks for it), and returns them with the environment.
+    pub fn split_panorama(
+        base: &'a Image,
+        levels: Option<usize>,
+    ) -> (ImageEnv<'a>, Option<crate::flux::Peaks>) {
+        use crate::flux::{Grid, Peaks};
+        let grid = Grid::Projection(Projection::Equirect, base.width, base.height);
+        let ceiling_of = |p: &Option<Peaks>| p.as_ref().map_or(Vec4::INFINITY, Peaks::ceiling_vec);
+        if levels.is_some_and(|l| l < 2) || base.height <= 8 {
+            let peaks = Peaks::find(grid, &[base]);
+            let env = Self::below(Projection::Equirect, base, levels, ceiling_of(&peaks));
+            return (env, peaks);
+        }
+        let weights = row_weights(base.width, base.height);
+        let (peaks, first) = Peaks::find_reducing(grid, base, &weights);
+        let ceiling = ceiling_of(&peaks);
+        let mut pyramid = vec![first];
+        grow(Projection::Equirect, base, &mut pyramid, levels, ceiling);
+        let env = ImageEnv {
+            projection: Projection::Equirect,
+            base,
+            pyramid,
+            ceiling,
+        };
+        (env, peaks)
+    }
+
     fn level(&self, level: usize) -> &Image {
         match level {
             0 => self.base,
             l => &self.pyramid[(l - 1).min(self.pyramid.len().saturating_sub(1))],
         }
     }
+}
+
+/// Adds 2x2 solid-angle-weighted levels to `pyramid` (levels 1 and up of `base`) until it
+/// holds `levels` - 1 of them or the last is 8 texels high. Level 0's reads are clamped to
+/// `ceiling`.
+fn grow(
+    projection: Projection,
+    base: &Image,
+    pyramid: &mut Vec<Image>,
+    levels: Option<usize>,
+    ceiling: Vec4,
+) {
+    let want = levels.unwrap_or(usize::MAX);
+    loop {
+        let last = pyramid.last().unwrap_or(base);
+        if last.height <= 8 || pyramid.len() + 1 >= want {
+            break;
+        }
+        let clamp = if pyramid.is_empty() {
+            ceiling
+        } else {
+            Vec4::INFINITY
+        };
+        let next = if projection == Projection::Equirect {
+            last.downsample_2x_rows(&row_weights(last.width, last.height), clamp)
+        } else {
+            let grid = crate::flux::Grid::Projection(projection, last.width, last.height);
+            last.downsample_2x_weighted(|x, y| grid.density(x as f32 + 0.5, y as f32 + 0.5), clamp)
+        };
+        pyramid.push(next);
+    }
+}
+
+/// A panorama's texel weights, one per row (the solid angle per unit area at the row's centre).
+fn row_weights(w: usize, h: usize) -> Vec<f32> {
+    let grid = crate::flux::Grid::Projection(Projection::Equirect, w, h);
+    (0..h).map(|y| grid.density(0.5, y as f32 + 0.5)).collect()
 }
 
 impl ImageEnv<'_> {
