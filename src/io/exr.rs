@@ -1,16 +1,26 @@
 //! OpenEXR through the `exr` crate: the first RGB(A) layer in, half-float RGBA out.
+//!
+//! Reading trusts nothing in the file: before the crate sees a byte, the headers, the chunk
+//! table and every chunk are checked (each attribute and chunk inside the file, every block
+//! of every part present exactly once, DWA section sizes within what the chunk and its block
+//! allow), and every call into the crate runs behind `catch_unwind`, so a corrupt file is a
+//! one-line error, never a panic or an abort on a huge allocation.
 
 use super::{Decoded, FileFormat, Limits, Meta};
 use crate::error::{Error, Result};
 use crate::image::{ColorSpace, Image};
+use exr::block::chunk::{Chunk, CompressedBlock};
+use exr::meta::header::Header;
+use exr::meta::{BlockDescription, MetaData};
 use exr::prelude::*;
 use glam::Vec4;
+use std::collections::HashMap;
 use std::io::Cursor;
 use std::path::Path;
 
 pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
-    let err = |e: exr::error::Error| Error::file(path, format!("cannot decode OpenEXR: {e}"));
-    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(err)?;
+    let fail = |msg: String| Error::file(path, format!("cannot decode OpenEXR: {msg}"));
+    let (meta, table_start) = read_meta(bytes).map_err(fail)?;
     let header = meta
         .headers
         .first()
@@ -33,6 +43,21 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             ),
         ));
     }
+    if meta.headers.iter().any(|h| h.deep) {
+        return Err(fail("deep data is not supported".into()));
+    }
+    // The samples decompressed: at most 16 four-byte channels per pixel the limit allows.
+    let raw = (size.0 as u64)
+        .saturating_mul(size.1 as u64)
+        .saturating_mul(header.channels.bytes_per_pixel as u64);
+    if raw > limits.max_pixels.saturating_mul(64) {
+        return Err(fail(format!(
+            "the first layer's {} channels hold {raw} bytes of samples, too many for {}x{} pixels",
+            header.channels.list.len(),
+            size.0,
+            size.1
+        )));
+    }
     let sample = match channel("R").map(|c| c.sample_type) {
         Some(SampleType::F16) => "16F",
         Some(SampleType::U32) => "32UI",
@@ -44,10 +69,12 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         if alpha { "RGBA" } else { "RGB" },
         header.compression
     );
-    let image = match decode_blocks(bytes) {
-        Some(img) => img,
-        None => read_layer(bytes).map_err(err)?,
-    };
+    let chunks = read_chunks(bytes, &meta, table_start).map_err(fail)?;
+    let image = match fast_layout(&meta) {
+        Some(layout) => decode_blocks(&meta, &layout, chunks),
+        None => read_layer(&meta, chunks),
+    }
+    .map_err(fail)?;
     let meta = Meta {
         file_format: FileFormat::Exr,
         pixel_format,
@@ -58,44 +85,407 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
     Ok((Decoded::Image(image), meta))
 }
 
-/// The first valid RGB(A) layer through the exr crate's reader: every file it takes, but
-/// texel by texel on one thread.
-fn read_layer(bytes: &[u8]) -> exr::error::Result<Image> {
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgba_channels(
-            |res, _| Image::new(res.0, res.1),
-            |img: &mut Image, pos, (r, g, b, a): (f32, f32, f32, f32)| {
-                img.set(pos.0, pos.1, Vec4::new(r, g, b, a))
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))?;
-    Ok(image.layer_data.channel_data.pixels)
+thread_local! {
+    /// Set while this thread is inside a guarded call into the exr crate.
+    static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
-/// The common case (one scan-line layer, R G B and maybe A as half or full floats), a block
-/// per task: each block is decompressed and converted straight into its rows, in parallel.
-/// The crate's reader decompresses in parallel too but places texels one by one on one
-/// thread, most of the time a 4K EXR took to read. None: leave the file to the crate's reader
-/// (and its error messages).
-fn decode_blocks(bytes: &[u8]) -> Option<Image> {
-    use exr::block::chunk::Chunk;
-    use exr::block::UncompressedBlock;
-    use exr::meta::BlockDescription;
-    use rayon::prelude::*;
+/// Runs one call into the exr crate: its errors become messages, and so do its panics (an
+/// index out of range or a capacity overflow on corrupt data), caught here and not printed.
+/// The panic hook stays quiet only on a thread inside such a call (none of which reaches
+/// rayon, so no other job can run there meanwhile); every other panic goes to the hook that
+/// was there before. Aborts on failed allocations cannot be caught: `read_chunks` bounds the
+/// sizes the crate allocates from before it sees them.
+fn guarded<T>(f: impl FnOnce() -> exr::error::Result<T>) -> std::result::Result<T, String> {
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET.try_with(|q| q.get()).unwrap_or(false) {
+                previous(info)
+            }
+        }));
+    });
+    let was = QUIET.with(|q| q.replace(true));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    QUIET.with(|q| q.set(was));
+    match result {
+        Ok(done) => done.map_err(|e| e.to_string()),
+        Err(payload) => {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown failure".into());
+            Err(format!("corrupt data ({what})"))
+        }
+    }
+}
 
-    let reader = exr::block::read(Cursor::new(bytes), false).ok()?;
-    let meta = reader.meta_data().clone();
+fn u32_at(bytes: &[u8], at: usize) -> Option<u32> {
+    Some(u32::from_le_bytes(
+        bytes.get(at..at.checked_add(4)?)?.try_into().ok()?,
+    ))
+}
+
+fn u64_at(bytes: &[u8], at: usize) -> Option<u64> {
+    Some(u64::from_le_bytes(
+        bytes.get(at..at.checked_add(8)?)?.try_into().ok()?,
+    ))
+}
+
+/// The headers through the crate, after checking that each attribute lies inside the file;
+/// and where the chunk table starts (after the headers).
+fn read_meta(bytes: &[u8]) -> std::result::Result<(MetaData, usize), String> {
+    if bytes.get(..4) != Some(&[0x76, 0x2f, 0x31, 0x01]) || bytes.len() < 8 {
+        return Err("not an OpenEXR file (no magic number)".into());
+    }
+    let multipart = u32_at(bytes, 4).is_some_and(|v| v & 0x1000 != 0);
+    let truncated = || "the header is truncated".to_string();
+    let mut at = 8;
+    loop {
+        // One header: attributes (name, type name, size, value) up to an empty name.
+        let mut attributes = 0;
+        loop {
+            let zero = |from: usize| {
+                bytes
+                    .get(from..)
+                    .and_then(|rest| rest.iter().position(|&b| b == 0))
+                    .map(|i| from + i)
+            };
+            let name_end = zero(at).ok_or_else(truncated)?;
+            if name_end == at {
+                at += 1;
+                break;
+            }
+            let type_end = zero(name_end + 1).ok_or_else(truncated)?;
+            let size = u32_at(bytes, type_end + 1).ok_or_else(truncated)? as i32;
+            let value = type_end + 5;
+            if size < 0 || size as usize > bytes.len() - value.min(bytes.len()) {
+                let name = String::from_utf8_lossy(&bytes[at..name_end]);
+                return Err(format!(
+                    "attribute {name:?} claims {size} bytes, more than the file holds"
+                ));
+            }
+            at = value + size as usize;
+            attributes += 1;
+        }
+        // A multi-part file ends its list of headers with an empty one.
+        if !multipart || attributes == 0 {
+            break;
+        }
+    }
+    let meta = guarded(|| MetaData::read_from_buffered(Cursor::new(bytes), false))?;
+    Ok((meta, at))
+}
+
+/// Every chunk of the file, read where the chunk table points, after checking that each
+/// lies inside the file, that every block of every part is there exactly once (two chunks
+/// claiming one position made the image depend on which thread finished last), and that a
+/// DWA chunk's section sizes fit the chunk and its block. In table order.
+fn read_chunks(
+    bytes: &[u8],
+    meta: &MetaData,
+    table_start: usize,
+) -> std::result::Result<Vec<Chunk>, String> {
+    let counts: Vec<usize> = meta.headers.iter().map(|h| h.chunk_count).collect();
+    let total = counts
+        .iter()
+        .try_fold(0usize, |sum, &n| sum.checked_add(n))
+        .filter(|&n| n <= (bytes.len() - table_start.min(bytes.len())) / 8)
+        .ok_or_else(|| "the chunk table is larger than the file".to_string())?;
+    let table_end = table_start + total * 8;
+    let multipart = meta.requirements.is_multilayer();
+    let mut chunks = Vec::with_capacity(total);
+    let mut ranges = Vec::with_capacity(total);
+    let mut entry = table_start;
+    for (part, header) in meta.headers.iter().enumerate() {
+        // Each block position of the part, and whether a chunk has claimed it yet.
+        let mut unclaimed: HashMap<(usize, usize, usize, usize), bool> = guarded(|| {
+            Ok(header
+                .blocks_increasing_y_order()
+                .take(counts[part] + 1)
+                .map(|t| {
+                    let (i, l) = (t.location.tile_index, t.location.level_index);
+                    ((i.0, i.1, l.0, l.1), true)
+                })
+                .collect())
+        })?;
+        if unclaimed.len() != counts[part] {
+            return Err(format!(
+                "part {part} has {} blocks but its chunk table lists {} (blocks missing)",
+                unclaimed.len(),
+                counts[part]
+            ));
+        }
+        let tiled = matches!(header.blocks, BlockDescription::Tiles(_));
+        let what = if tiled { "tile" } else { "scan-line block" };
+        for index in 0..counts[part] {
+            let offset = u64_at(bytes, entry).unwrap_or(0);
+            entry += 8;
+            let at = usize::try_from(offset)
+                .ok()
+                .filter(|&at| at >= table_end && at < bytes.len())
+                .ok_or_else(|| {
+                    format!(
+                        "{what} {index} of part {part} is missing (its chunk offset {offset} \
+                         is outside the pixel data)"
+                    )
+                })?;
+            // The chunk's byte count, checked before the crate reads that many bytes.
+            let mut field = at + if multipart { 4 } else { 0 } + if tiled { 16 } else { 4 };
+            if multipart && u32_at(bytes, at) != Some(part as u32) {
+                return Err(format!(
+                    "part {part}'s chunk table points at offset {at}, a chunk of another part"
+                ));
+            }
+            let declared = u32_at(bytes, field).map_or(-1, |v| v as i32);
+            field += 4;
+            if declared <= 0 {
+                return Err(format!(
+                    "chunk at offset {at} claims {declared} bytes of data"
+                ));
+            }
+            if declared as usize > bytes.len() - field.min(bytes.len()) {
+                return Err(format!(
+                    "chunk at offset {at} claims {declared} bytes, more than the file holds"
+                ));
+            }
+            ranges.push((at, field + declared as usize));
+            let chunk = guarded(|| Chunk::read(&mut &bytes[at..], meta))?;
+            let (tile, bounds) = guarded(|| {
+                let tile = header.get_block_data_indices(&chunk.compressed_block)?;
+                Ok((tile, header.get_absolute_block_pixel_coordinates(tile)?))
+            })?;
+            if let CompressedBlock::ScanLine(block) = &chunk.compressed_block {
+                let lines = header.compression.scan_lines_per_block() as i64;
+                let y = block.y_coordinate as i64 - header.own_attributes.layer_position.1 as i64;
+                if y % lines != 0 {
+                    return Err(format!(
+                        "scan-line block at offset {at} starts at line {}, not a block boundary",
+                        block.y_coordinate
+                    ));
+                }
+            }
+            let (i, l) = (tile.tile_index, tile.level_index);
+            match unclaimed.get_mut(&(i.0, i.1, l.0, l.1)) {
+                Some(open) if *open => *open = false,
+                Some(_) => {
+                    return Err(format!(
+                        "two chunks hold {what} ({}, {}) at level ({}, {}) of part {part}: \
+                         duplicate (overlapping) {what}s, so others are missing",
+                        i.0, i.1, l.0, l.1
+                    ))
+                }
+                None => {
+                    return Err(format!(
+                        "a chunk holds {what} ({}, {}) at level ({}, {}), which part {part} \
+                         does not have",
+                        i.0, i.1, l.0, l.1
+                    ))
+                }
+            }
+            if matches!(
+                header.compression,
+                Compression::DWAA(_) | Compression::DWAB(_)
+            ) {
+                let data = match &chunk.compressed_block {
+                    CompressedBlock::ScanLine(b) => &b.compressed_pixels_le,
+                    CompressedBlock::Tile(b) => &b.compressed_pixels_le,
+                    _ => return Err("deep data is not supported".into()),
+                };
+                check_dwa(data, header, bounds.size)
+                    .map_err(|e| format!("DWA chunk at offset {at}: {e}"))?;
+            }
+            chunks.push(chunk);
+        }
+    }
+    // Chunks follow one another: none reaches into the next.
+    ranges.sort_unstable();
+    if let Some(pair) = ranges.windows(2).find(|p| p[0].1 > p[1].0) {
+        return Err(format!(
+            "the chunks at offsets {} and {} overlap",
+            pair[0].0, pair[1].0
+        ));
+    }
+    Ok(chunks)
+}
+
+/// The 11 counters that open a DWA chunk (after OpenEXR's `DataSizesSingle`): version,
+/// UNKNOWN raw and packed sizes, AC packed, DC packed, RLE packed, RLE token and raw sizes,
+/// AC and DC value counts, AC coder. The crate allocates from the sizes and counts before
+/// it can find them wrong (the abort on a 50 PB allocation), and takes some that are too
+/// large without a word, so each must be what the block holds: the packed sections within
+/// the chunk, the UNKNOWN and RLE raw sizes those of the block's channels of each scheme, a
+/// DC value per 8x8 block of each lossy channel and at most 63 AC values, and RLE tokens at
+/// most twice the bytes they expand to.
+fn check_dwa(data: &[u8], header: &Header, size: Vec2<usize>) -> std::result::Result<(), String> {
+    let block_bytes = size.area() * header.channels.bytes_per_pixel;
+    if data.is_empty() || data.len() == block_bytes {
+        return Ok(()); // stored as it is
+    }
+    let field = |i: usize| u64_at(data, i * 8).ok_or("the chunk is shorter than its DWA header");
+    let (version, unknown_raw, unknown_packed) = (field(0)?, field(1)?, field(2)?);
+    let (ac_packed, dc_packed, rle_packed) = (field(3)?, field(4)?, field(5)?);
+    let (rle_tokens, rle_raw) = (field(6)?, field(7)?);
+    let (ac_count, dc_count, _coder) = (field(8)?, field(9)?, field(10)?);
+    if version > 2 {
+        return Err(format!("unknown DWA version {version}"));
+    }
+    let mut body = 88;
+    let rules = if version == 2 {
+        let size = data
+            .get(88..90)
+            .map(|b| u16::from_le_bytes([b[0], b[1]]) as usize)
+            .filter(|&n| n >= 2 && 88 + n <= data.len())
+            .ok_or("its channel rules overrun the chunk")?;
+        body += size;
+        dwa_rules(&data[90..88 + size])?
+    } else {
+        legacy_dwa_rules()
+    };
+    let body = (data.len() - body) as u64;
+    let packed = [unknown_packed, ac_packed, dc_packed, rle_packed]
+        .iter()
+        .try_fold(0u64, |sum, &n| sum.checked_add(n));
+    if packed != Some(body) {
+        return Err(format!(
+            "its sections claim {unknown_packed} + {ac_packed} + {dc_packed} + {rle_packed} \
+             bytes, not its {body}"
+        ));
+    }
+    // Bytes of UNKNOWN and RLE channels, 8x8 blocks of lossy ones.
+    let (mut unknown, mut rle, mut blocks) = (0u64, 0u64, 0u64);
+    for c in &header.channels.list {
+        let name = c.name.to_string();
+        let suffix = name.rsplit('.').next().unwrap_or_default();
+        let scheme = rules
+            .iter()
+            .rfind(|r| {
+                r.2 == c.sample_type
+                    && if r.3 {
+                        suffix.eq_ignore_ascii_case(&r.0)
+                    } else {
+                        suffix == r.0
+                    }
+            })
+            .map_or(DwaScheme::Unknown, |r| r.1);
+        let (w, h) = (
+            size.0.div_ceil(c.sampling.0.max(1)),
+            size.1.div_ceil(c.sampling.1.max(1)),
+        );
+        let bytes = (w * h * c.sample_type.bytes_per_sample()) as u64;
+        match scheme {
+            DwaScheme::Unknown => unknown += bytes,
+            DwaScheme::Rle => rle += bytes,
+            DwaScheme::Lossy => blocks += (w.div_ceil(8) * h.div_ceil(8)) as u64,
+        }
+    }
+    let wrong = |name: &str, value: u64, want: u64| {
+        (value != want).then(|| format!("it claims {value} {name}, its block holds {want}"))
+    };
+    let problem = wrong("UNKNOWN bytes", unknown_raw, unknown)
+        .or_else(|| wrong("RLE bytes", rle_raw, rle))
+        .or_else(|| wrong("DC values", dc_count, blocks))
+        .or_else(|| {
+            (ac_count > 63 * blocks).then(|| {
+                format!(
+                    "it claims {ac_count} AC values, more than its block holds ({})",
+                    63 * blocks
+                )
+            })
+        })
+        .or_else(|| {
+            (rle_tokens > 2 * rle + 16)
+                .then(|| format!("it claims {rle_tokens} RLE token bytes for {rle} bytes"))
+        })
+        .or_else(|| {
+            // A section with nothing in it has nothing packed either.
+            [
+                ("UNKNOWN", unknown_raw, unknown_packed),
+                ("AC", ac_count, ac_packed),
+                ("DC", dc_count, dc_packed),
+                ("RLE", rle_raw, rle_packed.max(rle_tokens)),
+            ]
+            .iter()
+            .find(|s| s.1 == 0 && s.2 != 0)
+            .map(|s| format!("its empty {} section claims {} bytes", s.0, s.2))
+        });
+    problem.map_or(Ok(()), Err)
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum DwaScheme {
+    Unknown,
+    Lossy,
+    Rle,
+}
+
+/// A DWA channel rule: name suffix, scheme, sample type, case-insensitive.
+type DwaRule = (String, DwaScheme, SampleType, bool);
+
+/// The rules of a version-2 DWA chunk: each a NUL-terminated suffix (at most 128 bytes), a
+/// flags byte (CSC index + 1 in the high nibble, scheme in bits 2-3, case-insensitive in
+/// bit 0) and a sample type byte.
+fn dwa_rules(mut data: &[u8]) -> std::result::Result<Vec<DwaRule>, String> {
+    let corrupt = || "a corrupt DWA channel rule".to_string();
+    let mut rules = Vec::new();
+    while !data.is_empty() {
+        let end = data.iter().position(|&b| b == 0).filter(|&n| n <= 128);
+        let end = end.ok_or_else(corrupt)?;
+        let suffix = String::from_utf8_lossy(&data[..end]).into_owned();
+        let [flags, kind] = *data.get(end + 1..end + 3).ok_or_else(corrupt)? else {
+            return Err(corrupt());
+        };
+        data = &data[end + 3..];
+        let scheme = match (flags >> 2) & 3 {
+            0 => DwaScheme::Unknown,
+            1 => DwaScheme::Lossy,
+            2 => DwaScheme::Rle,
+            _ => return Err(corrupt()),
+        };
+        let kind = match kind {
+            0 => SampleType::U32,
+            1 => SampleType::F16,
+            2 => SampleType::F32,
+            _ => return Err(corrupt()),
+        };
+        if flags >> 4 > 3 {
+            return Err(corrupt());
+        }
+        rules.push((suffix, scheme, kind, flags & 1 != 0));
+    }
+    Ok(rules)
+}
+
+/// The rules that DWA chunks before version 2 imply.
+fn legacy_dwa_rules() -> Vec<DwaRule> {
+    let mut rules = Vec::new();
+    for suffix in [
+        "r", "red", "g", "grn", "green", "b", "blu", "blue", "y", "by", "ry",
+    ] {
+        for kind in [SampleType::F16, SampleType::F32] {
+            rules.push((suffix.to_string(), DwaScheme::Lossy, kind, true));
+        }
+    }
+    for kind in [SampleType::U32, SampleType::F16, SampleType::F32] {
+        rules.push(("a".to_string(), DwaScheme::Rle, kind, true));
+    }
+    rules
+}
+
+/// Where each channel's samples go in a texel (None: skipped) and their type, and whether
+/// there is alpha: for the common case that `decode_blocks` takes (one scan-line layer, R G
+/// B and maybe A as half or full floats, no subsampling). None: leave it to `read_layer`.
+type Layout = (Vec<(Option<usize>, SampleType)>, bool);
+
+fn fast_layout(meta: &MetaData) -> Option<Layout> {
     let [header] = meta.headers.as_slice() else {
         return None;
     };
     if header.deep || header.blocks != BlockDescription::ScanLines {
         return None;
     }
-    // Where each channel's samples go in a texel (None: skipped), and their size.
     let mut slots = Vec::new();
     let mut found = [false; 4];
     for c in &header.channels.list {
@@ -111,49 +501,122 @@ fn decode_blocks(bytes: &[u8]) -> Option<Image> {
         }
         slots.push((slot, c.sample_type));
     }
-    if !(found[0] && found[1] && found[2]) {
-        return None;
-    }
+    (found[0] && found[1] && found[2]).then_some((slots, found[3]))
+}
+
+/// The common case (see `Layout`), a block per task: each block is decompressed and
+/// converted straight into its rows, in parallel. The crate's reader decompresses in
+/// parallel too but places texels one by one on one thread, most of the time a 4K EXR took
+/// to read. The chunks are those `read_chunks` checked: each block of the layer once.
+fn decode_blocks(
+    meta: &MetaData,
+    (slots, alpha): &Layout,
+    chunks: Vec<Chunk>,
+) -> std::result::Result<Image, String> {
+    use exr::block::UncompressedBlock;
+    use rayon::prelude::*;
+
+    let header = &meta.headers[0];
     let (w, h) = (header.layer_size.0, header.layer_size.1);
-    // Blocks in row order, checked to tile the image exactly, each with its rows.
-    let mut blocks: Vec<(usize, usize, Chunk)> = Vec::new();
-    for chunk in reader.all_chunks(false).ok()? {
-        let chunk = chunk.ok()?;
-        let index = header
-            .get_block_data_indices(&chunk.compressed_block)
-            .ok()?;
-        let bounds = header.get_absolute_block_pixel_coordinates(index).ok()?;
-        if bounds.position.0 != 0 || bounds.size.0 != w || chunk.layer_index != 0 {
-            return None;
-        }
+    // Blocks in row order, each with its rows.
+    let mut blocks: Vec<(usize, usize, Chunk)> = Vec::with_capacity(chunks.len());
+    for chunk in chunks {
+        let bounds = guarded(|| {
+            let index = header.get_block_data_indices(&chunk.compressed_block)?;
+            header.get_absolute_block_pixel_coordinates(index)
+        })?;
         blocks.push((bounds.position.1 as usize, bounds.size.1, chunk));
     }
     blocks.sort_by_key(|b| b.0);
     let mut next = 0;
     for (y, lines, _) in &blocks {
         if *y != next {
-            return None;
+            return Err(format!("scan lines {next} to {y} are missing"));
         }
         next += lines;
     }
     if next != h {
-        return None;
+        return Err(format!("scan lines {next} to {h} are missing"));
     }
     let mut img = Image::new(w, h);
     let mut rest = img.pixels.as_mut_slice();
     let mut jobs = Vec::with_capacity(blocks.len());
-    for (_, lines, chunk) in blocks {
+    for (y, lines, chunk) in blocks {
         let (rows, tail) = rest.split_at_mut(lines * w);
         rest = tail;
-        jobs.push((chunk, rows));
+        jobs.push((y, chunk, rows));
     }
-    let ok = jobs.into_par_iter().all(|(chunk, rows)| {
-        let Ok(block) = UncompressedBlock::decompress_chunk(chunk, &meta, false) else {
-            return false;
-        };
-        fill_rows(&block.data, &slots, found[3], w, rows)
-    });
-    ok.then_some(img)
+    jobs.into_par_iter().try_for_each(|(y, chunk, rows)| {
+        let block = guarded(|| UncompressedBlock::decompress_chunk(chunk, meta, false))?;
+        if fill_rows(&block.data, slots, *alpha, w, rows) {
+            Ok(())
+        } else {
+            Err(format!(
+                "the block at line {y} decompresses to the wrong size"
+            ))
+        }
+    })?;
+    Ok(img)
+}
+
+/// The first layer, when it is R G B (A) by name, through the exr crate's pixel reader (any
+/// layout: tiles, mip levels, subsampling, integer samples), texel by texel on one thread.
+/// The chunks are those `read_chunks` checked, decompressed here in parallel batches with
+/// rayon, rather than by the crate's own thread pool, where a panic would abort the process.
+fn read_layer(meta: &MetaData, chunks: Vec<Chunk>) -> std::result::Result<Image, String> {
+    use exr::block::{BlockIndex, UncompressedBlock};
+    use exr::image::read::image::{LayersReader, ReadLayers};
+    use rayon::prelude::*;
+
+    let spec = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |res, _| Image::new(res.0, res.1),
+            |img: &mut Image, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+                img.set(pos.0, pos.1, Vec4::new(r, g, b, a))
+            },
+        )
+        .first_valid_layer();
+    // The first header only: the one whose size was checked against the limits.
+    let headers = &meta.headers[..1];
+    let header = &headers[0];
+    let mut layer = guarded(|| spec.create_layers_reader(headers))?;
+    let mut wanted = Vec::new();
+    for chunk in chunks.into_iter().filter(|c| c.layer_index == 0) {
+        let keep = guarded(|| {
+            let tile = header.get_block_data_indices(&chunk.compressed_block)?;
+            let bounds = header.get_absolute_block_pixel_coordinates(tile)?;
+            let index = BlockIndex {
+                layer: 0,
+                pixel_position: bounds.position.to_usize("block position")?,
+                pixel_size: bounds.size,
+                level: tile.level_index,
+            };
+            Ok(layer.filter_block(meta, tile, index))
+        })?;
+        if keep {
+            wanted.push(chunk);
+        }
+    }
+    // Batches bound the decompressed blocks held at once; blocks go in in file order.
+    let batch = 4 * rayon::current_num_threads();
+    let mut wanted = wanted.into_iter();
+    loop {
+        let some: Vec<Chunk> = wanted.by_ref().take(batch).collect();
+        if some.is_empty() {
+            break;
+        }
+        let blocks: Vec<UncompressedBlock> = some
+            .into_par_iter()
+            .map(|chunk| guarded(|| UncompressedBlock::decompress_chunk(chunk, meta, false)))
+            .collect::<std::result::Result<_, _>>()?;
+        for block in blocks {
+            guarded(|| layer.read_block(headers, block))?;
+        }
+    }
+    let layer = guarded(|| Ok(layer.into_layers()))?;
+    Ok(layer.channel_data.pixels)
 }
 
 /// Converts one decompressed block (per line, each channel's samples in native byte order)
@@ -289,7 +752,7 @@ fn zip_block(
         let row = &img.pixels[y * w..(y + 1) * w];
         for &c in order {
             for (f, p) in floats.iter_mut().zip(row) {
-                *f = p[c];
+                *f = super::finite(p[c], super::HALF_MAX);
             }
             // Slice conversion uses the CPU's F16C instructions where present.
             halves.convert_from_f32_slice(&floats);
@@ -327,10 +790,45 @@ fn zip_block(
 mod tests {
     use super::*;
 
+    /// The fast path's texels, None where it declines the file.
+    fn fast(bytes: &[u8]) -> Option<Image> {
+        let (meta, start) = read_meta(bytes).unwrap();
+        let layout = fast_layout(&meta)?;
+        let chunks = read_chunks(bytes, &meta, start).unwrap();
+        Some(decode_blocks(&meta, &layout, chunks).unwrap())
+    }
+
+    /// The crate's pixel reader on the checked chunks.
+    fn slow(bytes: &[u8]) -> Image {
+        let (meta, start) = read_meta(bytes).unwrap();
+        read_layer(&meta, read_chunks(bytes, &meta, start).unwrap()).unwrap()
+    }
+
+    /// The crate's own reader, start to end.
+    fn crate_reader(bytes: &[u8]) -> Image {
+        read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .rgba_channels(
+                |res, _| Image::new(res.0, res.1),
+                |img: &mut Image, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+                    img.set(pos.0, pos.1, Vec4::new(r, g, b, a))
+                },
+            )
+            .first_valid_layer()
+            .all_attributes()
+            .from_buffered(Cursor::new(bytes))
+            .unwrap()
+            .layer_data
+            .channel_data
+            .pixels
+    }
+
     fn both(bytes: &[u8], what: &str) {
-        let fast = decode_blocks(bytes).unwrap_or_else(|| panic!("{what}: declined"));
-        let slow = read_layer(bytes).unwrap();
+        let fast = fast(bytes).unwrap_or_else(|| panic!("{what}: declined"));
+        let slow = slow(bytes);
         assert_eq!(fast, slow, "{what}");
+        assert_eq!(slow, crate_reader(bytes), "{what}");
     }
 
     /// The block-parallel reader gives the crate reader's texels bit for bit.
@@ -389,7 +887,7 @@ mod tests {
         }
     }
 
-    /// Tiled files go to the crate's reader.
+    /// Tiled files go to the crate's pixel reader.
     #[test]
     fn tiles_are_left_to_the_crate() {
         let channels = SpecificChannels::rgb(|Vec2(x, y)| (x as f32, y as f32, 0.5f32));
@@ -407,8 +905,18 @@ mod tests {
             .write()
             .to_buffered(Cursor::new(&mut out))
             .unwrap();
-        assert!(decode_blocks(&out).is_none());
-        let img = read_layer(&out).unwrap();
+        assert!(fast(&out).is_none());
+        let img = slow(&out);
         assert_eq!(img.get(39, 29), Vec4::new(39.0, 29.0, 0.5, 1.0));
+        assert_eq!(img, crate_reader(&out));
+    }
+
+    /// A panic inside a guarded call is a message, not an unwinding thread.
+    #[test]
+    fn panics_become_messages() {
+        let e = guarded::<()>(|| panic!("capacity overflow")).unwrap_err();
+        assert!(e.contains("capacity overflow"), "{e}");
+        let e = guarded::<()>(|| Err(exr::error::Error::Invalid("thing".into()))).unwrap_err();
+        assert!(e.contains("thing"), "{e}");
     }
 }
