@@ -849,7 +849,8 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Recipe> {
             format!("{len} bytes is too long for a recipe (at most {MAX_RECIPE_BYTES})"),
         ));
     }
-    let text = std::fs::read_to_string(path).map_err(|e| Error::file(path, io::io_msg(&e)))?;
+    let text =
+        String::from_utf8(io::read_file(path)?).map_err(|_| Error::file(path, "not UTF-8 text"))?;
     let base = path
         .parent()
         .filter(|p| !p.as_os_str().is_empty())

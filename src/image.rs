@@ -12,6 +12,11 @@ pub enum ColorSpace {
     Linear,
 }
 
+/// The largest value an input keeps (larger ones are clamped on reading). Far above any
+/// measured radiance (a sun is about 1e9 in absolute units), and low enough that sums of a
+/// whole map's texels times their weights (2^28 texels or fewer) stay finite in f32.
+pub const MAX_RADIANCE: f32 = 1e28;
+
 /// A linear RGBA f32 image, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
@@ -227,7 +232,8 @@ impl Image {
         }
     }
 
-    /// Replaces NaN, infinite and negative values by 0 and returns how many were replaced.
+    /// Replaces NaN, infinite and negative values by 0, clamps values above [`MAX_RADIANCE`],
+    /// and returns how many were replaced.
     pub fn sanitize(&mut self) -> usize {
         use rayon::prelude::*;
         self.pixels
@@ -238,6 +244,9 @@ impl Image {
                     let v = p[c];
                     if !v.is_finite() || v < 0.0 {
                         p[c] = 0.0;
+                        count += 1;
+                    } else if v > MAX_RADIANCE {
+                        p[c] = MAX_RADIANCE;
                         count += 1;
                     }
                 }
@@ -478,8 +487,28 @@ pub fn luminance(p: Vec4) -> f32 {
 /// A zeroed vector of `n` texels. Large ones ask the kernel for 2 MiB pages before their first
 /// touch: filling a fresh 128 MB level otherwise costs 32768 page faults, as much time as the
 /// arithmetic that fills it.
+///
+/// A failed allocation is a panic with the size, not the allocator's abort, so the command
+/// ends with one line.
 fn huge_zeroed(n: usize) -> Vec<Vec4> {
-    let v: Vec<Vec4> = bytemuck::zeroed_vec(n);
+    let v: Vec<Vec4> = match std::alloc::Layout::array::<Vec4>(n) {
+        Ok(layout) if layout.size() > 0 => {
+            // SAFETY: a zeroed allocation of `n` Vec4 (all-zero bytes are a valid Vec4) with
+            // the layout Vec<Vec4> itself uses, handed to Vec to own and free.
+            unsafe {
+                let p = std::alloc::alloc_zeroed(layout) as *mut Vec4;
+                if p.is_null() {
+                    panic!(
+                        "out of memory: cannot allocate {} for an image",
+                        crate::io::human_bytes(layout.size() as u64)
+                    );
+                }
+                Vec::from_raw_parts(p, n, n)
+            }
+        }
+        Ok(_) => Vec::new(),
+        Err(_) => panic!("out of memory: an image of {n} texels is too large to address"),
+    };
     #[cfg(target_os = "linux")]
     {
         const HUGE: usize = 2 << 20;

@@ -540,6 +540,7 @@ fn absurd_sizes_are_rejected_before_allocating() {
     let small = Limits {
         max_pixels: 16,
         max_dimension: 4,
+        ..Limits::default()
     };
     for (kind, bytes) in [(FileFormat::Ktx2, &k), (FileFormat::Dds, &d)] {
         let e = decoder(kind)(bytes, Path::new("big.file"), &small).unwrap_err();

@@ -9,6 +9,7 @@ use cubeforge::io::{self, raster, rgbe, Decoded, FileFormat, ReadOptions, WriteO
 use glam::Vec4;
 use std::path::Path;
 
+/// The image crate's reading, with values clamped to 1e28 as every cubeforge reader does.
 fn crate_decode(bytes: &[u8]) -> Image {
     let (d, _) = raster::decode(
         bytes,
@@ -17,9 +18,12 @@ fn crate_decode(bytes: &[u8]) -> Image {
         &ReadOptions::default(),
     )
     .expect("the image crate reads it");
-    let Decoded::Image(img) = d else {
+    let Decoded::Image(mut img) = d else {
         panic!("not an image")
     };
+    for p in &mut img.pixels {
+        *p = p.min(glam::Vec4::splat(cubeforge::image::MAX_RADIANCE));
+    }
     img
 }
 

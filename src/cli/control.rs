@@ -31,6 +31,10 @@ pub struct Args {
     /// Refuse images with more pixels than this (checked before decoding).
     #[arg(long, default_value_t = Limits::default().max_pixels)]
     pub max_pixels: u64,
+    /// Memory a command may plan to use, in bytes or with K, M, G (default: half the
+    /// machine's memory).
+    #[arg(long, value_parser = super::bytes)]
+    pub max_memory: Option<u64>,
 }
 
 const RECIPE_HELP: &str = "\
@@ -81,10 +85,7 @@ impl KtxFormat {
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
     let mut stages = Stages::new(verbose);
-    let limits = Limits {
-        max_pixels: a.max_pixels,
-        ..Limits::default()
-    };
+    let limits = super::limits(a.max_pixels, a.max_memory);
     // Check the options before reading anything.
     let format = match FileFormat::from_extension(&a.output) {
         Some(f @ (FileFormat::Png | FileFormat::Exr | FileFormat::Ktx2)) => f,
@@ -121,6 +122,11 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             )));
         }
     }
+    // The baked map, its sources at output size and the mip chain, RGBA f32.
+    limits.check_memory(
+        format_args!("{}: a {size} map", a.recipe.display()),
+        size.width as u64 * size.height as u64 * 16 * 4,
+    )?;
     let baked = recipe.bake(Some(size), &limits)?;
     stages.done("bake");
 
@@ -160,7 +166,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     io::write_all_atomic(&[(a.output.clone(), bytes), (sidecar_path.clone(), sidecar)])?;
     stages.done("write");
 
-    report(&a.output, &sidecar_path, &baked, &what);
+    report(&a.output, &sidecar_path, &baked, &what)?;
     stages.total();
     Ok(())
 }
@@ -182,27 +188,31 @@ fn mip_chain(img: &Image, count: usize) -> Vec<Image> {
     levels
 }
 
-fn report(output: &Path, sidecar: &Path, baked: &Baked, what: &str) {
+fn report(output: &Path, sidecar: &Path, baked: &Baked, what: &str) -> Result<()> {
     for w in &baked.warnings {
         warn(w);
     }
-    println!(
+    super::say(format_args!(
         "{}: {}x{} control map, {what}, linear data",
         output.display(),
         baked.image.width,
         baked.image.height
-    );
+    ))?;
     for (c, ch) in ["R", "G", "B", "A"].iter().zip(&baked.channels) {
         let note = if ch.holds == control::Slot::Blur && baked.max_lod_bias > 0.0 {
             format!(" (lod bias = blur x {})", baked.max_lod_bias)
         } else {
             String::new()
         };
-        println!("  {c} = {:<13} {}{note}", ch.holds.name(), ch.source);
+        super::say(format_args!(
+            "  {c} = {:<13} {}{note}",
+            ch.holds.name(),
+            ch.source
+        ))?;
     }
-    println!(
+    super::say(format_args!(
         "{}: max_lod_bias {} and the packing",
         sidecar.display(),
         baked.max_lod_bias
-    );
+    ))
 }

@@ -33,13 +33,13 @@ pub struct Args {
     #[arg(long)]
     pub no_antialias: bool,
     /// Rotate the environment about +Y, degrees (90 brings the old centre +Z to +X).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(value_parser = super::angle, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub yaw: f32,
     /// Rotate the environment about +X, degrees.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(value_parser = super::angle, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub pitch: f32,
     /// Rotate the environment about +Z, degrees.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(value_parser = super::angle, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub roll: f32,
     /// Flip handedness (mirror X) for engines with the other convention.
     #[arg(long)]
@@ -47,9 +47,9 @@ pub struct Args {
     /// Write 16-bit PNG instead of 8-bit.
     #[arg(long)]
     pub png16: bool,
-    /// Texel format of KTX2 and DDS output.
-    #[arg(long, value_enum, default_value_t = GpuFormat::Rgba16f)]
-    pub gpu_format: GpuFormat,
+    /// Texel format of KTX2 and DDS output (default rgba16f).
+    #[arg(long, value_enum)]
+    pub gpu_format: Option<GpuFormat>,
     /// Mip levels in KTX2 and DDS output (default: the full chain down to 1x1).
     #[arg(long)]
     pub levels: Option<usize>,
@@ -62,6 +62,25 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let limits = a.input.limits();
     let read = a.input.read_options();
     let to = output_kind(&a)?;
+    // Say which options this output ignores, and refuse the impossible, before the decode.
+    let container = matches!(to, Kind::Ktx2 | Kind::Dds);
+    if !container {
+        if a.levels.is_some() {
+            warn("--levels applies to KTX2 and DDS outputs: ignored");
+        }
+        if a.gpu_format.is_some() {
+            warn("--gpu-format applies to KTX2 and DDS outputs: ignored");
+        }
+    }
+    if a.levels == Some(0) {
+        return Err(Error::usage("--levels 0: a map has at least 1 level"));
+    }
+    if to == Kind::Faces && a.to.is_none() && a.output.extension().is_none() && !a.output.exists() {
+        warn(format!(
+            "{}: no file extension, so six faces go into this new folder (--to faces)",
+            a.output.display()
+        ));
+    }
     // Check the options before the (possibly slow) decode.
     let face_format = match to {
         Kind::Faces => face_format(&a)?,
@@ -71,7 +90,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     stages.done("decode");
     if loaded.meta.replaced_values > 0 {
         warn(format!(
-            "{}: replaced {} NaN, infinite or negative values by 0",
+            "{}: replaced {} NaN, infinite or negative values by 0 (and values above 1e28 by 1e28)",
             loaded.files[0].display(),
             loaded.meta.replaced_values
         ));
@@ -80,12 +99,31 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     if size == 0 {
         return Err(Error::usage("--size must be at least 1"));
     }
+    if let (Some(n), true) = (a.levels, container) {
+        let most = CubeMap::full_chain_len(size);
+        if n > most {
+            return Err(Error::usage(format!(
+                "--levels {n}: a cube map of {size} px has 1 to {most} levels"
+            )));
+        }
+    }
     let (w, h) = to.image_size(size);
-    limits.check(&a.output, w as u64, h as u64).map_err(|_| {
-        Error::usage(format!(
+    if w as u64 * h as u64 > limits.max_pixels || w.max(h) > limits.max_dimension as usize {
+        return Err(Error::usage(format!(
             "--size {size} makes a {w}x{h} output, over the size limit (--max-pixels)"
-        ))
-    })?;
+        )));
+    }
+    // The output (RGBA f32, twice over for mips and encoding) and the input's pyramid.
+    let texels = if to.projection().is_some() || to.is_cells() {
+        w as u64 * h as u64
+    } else {
+        6 * size as u64 * size as u64
+    };
+    let input: u64 = loaded.images().iter().map(|i| i.pixels.len() as u64).sum();
+    limits.check_memory(
+        format_args!("--size {size} ({w}x{h} output)"),
+        (texels * 2 + input / 2) * 16,
+    )?;
     let hdr_out = loaded.hdr;
     let face_format = face_format.unwrap_or(if hdr_out {
         FileFormat::Exr
@@ -109,7 +147,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let write = WriteOptions {
         linear: a.input.linear,
         png16: a.png16,
-        gpu_format: a.gpu_format,
+        gpu_format: a.gpu_format.unwrap_or_default(),
     };
     let files = encode_output(
         &a.output,
@@ -138,6 +176,21 @@ pub(super) fn encode_output(
     levels: Option<usize>,
     inputs: &[PathBuf],
 ) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    let (format, images): (Option<FileFormat>, Vec<&cubeforge::image::Image>) = match (&to, &out) {
+        (Kind::Faces, Output::Cube(c)) => (Some(face_format), c.levels[0].iter().collect()),
+        (Kind::Ktx2 | Kind::Dds, Output::Cube(c)) => (
+            FileFormat::from_extension(output),
+            c.levels[0].iter().collect(),
+        ),
+        (_, Output::Image(img)) => (FileFormat::from_extension(output), vec![img]),
+        _ => (None, Vec::new()),
+    };
+    if let Some(f) = format {
+        // Box mips are means of level 0: they fit where it fits.
+        if let Some(w) = io::clamp_warning(output, f, write.gpu_format, images) {
+            super::warn(w);
+        }
+    }
     match (to, out) {
         (Kind::Faces, Output::Cube(cube)) => {
             encode_faces(output, &cube.levels[0], face_format, write, inputs)

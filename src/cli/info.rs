@@ -18,14 +18,15 @@ pub struct Args {
     /// Refuse images with more pixels than this.
     #[arg(long, default_value_t = Limits::default().max_pixels)]
     pub max_pixels: u64,
+    /// Memory a command may plan to use, in bytes or with K, M, G (default: half the
+    /// machine's memory).
+    #[arg(long, value_parser = super::bytes)]
+    pub max_memory: Option<u64>,
 }
 
 pub fn run(args: Args) -> Result<()> {
     let opts = ReadOptions {
-        limits: Limits {
-            max_pixels: args.max_pixels,
-            ..Limits::default()
-        },
+        limits: super::limits(args.max_pixels, args.max_memory),
         linear: args.linear,
     };
     let mut reports = Vec::new();
@@ -36,7 +37,7 @@ pub fn run(args: Args) -> Result<()> {
             // One file: its error is the one line (no summary after it).
             Err(e) if args.files.len() == 1 => return Err(e),
             Err(e) => {
-                eprintln!("cubeforge: error: {e}");
+                super::tell(format_args!("cubeforge: error: {e}"));
                 failed += 1;
             }
         }
@@ -50,11 +51,11 @@ pub fn run(args: Args) -> Result<()> {
             serde_json::to_string_pretty(&reports).ok()
         };
         if let Some(t) = text {
-            println!("{t}");
+            super::say(t)?;
         }
     } else {
         for r in &reports {
-            println!("{r}");
+            super::say(r)?;
         }
     }
     if failed > 0 {

@@ -104,10 +104,10 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     io::write_all_atomic(&files)?;
     stages.done("write");
     let dc = coeffs[0].map(|v| v * sh::BASIS[0].3);
-    println!(
+    super::say(format_args!(
         "irradiance {} px ({:?}); mean radiance {:.4} {:.4} {:.4}",
         a.size, a.method, dc[0], dc[1], dc[2]
-    );
+    ))?;
     stages.total();
     Ok(())
 }

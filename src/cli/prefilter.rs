@@ -32,13 +32,13 @@ pub struct Args {
     pub levels: Option<usize>,
     /// Importance samples per texel at the sharpest filtered level; doubled per level after it
     /// (wider lobes), up to 32 times.
-    #[arg(long, default_value_t = filter::DEFAULT_SAMPLES)]
+    #[arg(value_parser = clap::value_parser!(u32).range(1..=65536), long, default_value_t = filter::DEFAULT_SAMPLES)]
     pub samples: u32,
     /// cosine: specular power = 2^(gloss-scale * glossiness + gloss-bias), as cmft.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(value_parser = super::gloss_scale, long, default_value_t = 10.0)]
     pub gloss_scale: f32,
     /// cosine: see --gloss-scale.
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(value_parser = super::gloss_bias, long, default_value_t = 1.0, allow_hyphen_values = true)]
     pub gloss_bias: f32,
     /// cosine: cmft's lighting model (phongbrdf: power + 1, blinn: power / 4, blinnbrdf: / 4 + 1).
     #[arg(long, value_enum, default_value_t = LightingModel::Phong)]
@@ -93,7 +93,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     stages.done("decode");
     if loaded.meta.replaced_values > 0 {
         super::warn(format!(
-            "{}: replaced {} NaN, infinite or negative values by 0",
+            "{}: replaced {} NaN, infinite or negative values by 0 (and values above 1e28 by 1e28)",
             loaded.files[0].display(),
             loaded.meta.replaced_values
         ));
@@ -102,6 +102,11 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     if size == 0 || size > 16384 {
         return Err(Error::usage(format!("--size {size}: use 1 to 16384")));
     }
+    // The base faces, the chain (4/3 of them), a bordered sampler copy and the encoding.
+    a.input.limits().check_memory(
+        format_args!("--size {size}"),
+        6 * (size as u64).pow(2) * 16 * 4,
+    )?;
     let Output::Cube(base) = convert::convert(&loaded, Kind::Faces, size, &Resampler::default())
     else {
         unreachable!("faces are a cube")
@@ -154,6 +159,11 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         levels: &infos,
     })
     .map_err(|e| Error::usage(e.to_string()))?;
+    let format = container.unwrap_or(face_format);
+    let all = chain.levels.iter().flatten();
+    if let Some(w) = io::clamp_warning(&a.output, format, a.gpu_format, all) {
+        super::warn(w);
+    }
     let mut files = Vec::new();
     match container {
         Some(f) => {
@@ -204,7 +214,10 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             .samples
             .map(|s| format!(", {s} samples"))
             .unwrap_or_default();
-        println!("level {:2}  {:5} px  {what}{samples}", i.level, i.size);
+        super::say(format_args!(
+            "level {:2}  {:5} px  {what}{samples}",
+            i.level, i.size
+        ))?;
     }
     stages.total();
     Ok(())

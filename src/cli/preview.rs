@@ -37,16 +37,16 @@ pub struct Args {
     #[arg(long, default_value_t = 512)]
     pub size: usize,
     /// Vertical field of view, degrees.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(value_parser = super::finite_f32, long, default_value_t = 30.0)]
     pub fov: f32,
     /// Camera distance from the sphere's centre (the sphere has radius 1).
-    #[arg(long, default_value_t = 4.0)]
+    #[arg(value_parser = super::finite_f32, long, default_value_t = 4.0)]
     pub distance: f32,
     /// Orbit the camera about +Y, degrees (90 puts it on +X, 180 on -Z).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(value_parser = super::angle, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub yaw: f32,
     /// Orbit the camera towards +Y, degrees (90 looks straight down).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(value_parser = super::angle, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub pitch: f32,
     /// Compute the vectors per fragment (exact) or per vertex of a tessellated sphere
     /// (interpolated by the rasterizer, as section 7.2.5 compares).
@@ -56,13 +56,13 @@ pub struct Args {
     #[arg(long, default_value_t = 16)]
     pub tessellation: usize,
     /// Texture LOD bias added to the level a GPU would pick (needs a prefiltered chain).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(value_parser = super::finite_f32, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub lod_bias: f32,
     /// LOD bias a control map's blur of 1 means, when its sidecar JSON does not say.
-    #[arg(long, default_value_t = 4.0)]
+    #[arg(value_parser = super::finite_f32, long, default_value_t = 4.0)]
     pub max_lod_bias: f32,
     /// Radius of the environment (Brennan's correction for a finite distance; default: infinite).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(value_parser = super::finite_f32, long, allow_hyphen_values = true)]
     pub env_radius: Option<f32>,
     /// Centre of the environment's sphere, X,Y,Z (with --env-radius; default 0,0,0).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
@@ -77,7 +77,7 @@ pub struct Args {
     #[arg(long)]
     pub control: Option<PathBuf>,
     /// Exposure in stops before tone mapping (tone-mapped outputs only).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(value_parser = super::finite_f32, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub exposure: f32,
     /// Tone curve for PNG, JPEG and TGA output (EXR and HDR stay linear).
     #[arg(long, value_enum, default_value_t = Tonemap::None)]
@@ -94,7 +94,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', conflicts_with = "grid_bias")]
     pub grid: Vec<String>,
     /// Contact sheet of one material at several LOD biases, e.g. 0,1,2,3.
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    #[arg(value_parser = super::finite_f32, long, value_delimiter = ',', allow_hyphen_values = true)]
     pub grid_bias: Vec<f32>,
     /// Layout of ENV (detected from the aspect ratio; square images need sphere or angular).
     #[arg(long, value_enum)]
@@ -102,6 +102,10 @@ pub struct Args {
     /// Refuse images with more pixels than this (checked before decoding).
     #[arg(long, default_value_t = Limits::default().max_pixels)]
     pub max_pixels: u64,
+    /// Memory a command may plan to use, in bytes or with K, M, G (default: half the
+    /// machine's memory).
+    #[arg(long, value_parser = super::bytes)]
+    pub max_memory: Option<u64>,
 }
 
 fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
@@ -152,8 +156,7 @@ fn parse_background(s: &str) -> Result<Background> {
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
     if a.material == "list" {
-        print!("{}", material::list());
-        return Ok(());
+        return super::say(material::list().trim_end());
     }
     let mut stages = Stages::new(verbose);
     let (Some(env_path), Some(output)) = (&a.env, &a.output) else {
@@ -214,10 +217,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         return Err(Error::usage("--exposure must be a finite number"));
     }
     let cells = a.grid.len().max(a.grid_bias.len()).max(1);
-    let limits = Limits {
-        max_pixels: a.max_pixels,
-        ..Limits::default()
-    };
+    let limits = super::limits(a.max_pixels, a.max_memory);
     // The picture (every cell of a grid) against the pixel limit, before anything is read.
     let pixels = (a.size as u64).saturating_mul(a.size as u64) * cells as u64;
     if pixels > limits.max_pixels {
@@ -226,6 +226,8 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             a.size, limits.max_pixels
         )));
     }
+    // Each cell's picture and its samples' buffers, RGBA f32.
+    limits.check_memory(format_args!("--size {}", a.size), pixels * 16 * 3)?;
 
     let read = ReadOptions {
         limits,
@@ -234,7 +236,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let env = preview::load_environment(env_path, a.from, &read)?;
     if env.replaced_values > 0 {
         warn(format!(
-            "{}: replaced {} NaN, infinite or negative values by 0",
+            "{}: replaced {} NaN, infinite or negative values by 0 (and values above 1e28 by 1e28)",
             env_path.display(),
             env.replaced_values
         ));
@@ -252,13 +254,13 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             inputs.push(p.clone());
             if verbose {
                 match &side {
-                    Some(s) => eprintln!(
+                    Some(s) => super::tell(format_args!(
                         "cubeforge: control map blur 1 = LOD bias {max} (from {})",
                         s.display()
-                    ),
-                    None => {
-                        eprintln!("cubeforge: control map blur 1 = LOD bias {max} (--max-lod-bias)")
-                    }
+                    )),
+                    None => super::tell(format_args!(
+                        "cubeforge: control map blur 1 = LOD bias {max} (--max-lod-bias)"
+                    )),
                 }
             }
             Some((img, max))
@@ -335,6 +337,11 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     stages.done("render");
 
     super::convert::refuse_inputs(std::slice::from_ref(output), &inputs)?;
+    if let Some(f) = io::FileFormat::from_extension(output) {
+        if let Some(w) = io::clamp_warning(output, f, Default::default(), [&img]) {
+            super::warn(w);
+        }
+    }
     let bytes = io::encode_image(output, &img, &WriteOptions::default())?;
     stages.done("encode");
     io::write_all_atomic(&[(output.clone(), bytes)])?;

@@ -180,6 +180,9 @@ fn key_value_data(extra: &[(&str, &[u8])]) -> Vec<u8> {
 /// and returns its pairs: enough to describe a file without decoding its levels.
 pub fn metadata_from_file(path: &Path) -> Vec<(String, Vec<u8>)> {
     use std::io::Read;
+    if super::regular_file(path).is_err() {
+        return Vec::new();
+    }
     let Ok(mut f) = std::fs::File::open(path) else {
         return Vec::new();
     };

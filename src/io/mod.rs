@@ -17,6 +17,35 @@ use std::path::{Path, PathBuf};
 pub struct Limits {
     pub max_pixels: u64,
     pub max_dimension: u32,
+    /// Bytes a command may plan to use (default: half the machine's memory).
+    pub max_memory: u64,
+}
+
+/// Half the machine's physical memory: the default memory budget.
+pub fn default_memory_budget() -> u64 {
+    #[cfg(unix)]
+    {
+        // SAFETY: sysconf only reads system constants.
+        let (pages, size) = unsafe {
+            (
+                libc::sysconf(libc::_SC_PHYS_PAGES),
+                libc::sysconf(libc::_SC_PAGESIZE),
+            )
+        };
+        if pages > 0 && size > 0 {
+            return (pages as u64).saturating_mul(size as u64) / 2;
+        }
+    }
+    8 << 30
+}
+
+/// Bytes as people read them (3.2 GiB, 512 MiB).
+pub fn human_bytes(b: u64) -> String {
+    if b >= 1 << 30 {
+        format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
+    } else {
+        format!("{:.0} MiB", (b as f64 / (1u64 << 20) as f64).ceil())
+    }
 }
 
 impl Default for Limits {
@@ -24,6 +53,7 @@ impl Default for Limits {
         Limits {
             max_pixels: 32768 * 16384,
             max_dimension: 65536,
+            max_memory: default_memory_budget(),
         }
     }
 }
@@ -45,6 +75,30 @@ impl Limits {
                     self.max_pixels, self.max_dimension
                 ),
             ));
+        }
+        // The RGBA f32 image and, at worst, a decoder's buffer of the same size.
+        let needs = w.saturating_mul(h).saturating_mul(32);
+        if needs > self.max_memory {
+            return Err(Error::file(
+                path,
+                format!(
+                    "image claims {w}x{h} pixels, about {} of memory to decode, over the budget of {} (--max-memory)",
+                    human_bytes(needs),
+                    human_bytes(self.max_memory)
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Refuses a plan that needs more than the memory budget, naming what needs it.
+    pub fn check_memory(&self, what: impl std::fmt::Display, bytes: u64) -> Result<()> {
+        if bytes > self.max_memory {
+            return Err(Error::usage(format!(
+                "{what} needs about {} of memory, over the budget of {} (half this machine's memory by default; --max-memory)",
+                human_bytes(bytes),
+                human_bytes(self.max_memory)
+            )));
         }
         Ok(())
     }
@@ -186,12 +240,13 @@ impl GpuFormat {
             match self {
                 GpuFormat::Rgba16f => {
                     for v in a {
-                        out.extend_from_slice(&half::f16::from_f32(v).to_le_bytes());
+                        let h = half::f16::from_f32(finite(v, HALF_MAX));
+                        out.extend_from_slice(&h.to_le_bytes());
                     }
                 }
                 GpuFormat::Rgba32f => {
                     for v in a {
-                        out.extend_from_slice(&v.to_le_bytes());
+                        out.extend_from_slice(&finite(v, f32::MAX).to_le_bytes());
                     }
                 }
                 GpuFormat::Rgba8Srgb => {
@@ -239,6 +294,74 @@ impl GpuFormat {
     }
 }
 
+/// The largest half float: values above it would be written as infinity.
+pub const HALF_MAX: f32 = 65504.0;
+
+/// `v` made finite within +-`max` (NaN becomes 0): what every float encoder writes.
+#[inline]
+pub fn finite(v: f32, max: f32) -> f32 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(-max, max)
+    }
+}
+
+/// The largest magnitude `format` (with `gpu` for containers) stores as a finite float; None
+/// where values are clamped to [0, 1] as a matter of course (8-bit formats).
+pub fn largest_value(format: FileFormat, gpu: GpuFormat) -> Option<f32> {
+    match format {
+        FileFormat::Exr => Some(HALF_MAX),
+        FileFormat::Hdr => Some(f32::MAX),
+        FileFormat::Ktx2 | FileFormat::Dds => match gpu {
+            GpuFormat::Rgba16f => Some(HALF_MAX),
+            GpuFormat::Rgba32f => Some(f32::MAX),
+            GpuFormat::Rgba8Srgb | GpuFormat::Rgba8 => None,
+        },
+        _ => None,
+    }
+}
+
+/// How many channel values of `images` are NaN or beyond +-`max`: what the encoders clamp.
+pub fn count_out_of_range<'a>(images: impl IntoIterator<Item = &'a Image>, max: f32) -> u64 {
+    use rayon::prelude::*;
+    images
+        .into_iter()
+        .map(|img| {
+            img.pixels
+                .par_iter()
+                .map(|p| {
+                    let bad = p.is_nan_mask() | p.abs().cmpgt(glam::Vec4::splat(max));
+                    bad.bitmask().count_ones() as u64
+                })
+                .sum::<u64>()
+        })
+        .sum()
+}
+
+/// The warning for an output whose values `format` cannot hold, None when all fit.
+pub fn clamp_warning<'a>(
+    path: &Path,
+    format: FileFormat,
+    gpu: GpuFormat,
+    images: impl IntoIterator<Item = &'a Image>,
+) -> Option<String> {
+    let max = largest_value(format, gpu)?;
+    let n = count_out_of_range(images, max);
+    (n > 0).then(|| {
+        format!(
+            "{}: {n} values beyond {} (the largest {}) written as that value",
+            path.display(),
+            if max == HALF_MAX { "65504" } else { "3.4e38" },
+            if max == HALF_MAX {
+                "half float"
+            } else {
+                "float"
+            }
+        )
+    })
+}
+
 #[inline]
 pub fn unorm8(v: f32) -> u8 {
     (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
@@ -253,7 +376,7 @@ pub struct Meta {
     pub color_space: ColorSpace,
     /// Holds values above 1 (float formats).
     pub hdr: bool,
-    /// NaN, infinite or negative values replaced by 0 on read.
+    /// NaN, infinite or negative values replaced by 0 on read (values above 1e28 by 1e28).
     pub replaced_values: usize,
 }
 
@@ -303,10 +426,32 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     Ok((decoded, meta))
 }
 
+/// Reads a whole file, refusing anything that is not a regular file first: a FIFO would block
+/// forever and a device (`/dev/zero`) read without end.
+pub fn read_file(path: &Path) -> Result<Vec<u8>> {
+    regular_file(path)?;
+    std::fs::read(path).map_err(|e| Error::file(path, io_msg(&e)))
+}
+
+/// Fails unless `path` names a regular file (links followed), without opening it.
+pub fn regular_file(path: &Path) -> Result<()> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::file(path, io_msg(&e)))?;
+    if meta.is_file() {
+        Ok(())
+    } else if meta.is_dir() {
+        Err(Error::file(path, "is a folder, not a file"))
+    } else {
+        Err(Error::file(
+            path,
+            "not a regular file (a pipe, socket or device): give a file",
+        ))
+    }
+}
+
 /// Reads any supported file as stored, by content, with the size limit checked from the
 /// header before pixels are allocated.
 pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
-    let bytes = std::fs::read(path).map_err(|e| Error::file(path, io_msg(&e)))?;
+    let bytes = read_file(path)?;
     if bytes.is_empty() {
         return Err(Error::file(path, "file is empty"));
     }

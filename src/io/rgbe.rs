@@ -78,7 +78,9 @@ fn texel([r, g, b, e]: [u8; 4]) -> Vec4 {
     } else {
         (e as u32) << 22
     }) * 0.003_906_25;
-    Vec4::new(scale * r as f32, scale * g as f32, scale * b as f32, 1.0)
+    // RGBE reaches 1.7e38: clamped like every input (see `MAX_RADIANCE`).
+    let v = Vec4::new(scale * r as f32, scale * g as f32, scale * b as f32, 1.0);
+    v.min(Vec4::splat(crate::image::MAX_RADIANCE))
 }
 
 /// Walks the scanline of `w` texels that starts at byte `p`, writing its texels to `out` when
@@ -201,7 +203,8 @@ pub fn encode(img: &Image) -> Vec<u8> {
 /// Shared-exponent form: the largest channel's exponent e (value = m 2^e, m in [0.5, 1)),
 /// each channel truncated to 8 bits of that scale. Read from the float's bits: no log2.
 fn to_rgbe(p: Vec4) -> [u8; 4] {
-    let [r, g, b] = [p.x, p.y, p.z].map(|v| if v > 0.0 { v } else { 0.0 });
+    // NaN and negatives to 0, infinity to the largest RGBE value.
+    let [r, g, b] = [p.x, p.y, p.z].map(|v| if v > 0.0 { v.min(f32::MAX) } else { 0.0 });
     let max = r.max(g).max(b);
     if max < f32::MIN_POSITIVE {
         return [0; 4];

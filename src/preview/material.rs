@@ -390,7 +390,7 @@ pub fn resolve(spec: &str) -> Result<Material> {
             names.join(", ")
         )));
     }
-    let text = std::fs::read(path).map_err(|e| Error::file(path, crate::io::io_msg(&e)))?;
+    let text = crate::io::read_file(path)?;
     let text = String::from_utf8(text)
         .map_err(|_| Error::file(path, "a material file must be UTF-8 text (TOML)"))?;
     parse_toml(&text, path)

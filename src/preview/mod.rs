@@ -769,7 +769,7 @@ pub struct LoadedEnv {
     pub files: Vec<PathBuf>,
     /// Holds values above 1.
     pub hdr: bool,
-    /// NaN, infinite or negative values replaced by 0 on read.
+    /// NaN, infinite or negative values replaced by 0 on read (values above 1e28 by 1e28).
     pub replaced_values: usize,
 }
 
@@ -902,7 +902,8 @@ pub fn read_control(path: &Path, default_max: f32) -> Result<(Image, f32, Option
     let Some(side) = control_sidecar(path) else {
         return Ok((img, default_max, None));
     };
-    let text = std::fs::read_to_string(&side).map_err(|e| Error::file(&side, io::io_msg(&e)))?;
+    let text = String::from_utf8(io::read_file(&side)?)
+        .map_err(|_| Error::file(&side, "not UTF-8 text"))?;
     let json: serde_json::Value = serde_json::from_str(&text)
         .map_err(|e| Error::file(&side, format!("not valid JSON: {e}")))?;
     let max = match json.get("max_lod_bias") {
