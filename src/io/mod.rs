@@ -117,6 +117,18 @@ impl Limits {
                 ),
             ));
         }
+        // Six faces and their mips (4/3) as RGBA f32, and the file's own texels at worst.
+        let needs = w.saturating_mul(h).saturating_mul(6 * 32 * 4 / 3);
+        if needs > self.max_memory {
+            return Err(Error::file(
+                path,
+                format!(
+                    "cube map claims six {w}x{h} faces, about {} of memory to decode, over the budget of {} (--max-memory)",
+                    human_bytes(needs),
+                    human_bytes(self.max_memory)
+                ),
+            ));
+        }
         Ok(())
     }
 }
