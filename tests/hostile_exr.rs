@@ -405,26 +405,7 @@ fn duplicate_and_missing_blocks_are_refused() {
 
 /// The exr crate's own reader, for comparison.
 fn crate_reader(bytes: &[u8]) -> Image {
-    read_first_rgba_layer_from_buffered(bytes)
-}
-
-fn read_first_rgba_layer_from_buffered(bytes: &[u8]) -> Image {
-    exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgba_channels(
-            |res, _| Image::new(res.0, res.1),
-            |img: &mut Image, pos, (r, g, b, a): (f32, f32, f32, f32)| {
-                img.set(pos.0, pos.1, Vec4::new(r, g, b, a))
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))
-        .unwrap()
-        .layer_data
-        .channel_data
-        .pixels
+    cubeforge::io::exr::crate_reader(bytes).unwrap()
 }
 
 /// (d) The real fixtures, and files of every layout the crate writes, decode exactly as the

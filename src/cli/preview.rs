@@ -207,14 +207,9 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         background: parse_background(&a.background)?,
     };
     opts.validate()?;
-    if !(a.max_lod_bias.is_finite() && a.max_lod_bias >= 0.0) {
+    // Finite already (its parser); it must also not be negative.
+    if a.max_lod_bias < 0.0 {
         return Err(Error::usage("--max-lod-bias must be a number >= 0"));
-    }
-    if a.grid_bias.iter().any(|b| !b.is_finite()) {
-        return Err(Error::usage("--grid-bias values must be finite numbers"));
-    }
-    if !a.exposure.is_finite() {
-        return Err(Error::usage("--exposure must be a finite number"));
     }
     let cells = a.grid.len().max(a.grid_bias.len()).max(1);
     let limits = super::limits(a.max_pixels, a.max_memory);

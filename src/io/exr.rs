@@ -559,6 +559,25 @@ fn decode_blocks(
     Ok(img)
 }
 
+/// The exr crate's own reader, start to end, unguarded: the reference the tests compare the
+/// checked decoder with (never for untrusted files: it can abort on them).
+#[doc(hidden)]
+pub fn crate_reader(bytes: &[u8]) -> exr::error::Result<Image> {
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |res, _| Image::new(res.0, res.1),
+            |img: &mut Image, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+                img.set(pos.0, pos.1, Vec4::new(r, g, b, a))
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
 /// The first layer, when it is R G B (A) by name, through the exr crate's pixel reader (any
 /// layout: tiles, mip levels, subsampling, integer samples), texel by texel on one thread.
 /// The chunks are those `read_chunks` checked, decompressed here in parallel batches with
@@ -804,24 +823,8 @@ mod tests {
         read_layer(&meta, read_chunks(bytes, &meta, start).unwrap()).unwrap()
     }
 
-    /// The crate's own reader, start to end.
     fn crate_reader(bytes: &[u8]) -> Image {
-        read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .rgba_channels(
-                |res, _| Image::new(res.0, res.1),
-                |img: &mut Image, pos, (r, g, b, a): (f32, f32, f32, f32)| {
-                    img.set(pos.0, pos.1, Vec4::new(r, g, b, a))
-                },
-            )
-            .first_valid_layer()
-            .all_attributes()
-            .from_buffered(Cursor::new(bytes))
-            .unwrap()
-            .layer_data
-            .channel_data
-            .pixels
+        super::crate_reader(bytes).unwrap()
     }
 
     fn both(bytes: &[u8], what: &str) {

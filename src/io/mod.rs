@@ -78,11 +78,21 @@ impl Limits {
         }
         // The RGBA f32 image and, at worst, a decoder's buffer of the same size.
         let needs = w.saturating_mul(h).saturating_mul(32);
+        self.check_decode_memory(path, format_args!("image claims {w}x{h} pixels"), needs)
+    }
+
+    /// Refuses a file whose claimed size (`claim`) needs more than the memory budget to decode.
+    fn check_decode_memory(
+        &self,
+        path: &Path,
+        claim: std::fmt::Arguments,
+        needs: u64,
+    ) -> Result<()> {
         if needs > self.max_memory {
             return Err(Error::file(
                 path,
                 format!(
-                    "image claims {w}x{h} pixels, about {} of memory to decode, over the budget of {} (--max-memory)",
+                    "{claim}, about {} of memory to decode, over the budget of {} (--max-memory)",
                     human_bytes(needs),
                     human_bytes(self.max_memory)
                 ),
@@ -119,17 +129,11 @@ impl Limits {
         }
         // Six faces and their mips (4/3) as RGBA f32, and the file's own texels at worst.
         let needs = w.saturating_mul(h).saturating_mul(6 * 32 * 4 / 3);
-        if needs > self.max_memory {
-            return Err(Error::file(
-                path,
-                format!(
-                    "cube map claims six {w}x{h} faces, about {} of memory to decode, over the budget of {} (--max-memory)",
-                    human_bytes(needs),
-                    human_bytes(self.max_memory)
-                ),
-            ));
-        }
-        Ok(())
+        self.check_decode_memory(
+            path,
+            format_args!("cube map claims six {w}x{h} faces"),
+            needs,
+        )
     }
 }
 
