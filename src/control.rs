@@ -109,6 +109,9 @@ pub struct Recipe {
     pub fresnel: Option<Source>,
     #[serde(default)]
     pub pack: Pack,
+    /// The line `size` is given on, for errors about it.
+    #[serde(skip)]
+    pub size_line: Option<usize>,
 }
 
 /// Width and height in texels; written `"512x256"`, or one number for a square.
@@ -892,6 +895,19 @@ pub fn parse(
             })?,
         }
     };
+    let mut recipe = recipe;
+    if recipe.size.is_some() {
+        recipe.size_line = text
+            .lines()
+            .position(|l| {
+                let l = l.trim_start();
+                let rest = l
+                    .strip_prefix("\"size\"")
+                    .or_else(|| l.strip_prefix("size"));
+                rest.is_some_and(|r| r.trim_start().starts_with(['=', ':']))
+            })
+            .map(|i| i + 1);
+    }
     if recipe.blur.is_some() && recipe.max_lod_bias.is_none() {
         return Err(Error::file(
             origin,

@@ -31,6 +31,29 @@ pub struct Loaded {
 }
 
 impl Loaded {
+    /// Keeps only level `n` of a cube map's mip chain (a prefiltered chain's blurrier level,
+    /// say) as the input.
+    pub fn keep_level(&mut self, n: usize) -> Result<()> {
+        let count = match &self.source {
+            Source::Cube(c) => c.levels.len(),
+            Source::Projection(..) => 1,
+        };
+        if n >= count {
+            return Err(Error::file(
+                &self.files[0],
+                format!(
+                    "no level {n}: it holds {count} level{}",
+                    if count == 1 { "" } else { "s" }
+                ),
+            ));
+        }
+        if let Source::Cube(c) = &mut self.source {
+            let level = c.levels.swap_remove(n);
+            c.levels = vec![level];
+        }
+        Ok(())
+    }
+
     /// The face edge that keeps the input's resolution.
     pub fn face_size(&self) -> usize {
         match &self.source {

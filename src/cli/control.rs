@@ -122,6 +122,19 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             )));
         }
     }
+    // Say where an oversized size came from: the option, the recipe's line, or its image.
+    let (w, h) = (size.width as u64, size.height as u64);
+    if w.max(h) > limits.max_dimension as u64 || w * h > limits.max_pixels {
+        let from = match (a.size, recipe.size_line) {
+            (Some(_), _) => "--size".to_string(),
+            (None, Some(l)) => format!("{}: line {l}", a.recipe.display()),
+            (None, None) => format!("{}: its first image", a.recipe.display()),
+        };
+        return Err(Error::usage(format!(
+            "{from}: a {size} map is over the limit of {} pixels, {} per side (--max-pixels)",
+            limits.max_pixels, limits.max_dimension
+        )));
+    }
     // The baked map, its sources at output size and the mip chain, RGBA f32.
     limits.check_memory(
         format_args!("{}: a {size} map", a.recipe.display()),
@@ -163,7 +176,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         .map_err(|e| Error::file(&sidecar_path, e.to_string()))?;
     sidecar.push(b'\n');
     stages.done("encode");
-    io::write_all_atomic(&[(a.output.clone(), bytes), (sidecar_path.clone(), sidecar)])?;
+    super::write_files(&[(a.output.clone(), bytes), (sidecar_path.clone(), sidecar)])?;
     stages.done("write");
 
     report(&a.output, &sidecar_path, &baked, &what)?;
@@ -192,7 +205,7 @@ fn report(output: &Path, sidecar: &Path, baked: &Baked, what: &str) -> Result<()
     for w in &baked.warnings {
         warn(w);
     }
-    super::say(format_args!(
+    super::report(format_args!(
         "{}: {}x{} control map, {what}, linear data",
         output.display(),
         baked.image.width,
@@ -204,13 +217,13 @@ fn report(output: &Path, sidecar: &Path, baked: &Baked, what: &str) -> Result<()
         } else {
             String::new()
         };
-        super::say(format_args!(
+        super::report(format_args!(
             "  {c} = {:<13} {}{note}",
             ch.holds.name(),
             ch.source
         ))?;
     }
-    super::say(format_args!(
+    super::report(format_args!(
         "{}: max_lod_bias {} and the packing",
         sidecar.display(),
         baked.max_lod_bias

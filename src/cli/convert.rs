@@ -5,6 +5,7 @@ use cubeforge::convert::{self, Output};
 use cubeforge::cube::{CubeMap, Faces, Interp, FACE_NAMES};
 use cubeforge::io::{self, FileFormat, GpuFormat, WriteOptions};
 use cubeforge::layout::Kind;
+use cubeforge::preview::tonemap;
 use cubeforge::resample::{Orientation, Resampler};
 use cubeforge::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -14,8 +15,8 @@ pub struct Args {
     /// One image; six face images in px nx py ny pz nz order; or a folder of px/nx/... faces.
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
-    /// Output file, or folder for --to faces.
-    #[arg(short, long)]
+    /// Output file, folder for --to faces, or - for standard output (with --format).
+    #[arg(short, long, allow_hyphen_values = true)]
     pub output: PathBuf,
     /// Output layout (default: from the output's extension; hcross for images, faces for a folder).
     #[arg(long, value_enum)]
@@ -23,7 +24,8 @@ pub struct Args {
     /// Cube face edge in texels (equirect output is 4N x 2N, sphere and angular 2N x 2N).
     #[arg(long)]
     pub size: Option<usize>,
-    /// File type of face images (png, jpg, tga, hdr, exr; default exr for HDR input, png for LDR).
+    /// File type of face images (png, jpg, tga, hdr, exr; default exr for HDR input, png for
+    /// LDR), or of the output written to standard output (-o -; also ktx2, dds).
     #[arg(long)]
     pub format: Option<String>,
     /// Interpolation between input texels.
@@ -53,12 +55,20 @@ pub struct Args {
     /// Mip levels in KTX2 and DDS output (default: the full chain down to 1x1).
     #[arg(long)]
     pub levels: Option<usize>,
+    /// Which level of a KTX2 or DDS mip chain (or which mN folder of a prefiltered chain) to
+    /// read; 0 is the full size.
+    #[arg(long, default_value_t = 0)]
+    pub level: usize,
+    #[command(flatten)]
+    pub tone: super::ToneArgs,
     #[command(flatten)]
     pub input: super::InputArgs,
 }
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
+pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     let mut stages = Stages::new(verbose);
+    let (output, to_stdout) = super::output_name(&a.output, a.format.as_deref())?;
+    a.output = output;
     let limits = a.input.limits();
     let read = a.input.read_options();
     let to = output_kind(&a)?;
@@ -86,7 +96,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         Kind::Faces => face_format(&a)?,
         _ => None,
     };
-    let loaded = convert::load(&a.inputs, a.input.from, &read)?;
+    let loaded = load_level(&a.inputs, a.input.from, &read, a.level)?;
     stages.done("decode");
     if loaded.meta.replaced_values > 0 {
         warn(format!(
@@ -156,35 +166,71 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         face_format,
         &write,
         a.levels,
+        &a.tone,
         &loaded.files,
     )?;
     stages.done("encode");
-    io::write_all_atomic(&files)?;
+    super::deliver(&files, to_stdout)?;
     stages.done("write");
     stages.total();
     Ok(())
 }
 
+/// Loads the inputs, then keeps only level `level` of a mip chain. A prefiltered chain's
+/// folder (m0, m1, ...) gives its `mN` folder.
+pub(super) fn load_level(
+    inputs: &[PathBuf],
+    from: Option<Kind>,
+    read: &io::ReadOptions,
+    level: usize,
+) -> Result<convert::Loaded> {
+    if let [dir] = inputs {
+        let sub = dir.join(format!("m{level}"));
+        if dir.is_dir() && dir.join("m0").is_dir() {
+            if !sub.is_dir() {
+                return Err(Error::file(
+                    dir,
+                    format!("--level {level}: no m{level} folder"),
+                ));
+            }
+            return convert::load(&[sub], from, read);
+        }
+    }
+    let mut loaded = convert::load(inputs, from, read)?;
+    loaded.keep_level(level)?;
+    Ok(loaded)
+}
+
 /// Encodes a conversion's result as the files it becomes: six faces in a folder, a container
-/// with `levels` box mips (None: the full chain), or one image. Refuses to overwrite inputs.
+/// with `levels` box mips (None: the full chain), or one image. 8-bit outputs get the
+/// exposure and tone curve. Refuses to overwrite inputs.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn encode_output(
     output: &Path,
     to: Kind,
-    out: Output,
+    mut out: Output,
     face_format: FileFormat,
     write: &WriteOptions,
     levels: Option<usize>,
+    tone: &super::ToneArgs,
     inputs: &[PathBuf],
 ) -> Result<Vec<(PathBuf, Vec<u8>)>> {
-    let (format, images): (Option<FileFormat>, Vec<&cubeforge::image::Image>) = match (&to, &out) {
-        (Kind::Faces, Output::Cube(c)) => (Some(face_format), c.levels[0].iter().collect()),
-        (Kind::Ktx2 | Kind::Dds, Output::Cube(c)) => (
-            FileFormat::from_extension(output),
-            c.levels[0].iter().collect(),
-        ),
-        (_, Output::Image(img)) => (FileFormat::from_extension(output), vec![img]),
-        _ => (None, Vec::new()),
+    let format = match to {
+        Kind::Faces => Some(face_format),
+        _ => FileFormat::from_extension(output),
     };
+    let mut images: Vec<&mut cubeforge::image::Image> = match &mut out {
+        Output::Cube(c) => c.levels[0].iter_mut().collect(),
+        Output::Image(img) => vec![img],
+    };
+    if let Some(f) = format {
+        if tone.applies(output, f, write.gpu_format) {
+            for img in &mut images {
+                tonemap::apply(img, tone.tonemap, tone.exposure);
+            }
+        }
+    }
+    let images = images.into_iter().map(|i| &*i);
     if let Some(f) = format {
         // Box mips are means of level 0: they fit where it fits.
         if let Some(w) = io::clamp_warning(output, f, write.gpu_format, images) {
@@ -234,7 +280,6 @@ pub(super) fn encode_faces(
         .map(|n| dir.join(format!("{n}.{ext}")))
         .collect();
     refuse_inputs(&paths, inputs)?;
-    std::fs::create_dir_all(dir).map_err(|e| Error::file(dir, io::io_msg(&e)))?;
     let encoded: Vec<Result<Vec<u8>>> = {
         use rayon::prelude::*;
         paths

@@ -26,5 +26,5 @@ pub fn run(args: Args) -> Result<()> {
         let bytes = io::encode_image(&path, &img, &WriteOptions::default())?;
         files.push((path, bytes));
     }
-    io::write_all_atomic(&files)
+    super::write_files(&files)
 }

@@ -3,7 +3,7 @@
 use super::{convert::encode_output, convert::output_kind_for, Stages};
 use cubeforge::convert::{self, Loaded, Output, Source};
 use cubeforge::filter::{self, sh, IrradianceMethod};
-use cubeforge::io::{self, FileFormat, GpuFormat, WriteOptions};
+use cubeforge::io::{FileFormat, GpuFormat, WriteOptions};
 use cubeforge::layout::Kind;
 use cubeforge::resample::Resampler;
 use cubeforge::{Error, Result};
@@ -36,6 +36,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = GpuFormat::Rgba16f)]
     pub gpu_format: GpuFormat,
     #[command(flatten)]
+    pub tone: super::ToneArgs,
+    #[command(flatten)]
     pub input: super::InputArgs,
 }
 
@@ -64,7 +66,15 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         unreachable!("faces are a cube")
     };
     stages.done("resample");
-    let (irr, coeffs) = filter::irradiance(&base, a.size, a.method);
+    let bar = super::progress(6 * a.size as u64, format!("irradiance {}", a.size));
+    let (irr, coeffs) = filter::irradiance_with_progress(&base, a.size, a.method, &|n| {
+        if let Some(b) = &bar {
+            b.inc(n);
+        }
+    });
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
     stages.done("filter");
 
     let out = match to {
@@ -92,6 +102,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         face_format,
         &write,
         Some(1),
+        &a.tone,
         &loaded.files,
     )?;
     if let Some(p) = &a.sh {
@@ -101,10 +112,10 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         files.push((p.clone(), json));
     }
     stages.done("encode");
-    io::write_all_atomic(&files)?;
+    super::write_files(&files)?;
     stages.done("write");
     let dc = coeffs[0].map(|v| v * sh::BASIS[0].3);
-    super::say(format_args!(
+    super::report(format_args!(
         "irradiance {} px ({:?}); mean radiance {:.4} {:.4} {:.4}",
         a.size, a.method, dc[0], dc[1], dc[2]
     ))?;

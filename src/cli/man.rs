@@ -29,5 +29,5 @@ pub fn run(args: Args) -> Result<()> {
             .map_err(|e| Error::file(&file, e.to_string()))?;
         files.push((args.dir.join(file), buf));
     }
-    cubeforge::io::write_all_atomic(&files)
+    super::write_files(&files)
 }

@@ -1,5 +1,6 @@
 //! Command-line front end: one file per command. Parses and reports; the library does the work.
 
+mod completions;
 mod control;
 mod convert;
 mod fixtures;
@@ -10,6 +11,8 @@ mod prefilter;
 mod preview;
 
 use clap::{Parser, Subcommand};
+use cubeforge::io::{FileFormat, GpuFormat};
+use cubeforge::preview::tonemap::Tonemap;
 use std::time::Instant;
 
 #[derive(Parser, Debug)]
@@ -25,6 +28,9 @@ pub struct Cli {
     /// Print the time each stage takes (decode, resample, encode, write).
     #[arg(short, long, global = true)]
     pub verbose: bool,
+    /// Print errors only: no warnings, summaries or progress bars (for build scripts).
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    pub quiet: bool,
     #[command(subcommand)]
     pub command: Command,
 }
@@ -43,6 +49,8 @@ pub enum Command {
     Control(control::Args),
     /// Preview a map on a sphere: reflection, refraction, Fresnel and dispersion (Cg Tutorial ch. 7).
     Preview(preview::Args),
+    /// Print a shell completion script: `source <(cubeforge completions bash)`.
+    Completions(completions::Args),
     /// Write the man pages (man/*.1) from these definitions.
     #[command(hide = true)]
     Man(man::Args),
@@ -80,6 +88,43 @@ impl InputArgs {
             linear: self.linear,
         }
     }
+}
+
+/// Exposure and tone curve for outputs of 8 bits a channel: HDR input would clip at 1.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct ToneArgs {
+    /// Exposure in stops before the tone curve (8-bit outputs only).
+    #[arg(value_parser = exposure, long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub exposure: f32,
+    /// Tone curve for 8-bit outputs (PNG, JPEG, TGA, rgba8 KTX2 and DDS); EXR, HDR and
+    /// float containers stay linear.
+    #[arg(long, value_enum, default_value_t = Tonemap::None)]
+    pub tonemap: Tonemap,
+}
+
+impl ToneArgs {
+    /// Whether an output in `format` gets the curve; says so when the options are ignored.
+    pub fn applies(&self, output: &std::path::Path, format: FileFormat, gpu: GpuFormat) -> bool {
+        tone_applies(output, format, gpu, self.exposure, self.tonemap)
+    }
+}
+
+/// See [`ToneArgs::applies`].
+pub fn tone_applies(
+    output: &std::path::Path,
+    format: FileFormat,
+    gpu: GpuFormat,
+    exposure: f32,
+    tonemap: Tonemap,
+) -> bool {
+    let eight_bit = cubeforge::io::largest_value(format, gpu).is_none();
+    if !eight_bit && (exposure != 0.0 || tonemap != Tonemap::None) {
+        warn(format_args!(
+            "{}: --exposure and --tonemap apply to 8-bit outputs; this one keeps linear radiance",
+            output.display()
+        ));
+    }
+    eight_bit
 }
 
 /// Times stages and prints them with -v.
@@ -120,8 +165,45 @@ impl Stages {
     }
 }
 
+/// Set by --quiet: warnings, summaries and progress bars stay silent.
+static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+pub fn quiet() -> bool {
+    QUIET.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 pub fn warn(msg: impl std::fmt::Display) {
-    tell(format_args!("cubeforge: warning: {msg}"));
+    if !quiet() {
+        tell(format_args!("cubeforge: warning: {msg}"));
+    }
+}
+
+/// A summary line on standard output, silenced by --quiet (what a command made, not what
+/// it was asked to print).
+pub fn report(text: impl std::fmt::Display) -> cubeforge::Result<()> {
+    if quiet() {
+        return Ok(());
+    }
+    say(text)
+}
+
+/// A progress bar on standard error for work counted in `total` units; none when standard
+/// error is not a terminal or with --quiet.
+pub fn progress(total: u64, prefix: String) -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    if quiet() || !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let b = indicatif::ProgressBar::new(total);
+    b.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{prefix} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    b.set_prefix(prefix);
+    Some(b)
 }
 
 /// Writes a line to standard output. A reader that went away (`| head`) ends the process
@@ -143,6 +225,82 @@ pub fn say(text: impl std::fmt::Display) -> cubeforge::Result<()> {
 pub fn tell(text: impl std::fmt::Display) {
     use std::io::Write;
     let _ = writeln!(std::io::stderr(), "{text}");
+}
+
+/// Writes a command's files, all or none (see [`cubeforge::io::atomic`]).
+pub fn write_files(files: &[(std::path::PathBuf, Vec<u8>)]) -> cubeforge::Result<()> {
+    let staged = cubeforge::io::stage(files)?;
+    // Tests stop here to signal a command that has written its temporaries.
+    if let Some(ms) = std::env::var("CUBEFORGE_TEST_PAUSE_BEFORE_COMMIT_MS")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
+    }
+    staged.commit()
+}
+
+/// `-o -` writes to standard output: the name that stands in for it, whose extension (from
+/// `--format`) picks the encoder, and whether that is what happens.
+pub fn output_name(
+    output: &std::path::Path,
+    format: Option<&str>,
+) -> cubeforge::Result<(std::path::PathBuf, bool)> {
+    if output != std::path::Path::new("-") {
+        return Ok((output.to_path_buf(), false));
+    }
+    match format.map(|f| (f, FileFormat::from_ext_str(f))) {
+        Some((f, Some(_))) => Ok((std::path::PathBuf::from(format!("-.{f}")), true)),
+        _ => Err(cubeforge::Error::usage(
+            "-o - (standard output) needs --format png, jpg, tga, hdr, exr, ktx2 or dds",
+        )),
+    }
+}
+
+/// Writes a command's files, or its one file to standard output.
+pub fn deliver(files: &[(std::path::PathBuf, Vec<u8>)], to_stdout: bool) -> cubeforge::Result<()> {
+    if !to_stdout {
+        return write_files(files);
+    }
+    use std::io::{IsTerminal, Write};
+    let mut out = std::io::stdout().lock();
+    if out.is_terminal() {
+        return Err(cubeforge::Error::usage(
+            "-o -: standard output is a terminal; redirect it to a file or a pipe",
+        ));
+    }
+    for (_, bytes) in files {
+        match out.write_all(bytes).and_then(|()| out.flush()) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
+            Err(e) => {
+                return Err(cubeforge::Error::usage(format!(
+                    "cannot write to standard output: {}",
+                    cubeforge::io::io_msg(&e)
+                )))
+            }
+        }
+    }
+    Ok(())
+}
+
+/// On SIGINT, SIGTERM or SIGHUP: take back the temporaries written so far, then end as the
+/// signal would have (the shell sees the usual status).
+fn remove_temporaries_on_signals() {
+    #[cfg(unix)]
+    {
+        use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+        let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+            return;
+        };
+        std::thread::spawn(move || {
+            if let Some(sig) = signals.forever().next() {
+                cubeforge::io::remove_temporaries();
+                let _ = signal_hook::low_level::emulate_default_handler(sig);
+                std::process::exit(128 + sig);
+            }
+        });
+    }
 }
 
 /// The limits from the size options.
@@ -201,6 +359,11 @@ pub fn angle(s: &str) -> Result<f32, String> {
     within(s, -3600.0, 3600.0)
 }
 
+/// Stops of exposure: 2^32 times the largest input (1e28) is still a float.
+pub fn exposure(s: &str) -> Result<f32, String> {
+    within(s, -32.0, 32.0)
+}
+
 /// cmft's gloss scale: the power 2^(scale x gloss + bias) must stay a float.
 pub fn gloss_scale(s: &str) -> Result<f32, String> {
     within(s, 0.0, 64.0)
@@ -243,6 +406,8 @@ pub fn run() -> i32 {
             return 2;
         }
     };
+    remove_temporaries_on_signals();
+    QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
     let result = match cli.command {
         Command::Convert(a) => convert::run(a, cli.verbose),
         Command::Info(a) => info::run(a),
@@ -250,6 +415,7 @@ pub fn run() -> i32 {
         Command::Irradiance(a) => irradiance::run(a, cli.verbose),
         Command::Control(a) => control::run(a, cli.verbose),
         Command::Preview(a) => preview::run(a, cli.verbose),
+        Command::Completions(a) => completions::run(a),
         Command::Man(a) => man::run(a),
         Command::Fixtures(a) => fixtures::run(a),
     };

@@ -8,7 +8,6 @@ use cubeforge::layout::Kind;
 use cubeforge::resample::Resampler;
 use cubeforge::{Error, Result};
 use serde::Serialize;
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
@@ -124,20 +123,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let plan = filter::plan(&opts, size);
     let cost = |i: &LevelInfo| (6 * i.size * i.size) as u64 * i.samples.unwrap_or(1) as u64;
     let total: u64 = plan.iter().map(|(i, _)| cost(i)).sum();
-    let bar = if std::io::stderr().is_terminal() {
-        let b = indicatif::ProgressBar::new(total);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{prefix} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-            .progress_chars("=> "),
-        );
-        b.set_prefix(format!("{} {size}", a.filter.name()));
-        Some(b)
-    } else {
-        None
-    };
+    let bar = super::progress(total, format!("{} {size}", a.filter.name()));
     let costs: Vec<u64> = plan.iter().map(|(i, _)| cost(i)).collect();
     let (chain, infos) = filter::prefilter(&base, &opts, &|level| {
         if let Some(b) = &bar {
@@ -201,7 +187,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         }
     }
     stages.done("encode");
-    io::write_all_atomic(&files)?;
+    super::write_files(&files)?;
     stages.done("write");
     for i in &infos {
         let what = match (i.roughness, i.power, i.sigma) {
@@ -214,7 +200,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             .samples
             .map(|s| format!(", {s} samples"))
             .unwrap_or_default();
-        super::say(format_args!(
+        super::report(format_args!(
             "level {:2}  {:5} px  {what}{samples}",
             i.level, i.size
         ))?;

@@ -26,9 +26,13 @@ pub struct Args {
     /// with all its levels), or a folder m0/ m1/ ... written by `cubeforge prefilter`.
     #[arg(value_name = "ENV")]
     pub env: Option<PathBuf>,
-    /// Output image: .png .jpg .tga (tone-mapped, sRGB) or .exr .hdr (linear radiance).
-    #[arg(short, long)]
+    /// Output image: .png .jpg .tga (tone-mapped, sRGB) or .exr .hdr (linear radiance); -
+    /// for standard output (with --format).
+    #[arg(short, long, allow_hyphen_values = true)]
     pub output: Option<PathBuf>,
+    /// File type of the output when it is - (standard output): png, jpg, tga, exr or hdr.
+    #[arg(long)]
+    pub format: Option<String>,
     /// Material: a preset (chrome, mirror-decal, glass, water, diamond, plastic, crystal), a
     /// .toml material file, or `list` to print the presets.
     #[arg(short, long, default_value = "chrome")]
@@ -164,6 +168,8 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             "preview needs an environment and an output: cubeforge preview ENV -o OUTPUT",
         ));
     };
+    let (output, to_stdout) = super::output_name(output, a.format.as_deref())?;
+    let output = &output;
     // Everything that can be checked is checked before the (possibly slow) decode.
     let tone_mapped = match FileFormat::from_extension(output) {
         Some(f) if f.is_container() => {
@@ -172,7 +178,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
                 "the preview is an image: name it .png .jpg .tga .exr or .hdr",
             ))
         }
-        Some(f) => !f.is_float(),
+        Some(f) => super::tone_applies(output, f, Default::default(), a.exposure, a.tonemap),
         None => return Err(io::unknown_ext(output)),
     };
     let specs: Vec<String> = if a.grid.is_empty() {
@@ -318,7 +324,15 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             lod_bias: bias,
             ..opts
         };
-        let mut img = preview::render(&env.sampler, &m, &surface, &o)?;
+        let bar = super::progress(o.size as u64, format!("preview {label}"));
+        let mut img = preview::render_with_progress(&env.sampler, &m, &surface, &o, &|n| {
+            if let Some(b) = &bar {
+                b.inc(n);
+            }
+        })?;
+        if let Some(b) = bar {
+            b.finish_and_clear();
+        }
         if tone_mapped {
             tonemap::apply(&mut img, a.tonemap, a.exposure);
         }
@@ -339,7 +353,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     }
     let bytes = io::encode_image(output, &img, &WriteOptions::default())?;
     stages.done("encode");
-    io::write_all_atomic(&[(output.clone(), bytes)])?;
+    super::deliver(&[(output.clone(), bytes)], to_stdout)?;
     stages.done("write");
     stages.total();
     Ok(())

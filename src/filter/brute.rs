@@ -26,6 +26,16 @@ pub fn texel_table(n: usize) -> Vec<(Vec3, f32)> {
 /// Convolves level 0 of `src` with `lobe` into faces of edge `size`, normalised by the lobe's
 /// own discrete integral (so a constant environment stays exactly constant).
 pub fn convolve(src: &CubeMap, lobe: Lobe, size: usize) -> [Image; 6] {
+    convolve_with_progress(src, lobe, size, &|_| {})
+}
+
+/// [`convolve`], calling `progress(1)` as each of the 6 x `size` output rows is done.
+pub fn convolve_with_progress(
+    src: &CubeMap,
+    lobe: Lobe,
+    size: usize,
+    progress: &(dyn Fn(u64) + Sync),
+) -> [Image; 6] {
     let n = src.size();
     let table = texel_table(n);
     let values: Vec<Vec4> = src.levels[0]
@@ -34,22 +44,21 @@ pub fn convolve(src: &CubeMap, lobe: Lobe, size: usize) -> [Image; 6] {
         .collect();
     let inv = 1.0 / size as f32;
     std::array::from_fn(|face| {
-        Image::from_fn(size, size, |x, y| {
-            let r = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
-            let mut acc = Vec4::ZERO;
-            let mut wsum = 0.0f32;
-            for ((d, sa), v) in table.iter().zip(&values) {
-                let w = lobe.weight(r.dot(*d)) * sa;
-                if w > 0.0 {
-                    acc += *v * w;
-                    wsum += w;
+        Image::from_rows(size, size, |y, row| {
+            for (x, out) in row.iter_mut().enumerate() {
+                let r = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                let mut acc = Vec4::ZERO;
+                let mut wsum = 0.0f32;
+                for ((d, sa), v) in table.iter().zip(&values) {
+                    let w = lobe.weight(r.dot(*d)) * sa;
+                    if w > 0.0 {
+                        acc += *v * w;
+                        wsum += w;
+                    }
                 }
+                *out = if wsum > 0.0 { acc / wsum } else { Vec4::ZERO };
             }
-            if wsum > 0.0 {
-                acc / wsum
-            } else {
-                Vec4::ZERO
-            }
+            progress(1);
         })
     })
 }

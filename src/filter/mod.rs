@@ -251,6 +251,17 @@ pub fn irradiance(
     size: usize,
     method: IrradianceMethod,
 ) -> (CubeMap, [[f64; 3]; 9]) {
+    irradiance_with_progress(base, size, method, &|_| {})
+}
+
+/// [`irradiance`], calling `progress(1)` for each of the 6 x `size` output rows the brute
+/// integral finishes (nothing for the SH method, which is instant).
+pub fn irradiance_with_progress(
+    base: &CubeMap,
+    size: usize,
+    method: IrradianceMethod,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (CubeMap, [[f64; 3]; 9]) {
     // A box-reduced copy: exact for the integral, and the SH of it is what the map holds.
     let chain = CubeMap {
         levels: vec![base.levels[0].clone()],
@@ -268,10 +279,11 @@ pub fn irradiance(
     };
     let coeffs = sh::project(&pick(256));
     let faces = match method {
-        IrradianceMethod::Brute => brute::convolve(
+        IrradianceMethod::Brute => brute::convolve_with_progress(
             &pick(IRRADIANCE_SOURCE_SIZE),
             Lobe::CosinePower { power: 1.0 },
             size,
+            progress,
         ),
         IrradianceMethod::Sh => {
             let e = sh::irradiance(&coeffs);

@@ -1,6 +1,7 @@
 //! Reading and writing files: codecs by content, size limits before allocation, and writes that
 //! land whole (temporary file, then rename) or not at all.
 
+pub mod atomic;
 pub mod dds;
 pub mod exr;
 pub mod ktx2;
@@ -10,7 +11,9 @@ pub mod rgbe;
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
 use crate::image::{ColorSpace, Image};
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+pub use atomic::{remove_temporaries, stage, write_all_atomic, Staged};
 
 /// Refuses images larger than this before any pixel memory is allocated.
 #[derive(Clone, Copy, Debug)]
@@ -466,8 +469,31 @@ pub fn regular_file(path: &Path) -> Result<()> {
 
 /// Reads any supported file as stored, by content, with the size limit checked from the
 /// header before pixels are allocated.
+/// The bytes of a file, or of standard input for the path `-` (up to the memory budget),
+/// with the name errors should give.
+fn read_input<'a>(path: &'a Path, limits: &Limits) -> Result<(Vec<u8>, &'a Path)> {
+    if path != Path::new("-") {
+        return Ok((read_file(path)?, path));
+    }
+    use std::io::Read;
+    let name = Path::new("standard input");
+    let mut bytes = Vec::new();
+    std::io::stdin()
+        .lock()
+        .take(limits.max_memory.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::file(name, io_msg(&e)))?;
+    if bytes.len() as u64 > limits.max_memory {
+        return Err(Error::file(
+            name,
+            "more bytes than the memory budget (--max-memory)",
+        ));
+    }
+    Ok((bytes, name))
+}
+
 pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
-    let bytes = read_file(path)?;
+    let (bytes, path) = read_input(path, &opts.limits)?;
     if bytes.is_empty() {
         return Err(Error::file(path, "file is empty"));
     }
@@ -550,55 +576,6 @@ pub fn unknown_ext(path: &Path) -> Error {
         path,
         "unknown output extension: use .png .jpg .tga .hdr .exr .ktx2 or .dds",
     )
-}
-
-/// Writes several files so that either all of them land or none does: each goes to a
-/// temporary file beside its target, and only when every one is complete are they renamed.
-pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
-    let mut temps: Vec<(PathBuf, &Path)> = Vec::new();
-    let cleanup = |temps: &[(PathBuf, &Path)]| {
-        for (t, _) in temps {
-            let _ = std::fs::remove_file(t);
-        }
-    };
-    // A rename onto a folder fails: find that out before anything is written.
-    if let Some((path, _)) = files.iter().find(|(p, _)| p.is_dir()) {
-        return Err(Error::file(path, "a folder of that name is in the way"));
-    }
-    for (path, bytes) in files {
-        let dir = path
-            .parent()
-            .filter(|p| !p.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        // A missing output folder is created (the README's first command writes into out/).
-        if let Err(e) = std::fs::create_dir_all(dir) {
-            cleanup(&temps);
-            return Err(Error::file(path, io_msg(&e)));
-        }
-        let tmp = dir.join(format!(".{name}.cubeforge-{}.tmp", std::process::id()));
-        if let Err(e) = std::fs::write(&tmp, bytes) {
-            let _ = std::fs::remove_file(&tmp);
-            cleanup(&temps);
-            return Err(Error::file(path, io_msg(&e)));
-        }
-        temps.push((tmp, path));
-    }
-    // Should a rename still fail, the files this call created are taken back.
-    let existed: Vec<bool> = temps.iter().map(|(_, p)| p.exists()).collect();
-    for (i, (tmp, path)) in temps.iter().enumerate() {
-        if let Err(e) = std::fs::rename(tmp, path) {
-            cleanup(&temps[i..]);
-            for ((_, done), _) in temps[..i].iter().zip(&existed).filter(|(_, &x)| !x) {
-                let _ = std::fs::remove_file(done);
-            }
-            return Err(Error::file(path, io_msg(&e)));
-        }
-    }
-    Ok(())
 }
 
 /// An I/O error as a short phrase ("No such file or directory").

@@ -660,6 +660,18 @@ pub fn render<E: Lookup + ?Sized>(
     surface: &Surface<'_>,
     opts: &Options,
 ) -> Result<Image> {
+    render_with_progress(env, material, surface, opts, &|_| {})
+}
+
+/// [`render`], calling `progress(1)` as each of the `opts.size` rows is done (for a progress
+/// bar: a large preview with many samples takes seconds).
+pub fn render_with_progress<E: Lookup + ?Sized>(
+    env: &E,
+    material: &Material,
+    surface: &Surface<'_>,
+    opts: &Options,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Image> {
     use rayon::prelude::*;
     opts.validate()?;
     material::validate(material).map_err(Error::usage)?;
@@ -757,6 +769,7 @@ pub fn render<E: Lookup + ?Sized>(
                 }
                 *out = acc * inv_s;
             }
+            progress(1);
         },
     );
     Ok(img)

@@ -24,6 +24,8 @@ impl Tonemap {
             Tonemap::None => x.min(1.0),
             Tonemap::Reinhard => x / (1.0 + x),
             Tonemap::Aces => {
+                // Past 1e4 the curve is flat at 1; its squares would overflow near 1e19.
+                let x = x.min(1e4);
                 ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
             }
         }
@@ -48,4 +50,29 @@ pub fn apply(img: &mut Image, tonemap: Tonemap, exposure: f32) {
     img.pixels
         .par_iter_mut()
         .for_each(|p| *p = tonemap.map(*p, exposure));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn curves_are_finite_and_in_range_for_every_input() {
+        for t in [Tonemap::None, Tonemap::Reinhard, Tonemap::Aces] {
+            for x in [
+                0.0,
+                1e-30,
+                0.5,
+                1.0,
+                1e4,
+                1e19,
+                1e28 * 2f32.powi(32),
+                f32::MAX,
+            ] {
+                let y = t.curve(x);
+                assert!((0.0..=1.0).contains(&y), "{t:?}({x}) = {y}");
+            }
+            assert!(t.curve(1e30) >= t.curve(10.0), "{t:?} is monotone");
+        }
+    }
 }
