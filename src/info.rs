@@ -1,12 +1,16 @@
-//! What a file holds: layout, sizes, levels, pixel format, colour space and value statistics.
+//! What a file or folder holds: layout, sizes, levels, pixel format, colour space and value
+//! statistics.
 
-use crate::error::Result;
+use crate::convert::find_faces;
+use crate::cube::{faces_from_images, CubeMap, Faces, FACE_LONG_NAMES, FACE_NAMES};
+use crate::error::{Error, Result};
 use crate::flux;
 use crate::image::{luminance, Image};
-use crate::io::{self, Decoded, ReadOptions};
+use crate::io::{self, Decoded, Meta, ReadOptions};
 use crate::layout::{self, Kind};
+use glam::Vec4;
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Stats {
@@ -64,6 +68,31 @@ fn levels_description(path: &Path, format: io::FileFormat) -> Option<serde_json:
 
 /// Statistics over images; luminance ignores non-finite values, sums run in a fixed order.
 pub fn stats<'a>(images: impl IntoIterator<Item = &'a Image>) -> Stats {
+    stats_of(images.into_iter().flat_map(|img| img.pixels.iter()))
+}
+
+/// Statistics over the texels of `img` that hold part of a `kind` layout: a cross's or
+/// strip's six faces (not its empty cells), the disc of a sphere or angular map (not the
+/// corners outside it), every texel of a panorama. With no layout, every texel.
+pub fn layout_stats(kind: Option<Kind>, img: &Image) -> Stats {
+    match kind {
+        Some(k) if k.is_cells() => stats(&layout::cross::extract(k, img)),
+        Some(k) => match k.projection() {
+            Some(p @ (layout::Projection::Sphere | layout::Projection::Angular)) => {
+                let (w, h) = (img.width, img.height);
+                stats_of(img.pixels.iter().enumerate().filter_map(|(i, px)| {
+                    let u = ((i % w) as f32 + 0.5) / w as f32;
+                    let v = ((i / w) as f32 + 0.5) / h as f32;
+                    p.to_dir(u, v).map(|_| px)
+                }))
+            }
+            _ => stats([img]),
+        },
+        None => stats([img]),
+    }
+}
+
+fn stats_of<'a>(pixels: impl Iterator<Item = &'a Vec4>) -> Stats {
     let mut s = Stats {
         min_luminance: f64::INFINITY,
         max_luminance: f64::NEG_INFINITY,
@@ -74,24 +103,22 @@ pub fn stats<'a>(images: impl IntoIterator<Item = &'a Image>) -> Stats {
     };
     let mut sum = 0.0f64;
     let mut n = 0u64;
-    for img in images {
-        for p in &img.pixels {
-            for c in p.to_array() {
-                if c.is_nan() {
-                    s.nan += 1;
-                } else if c.is_infinite() {
-                    s.inf += 1;
-                } else if c < 0.0 {
-                    s.negative += 1;
-                }
+    for p in pixels {
+        for c in p.to_array() {
+            if c.is_nan() {
+                s.nan += 1;
+            } else if c.is_infinite() {
+                s.inf += 1;
+            } else if c < 0.0 {
+                s.negative += 1;
             }
-            let l = luminance(*p) as f64;
-            if l.is_finite() {
-                s.min_luminance = s.min_luminance.min(l);
-                s.max_luminance = s.max_luminance.max(l);
-                sum += l;
-                n += 1;
-            }
+        }
+        let l = luminance(*p) as f64;
+        if l.is_finite() {
+            s.min_luminance = s.min_luminance.min(l);
+            s.max_luminance = s.max_luminance.max(l);
+            sum += l;
+            n += 1;
         }
     }
     if n == 0 {
@@ -112,26 +139,57 @@ fn image_flux(kind: Kind, img: &Image) -> Option<[f64; 3]> {
     }
     kind.is_cells().then(|| {
         let faces = layout::cross::extract(kind, img);
-        let grid = flux::Grid::Cube(faces[0].width);
-        flux::mean_radiance(grid, &faces.iter().collect::<Vec<_>>())
+        cube_flux(&faces)
     })
 }
 
-/// Reads a file as stored (no value replacement) and describes it.
-pub fn describe(path: &Path, opts: &ReadOptions) -> Result<Report> {
+fn cube_flux(faces: &Faces) -> [f64; 3] {
+    flux::mean_radiance(
+        flux::Grid::Cube(faces[0].width),
+        &faces.iter().collect::<Vec<_>>(),
+    )
+}
+
+/// What a square image with no `--from` may be.
+fn square_note(n: usize) -> String {
+    format!(
+        "a square {n}x{n} image: a sphere or angular map (face size {}; say which with --from sphere or --from angular) or a single face (face size {n})",
+        (n / 2).max(1)
+    )
+}
+
+/// Reads a file as stored (no value replacement), or a folder of six faces or a prefiltered
+/// chain (`m0/`, `m1/`, ... and `levels.json`, as `cubeforge prefilter` writes one), and
+/// describes it. `from` settles the layout of a single image (a square one needs it) or
+/// overrides what its shape says.
+pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Report> {
+    if path.is_dir() {
+        return describe_folder(path, from, opts);
+    }
     let (decoded, meta) = io::read_raw(path, opts)?;
     let file = path.display().to_string();
     Ok(match decoded {
         Decoded::Cube(cube) => {
+            let kind = if meta.file_format == io::FileFormat::Dds {
+                Kind::Dds
+            } else {
+                Kind::Ktx2
+            };
+            if let Some(k) = from.filter(|&k| k != kind) {
+                return Err(Error::file(
+                    path,
+                    format!(
+                        "--from {}: the file is a {} cube map",
+                        k.name(),
+                        meta.file_format.name()
+                    ),
+                ));
+            }
             let n = cube.size();
             Report {
                 file,
                 file_format: meta.file_format,
-                kind: Some(if meta.file_format == io::FileFormat::Dds {
-                    Kind::Dds
-                } else {
-                    Kind::Ktx2
-                }),
+                kind: Some(kind),
                 kind_note: None,
                 width: n,
                 height: n,
@@ -140,18 +198,34 @@ pub fn describe(path: &Path, opts: &ReadOptions) -> Result<Report> {
                 pixel_format: meta.pixel_format,
                 color_space: meta.color_space,
                 stats: stats(cube.levels[0].iter()),
-                flux: Some(flux::mean_radiance(
-                    flux::Grid::Cube(n),
-                    &cube.levels[0].iter().collect::<Vec<_>>(),
-                )),
+                flux: Some(cube_flux(&cube.levels[0])),
                 levels: levels_description(path, meta.file_format),
             }
         }
         Decoded::Image(img) => {
             let (w, h) = (img.width, img.height);
-            let (kind, note) = match layout::detect(w, h) {
-                Ok(k) => (Some(k), None),
-                Err(e) => (None, Some(e)),
+            let (kind, note) = match from {
+                Some(k @ (Kind::Faces | Kind::Ktx2 | Kind::Dds)) => {
+                    return Err(Error::file(
+                        path,
+                        format!(
+                            "--from {} does not describe a single image (give a folder of faces, or a .ktx2 or .dds file)",
+                            k.name()
+                        ),
+                    ))
+                }
+                Some(k) if !k.fits(w, h) => {
+                    return Err(Error::file(
+                        path,
+                        format!("a {w}x{h} image cannot hold a {} layout", k.name()),
+                    ))
+                }
+                Some(k) => (Some(k), None),
+                None if w == h => (None, Some(square_note(w))),
+                None => match layout::detect(w, h) {
+                    Ok(k) => (Some(k), None),
+                    Err(e) => (None, Some(e)),
+                },
             };
             Report {
                 file,
@@ -160,13 +234,12 @@ pub fn describe(path: &Path, opts: &ReadOptions) -> Result<Report> {
                 kind_note: note,
                 width: w,
                 height: h,
-                face_size: kind
-                    .map(|k| k.face_size(w, h))
-                    .or((w == h).then_some(w / 2)),
+                // Unknown where the layout is: a square image's face is its width or half of it.
+                face_size: kind.map(|k| k.face_size(w, h)),
                 mip_levels: 1,
                 pixel_format: meta.pixel_format,
                 color_space: meta.color_space,
-                stats: stats([&img]),
+                stats: layout_stats(kind, &img),
                 flux: kind.and_then(|k| image_flux(k, &img)),
                 levels: None,
             }
@@ -174,18 +247,171 @@ pub fn describe(path: &Path, opts: &ReadOptions) -> Result<Report> {
     })
 }
 
+/// Six faces read as stored, with the first face's description (and a note where the faces'
+/// pixel formats differ).
+fn read_faces(dir: &Path, opts: &ReadOptions) -> Result<(Faces, Meta)> {
+    let files = find_faces(dir)?;
+    let mut images = Vec::with_capacity(6);
+    let mut metas: Vec<Meta> = Vec::with_capacity(6);
+    for f in &files {
+        let (decoded, m) = io::read_raw(f, opts)?;
+        match decoded {
+            Decoded::Image(img) => images.push(img),
+            Decoded::Cube(_) => {
+                return Err(Error::file(
+                    f,
+                    "a face must be a single image, not a cube map",
+                ))
+            }
+        }
+        metas.push(m);
+    }
+    let cube = faces_from_images(images, &files)?;
+    let mut meta = metas.swap_remove(0);
+    let mut formats = vec![meta.pixel_format.clone()];
+    for m in &metas {
+        if !formats.contains(&m.pixel_format) {
+            formats.push(m.pixel_format.clone());
+        }
+    }
+    if formats.len() > 1 {
+        meta.pixel_format = format!("mixed: {}", formats.join(", "));
+    }
+    let CubeMap { mut levels } = cube;
+    Ok((levels.swap_remove(0), meta))
+}
+
+/// A folder of six faces, or a prefiltered chain `m0/`, `m1/`, ... (each a folder of faces,
+/// each level half the size of the one before) with its `levels.json`.
+fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Report> {
+    if let Some(k) = from.filter(|&k| k != Kind::Faces) {
+        return Err(Error::file(
+            dir,
+            format!(
+                "--from {}: a folder holds faces (--from faces) or a prefiltered chain",
+                k.name()
+            ),
+        ));
+    }
+    let chain = dir.join("m0").is_dir();
+    let (base, meta, mip_levels, levels) = if chain {
+        let (base, meta) = read_faces(&dir.join("m0"), opts)?;
+        let mut size = base[0].width;
+        let mut count = 1;
+        loop {
+            let sub = dir.join(format!("m{count}"));
+            if !sub.is_dir() {
+                break;
+            }
+            let (faces, _) = read_faces(&sub, opts)?;
+            let want = (size / 2).max(1);
+            if faces[0].width != want {
+                return Err(Error::file(
+                    &sub,
+                    format!(
+                        "faces are {0}x{0}, but level m{count} of a chain must be {1}x{1} (half of m{2})",
+                        faces[0].width,
+                        want,
+                        count - 1
+                    ),
+                ));
+            }
+            size = want;
+            count += 1;
+        }
+        (base, meta, count, chain_levels(dir, count)?)
+    } else {
+        if !holds_a_face(dir) {
+            // Say what a folder may hold when it holds none of it.
+            return Err(Error::file(
+                dir,
+                "holds neither six faces (px.EXT nx.EXT ... or posx.EXT negx.EXT ...) nor a prefiltered chain (m0/ m1/ ... and levels.json)",
+            ));
+        }
+        let (base, meta) = read_faces(dir, opts)?;
+        (base, meta, 1, None)
+    };
+    let n = base[0].width;
+    Ok(Report {
+        file: dir.display().to_string(),
+        file_format: meta.file_format,
+        kind: Some(Kind::Faces),
+        kind_note: None,
+        width: n,
+        height: n,
+        face_size: Some(n),
+        mip_levels,
+        pixel_format: meta.pixel_format,
+        color_space: meta.color_space,
+        stats: stats(base.iter()),
+        flux: Some(cube_flux(&base)),
+        levels,
+    })
+}
+
+/// Whether a folder holds any file named as a face (px.EXT, posx.EXT, ...).
+fn holds_a_face(dir: &Path) -> bool {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return true; // find_faces says why it cannot be read
+    };
+    entries.filter_map(|e| e.ok()).any(|e| {
+        let name = e.file_name().to_string_lossy().to_ascii_lowercase();
+        let stem = name.split('.').next().unwrap_or_default().to_owned();
+        FACE_NAMES.contains(&stem.as_str()) || FACE_LONG_NAMES.contains(&stem.as_str())
+    })
+}
+
+/// A chain folder's `levels.json`, if there is one; it must be JSON and list as many levels
+/// as the folder holds.
+fn chain_levels(dir: &Path, count: usize) -> Result<Option<serde_json::Value>> {
+    let path: PathBuf = dir.join("levels.json");
+    if !path.exists() {
+        return Ok(None);
+    }
+    let bytes = io::read_file(&path)?;
+    let json: serde_json::Value = serde_json::from_slice(&bytes)
+        .map_err(|e| Error::file(&path, format!("not valid JSON: {e}")))?;
+    if let Some(list) = json.get("levels").and_then(|l| l.as_array()) {
+        if list.len() != count {
+            return Err(Error::file(
+                &path,
+                format!(
+                    "lists {} levels but the folder holds {count} (m0 to m{})",
+                    list.len(),
+                    count - 1
+                ),
+            ));
+        }
+    }
+    Ok(Some(json))
+}
+
 impl std::fmt::Display for Report {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        writeln!(f, "{}", self.file)?;
+        // The name on one line, whatever it holds.
+        writeln!(f, "{}", self.file.replace('\n', "\\n").replace('\r', "\\r"))?;
         writeln!(f, "  format:       {}", self.file_format.name())?;
         match (&self.kind, &self.kind_note) {
+            (Some(Kind::Faces), _) if self.mip_levels > 1 => writeln!(
+                f,
+                "  layout:       faces, a prefiltered chain (folders m0 to m{})",
+                self.mip_levels - 1
+            )?,
+            (Some(Kind::Faces), _) => writeln!(f, "  layout:       faces (a folder of six)")?,
             (Some(k), _) => writeln!(f, "  layout:       {}", k.name())?,
             (None, Some(n)) => writeln!(f, "  layout:       unknown: {n}")?,
             _ => {}
         }
         writeln!(f, "  dimensions:   {} x {}", self.width, self.height)?;
-        if let Some(n) = self.face_size {
-            writeln!(f, "  face size:    {n}")?;
+        match self.face_size {
+            Some(n) => writeln!(f, "  face size:    {n}")?,
+            None if self.kind.is_none() && self.width == self.height => writeln!(
+                f,
+                "  face size:    unknown: {} as a sphere or angular map, {} as a single face",
+                (self.width / 2).max(1),
+                self.width
+            )?,
+            None => writeln!(f, "  face size:    unknown")?,
         }
         writeln!(f, "  mip levels:   {}", self.mip_levels)?;
         writeln!(f, "  pixel format: {}", self.pixel_format)?;

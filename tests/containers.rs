@@ -1,12 +1,15 @@
 //! KTX2 and DDS cube-map containers: round trips of every level in every format, hostile and
 //! truncated files (errors naming the file, never a panic), and checks by independent readers
-//! (ktx-parse for KTX2, Pillow for DDS) when they are installed.
+//! (ktx-parse for KTX2, Pillow and nvddsinfo for DDS): skipped with a line on stderr when one is
+//! not installed, failed when CI is set.
+
+mod common;
 
 use cubeforge::cube::CubeMap;
 use cubeforge::image::{linear_to_srgb, Image};
 use cubeforge::io::{self, dds, ktx2, Decoded, FileFormat, GpuFormat, Limits, ReadOptions};
 use glam::Vec4;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 const FORMATS: [GpuFormat; 4] = [
@@ -622,38 +625,14 @@ fn read_names_the_file_on_errors() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Independent readers. Each is skipped, with a note on stderr, when it is not installed.
-
-/// Folders that may hold `node_modules/ktx-parse`: $CUBEFORGE_TOOLS, then target/tools.
-fn tools_dirs() -> Vec<PathBuf> {
-    let mut dirs = Vec::new();
-    if let Some(d) = std::env::var_os("CUBEFORGE_TOOLS") {
-        dirs.push(PathBuf::from(d));
-    }
-    dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("target/tools"));
-    dirs
-}
-
-fn works(cmd: &str, arg: &str) -> bool {
-    Command::new(cmd)
-        .arg(arg)
-        .output()
-        .is_ok_and(|o| o.status.success())
-}
+// Independent readers (tests/common): each test is skipped, with a line on stderr, when its
+// reader is not installed, and fails when CI is set.
 
 #[test]
 fn ktx_parse_reads_our_ktx2() {
-    let Some(tools) = tools_dirs()
-        .into_iter()
-        .find(|d| d.join("node_modules/ktx-parse/package.json").is_file())
-    else {
-        eprintln!("skipped: ktx-parse not installed (npm install ktx-parse in $CUBEFORGE_TOOLS or target/tools)");
+    let Some(tools) = common::ktx_parse() else {
         return;
     };
-    if !works("node", "--version") {
-        eprintln!("skipped: node not installed");
-        return;
-    }
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/tools/ktx_check.mjs");
     let dir = tempfile::tempdir().unwrap();
     for format in FORMATS {
@@ -719,11 +698,7 @@ fn ktx_parse_reads_our_ktx2() {
 
 #[test]
 fn pillow_reads_our_rgba8_dds() {
-    let probe = Command::new("python3")
-        .args(["-c", "import PIL.DdsImagePlugin"])
-        .output();
-    if !probe.is_ok_and(|o| o.status.success()) {
-        eprintln!("skipped: Python Pillow not installed (python3 -m pip install pillow)");
+    if !common::pillow() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -787,8 +762,7 @@ fn faces_keep_their_order() {
 /// included. It prints the header only: the texels are checked by the Pillow test above.
 #[test]
 fn nvddsinfo_reads_our_dds_headers() {
-    if Command::new("nvddsinfo").output().is_err() {
-        eprintln!("skipped: nvddsinfo not installed (apt-get install libnvtt-bin)");
+    if !common::nvddsinfo() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

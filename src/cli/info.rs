@@ -1,4 +1,4 @@
-//! `cubeforge info`: describe files.
+//! `cubeforge info`: describe files and folders.
 
 use cubeforge::io::{Limits, ReadOptions};
 use cubeforge::{info, Error, Result};
@@ -6,9 +6,14 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Files to describe.
+    /// Files to describe, or folders: six faces (px.EXT ... or posx.EXT ...), or a prefiltered
+    /// chain (m0/ m1/ ... and levels.json, as `cubeforge prefilter` writes one).
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
+    /// Layout of single images: settles a square image (sphere or angular) and overrides what
+    /// the aspect ratio says.
+    #[arg(long, value_enum)]
+    pub from: Option<cubeforge::layout::Kind>,
     /// Print JSON: one object for one file, an array for several.
     #[arg(long)]
     pub json: bool,
@@ -32,11 +37,13 @@ pub fn run(args: Args) -> Result<()> {
     let mut reports = Vec::new();
     let mut failed = 0;
     for f in &args.files {
-        match info::describe(f, &opts) {
+        match info::describe(f, args.from, &opts) {
             Ok(r) => reports.push(r),
             // One file: its error is the one line (no summary after it).
             Err(e) if args.files.len() == 1 => return Err(e),
             Err(e) => {
+                // One line, even for a name that holds a line break.
+                let e = e.to_string().replace(['\n', '\r'], " ");
                 super::tell(format_args!("cubeforge: error: {e}"));
                 failed += 1;
             }

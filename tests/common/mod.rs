@@ -166,3 +166,94 @@ pub fn sphere_mean(faces: &[Image; 6], channel: usize) -> f64 {
     }
     acc / (4.0 * std::f64::consts::PI)
 }
+
+// ---------------------------------------------------------------------------------------------
+// Independent readers (OpenImageIO, nvddsinfo, ktx-parse, Pillow). A test that needs one calls
+// its finder first: where the reader is missing the test prints a skip line on stderr and
+// returns, or fails when CI is set to a true value (.ci/run installs every reader and sets
+// CI=true, so a reader that went missing there is a failure, not a silent pass).
+
+/// Whether `CI` holds a true value (`true`, `1`, `yes`; any case), as CI services set it.
+pub fn ci() -> bool {
+    std::env::var("CI")
+        .map(|v| matches!(v.trim().to_ascii_lowercase().as_str(), "true" | "1" | "yes"))
+        .unwrap_or(false)
+}
+
+/// `found`, or: under CI a failure that names the missing reader; otherwise false after a
+/// skip line naming the test, the reader and how to install it.
+pub fn reader_found(reader: &str, install: &str, found: bool) -> bool {
+    if found {
+        return true;
+    }
+    let test = std::thread::current()
+        .name()
+        .unwrap_or("this test")
+        .to_owned();
+    assert!(
+        !ci(),
+        "{test}: the independent reader {reader} is missing, and CI is set: install it ({install}) or unset CI"
+    );
+    // Straight to the process's stderr: libtest captures eprintln! of passing tests.
+    use std::io::Write;
+    let _ = writeln!(
+        std::io::stderr(),
+        "SKIPPED {test}: {reader} not installed ({install}); with CI=true this fails"
+    );
+    false
+}
+
+/// Whether `cmd ARGS` runs (exit status ignored when `any_status`).
+fn runs(cmd: &str, args: &[&str], any_status: bool) -> bool {
+    Command::new(cmd)
+        .args(args)
+        .output()
+        .is_ok_and(|o| any_status || o.status.success())
+}
+
+/// OpenImageIO's `oiiotool`.
+pub fn oiiotool() -> bool {
+    reader_found(
+        "oiiotool",
+        "apt-get install openimageio-tools",
+        runs("oiiotool", &["--version"], false),
+    )
+}
+
+/// NVIDIA Texture Tools' `nvddsinfo` (it exits non-zero when given no file).
+pub fn nvddsinfo() -> bool {
+    reader_found(
+        "nvddsinfo",
+        "apt-get install libnvtt-bin",
+        runs("nvddsinfo", &[], true),
+    )
+}
+
+/// Python's Pillow with its DDS plugin.
+pub fn pillow() -> bool {
+    reader_found(
+        "Pillow",
+        "python3 -m pip install pillow",
+        runs("python3", &["-c", "import PIL.DdsImagePlugin"], false),
+    )
+}
+
+/// The folder holding `node_modules/ktx-parse` ($CUBEFORGE_TOOLS, then target/tools), when
+/// node runs too; `tests/tools/ktx_check.mjs` takes it as its first argument.
+pub fn ktx_parse() -> Option<PathBuf> {
+    let mut dirs: Vec<PathBuf> = std::env::var_os("CUBEFORGE_TOOLS")
+        .map(PathBuf::from)
+        .into_iter()
+        .collect();
+    dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("target/tools"));
+    let tools = dirs
+        .into_iter()
+        .find(|d| d.join("node_modules/ktx-parse/package.json").is_file());
+    let node = runs("node", &["--version"], false);
+    let found = reader_found(
+        "ktx-parse (with node)",
+        "npm install ktx-parse@2 in target/tools or $CUBEFORGE_TOOLS; node from your system",
+        tools.is_some() && node,
+    );
+    tools.filter(|_| found)
+}

@@ -1,0 +1,243 @@
+//! The README's examples run, in order, on a fresh copy of the repository.
+//!
+//! The convention: in the README's ```sh blocks, every line that starts with `cubeforge ` is an
+//! example (a trailing `\` continues it on the next line, `&&` chains commands, `#` starts a
+//! comment); lines that start with `cargo ` are set-up and are not run here. Any other line in an
+//! sh block is an error, so nothing there goes untested. The examples run with the built binary
+//! in a temporary folder that holds a copy of `fixtures/` and, when it exists, a link to
+//! `../shared`; lines that read `../shared/fixtures/real` are skipped without it. Each must exit
+//! 0, and no example may write an output (`-o`, `--sh`) that an earlier one wrote.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+/// One example: its README line and its commands (each the arguments after `cubeforge`).
+struct Example {
+    line: usize,
+    text: String,
+    commands: Vec<Vec<String>>,
+}
+
+/// The examples of a README text, by the convention above, or what breaks the convention.
+fn examples(readme: &str) -> Result<Vec<Example>, String> {
+    let mut out = Vec::new();
+    let mut fence: Option<String> = None;
+    let mut pending: Option<(usize, String)> = None;
+    for (i, raw) in readme.lines().enumerate() {
+        let line_no = i + 1;
+        let trimmed = raw.trim();
+        if pending.is_none() && trimmed.starts_with("```") {
+            fence = match fence {
+                None => Some(trimmed.trim_start_matches('`').trim().to_owned()),
+                Some(_) => None,
+            };
+            continue;
+        }
+        if fence.as_deref() != Some("sh") {
+            continue;
+        }
+        let code = strip_comment(raw);
+        let (start, mut text) = pending.take().unwrap_or((line_no, String::new()));
+        text.push(' ');
+        match code.trim_end().strip_suffix('\\') {
+            Some(more) => {
+                text.push_str(more);
+                pending = Some((start, text));
+                continue;
+            }
+            None => text.push_str(code),
+        }
+        let text = text.split_whitespace().collect::<Vec<_>>().join(" ");
+        if text.is_empty() || text.starts_with("cargo ") {
+            continue;
+        }
+        if !text.starts_with("cubeforge ") {
+            return Err(format!(
+                "README.md:{start}: a line of an sh block that is neither a cubeforge example nor \
+                 a cargo set-up line: {text}"
+            ));
+        }
+        if let Some(c) = text.chars().find(|c| "'\"$|<>;*?`~(){}".contains(*c)) {
+            return Err(format!(
+                "README.md:{start}: examples are plain words (found {c:?}): {text}"
+            ));
+        }
+        let mut commands = Vec::new();
+        for part in text.split("&&") {
+            let words: Vec<String> = part.split_whitespace().map(str::to_owned).collect();
+            if words.first().map(String::as_str) != Some("cubeforge") {
+                return Err(format!(
+                    "README.md:{start}: every command of a chain is a cubeforge command: {text}"
+                ));
+            }
+            commands.push(words[1..].to_vec());
+        }
+        out.push(Example {
+            line: start,
+            text,
+            commands,
+        });
+    }
+    if pending.is_some() {
+        return Err("README.md: an example ends with '\\'".into());
+    }
+    if fence.is_some() {
+        return Err("README.md: a code block is not closed".into());
+    }
+    Ok(out)
+}
+
+/// The line without its comment (`#` at the start or after a space).
+fn strip_comment(line: &str) -> &str {
+    let bytes = line.as_bytes();
+    for (i, &b) in bytes.iter().enumerate() {
+        if b == b'#' && (i == 0 || bytes[i - 1].is_ascii_whitespace()) {
+            return &line[..i];
+        }
+    }
+    line
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let target = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), &target).unwrap();
+        }
+    }
+}
+
+#[test]
+fn readme_examples_run_in_order_on_a_fresh_copy() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(repo.join("README.md")).unwrap();
+
+    // The set-up: install, the main job on a bundled input, the tests.
+    let setup = readme
+        .split("## Set-up")
+        .nth(1)
+        .and_then(|s| s.split("```sh").nth(1))
+        .and_then(|s| s.split("```").next())
+        .expect("README.md has a Set-up section with an sh block");
+    let setup: Vec<&str> = setup
+        .lines()
+        .map(|l| strip_comment(l).trim())
+        .filter(|l| !l.is_empty())
+        .collect();
+    assert_eq!(setup.len(), 3, "install, main job, tests: {setup:?}");
+    assert_eq!(setup[0], "cargo install --path .");
+    assert!(
+        setup[1].starts_with("cargo run --release -- convert fixtures/"),
+        "{setup:?}"
+    );
+    assert_eq!(setup[2], "cargo test");
+
+    let examples = examples(&readme).unwrap_or_else(|e| panic!("{e}"));
+    assert!(examples.len() >= 20, "{} examples", examples.len());
+
+    // A fresh copy: the bundled fixtures, and ../shared beside it when this checkout has one.
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path().join("cubeforge");
+    copy_dir(&repo.join("fixtures"), &root.join("fixtures"));
+    let shared = repo.join("../shared");
+    let have_shared = cfg!(unix) && shared.join("fixtures/real").is_dir();
+    #[cfg(unix)]
+    if have_shared {
+        std::os::unix::fs::symlink(shared.canonicalize().unwrap(), tmp.path().join("shared"))
+            .unwrap();
+    }
+
+    let start = Instant::now();
+    let (mut ran, mut skipped) = (0, 0);
+    for ex in &examples {
+        if ex.text.contains("../shared/") && !have_shared {
+            use std::io::Write;
+            let _ = writeln!(
+                std::io::stderr(),
+                "SKIPPED README.md:{}: ../shared/fixtures/real not found",
+                ex.line
+            );
+            skipped += 1;
+            continue;
+        }
+        for args in &ex.commands {
+            for (flag, value) in args.iter().zip(args.iter().skip(1)) {
+                if ["-o", "--output", "--sh"].contains(&flag.as_str()) {
+                    assert!(
+                        !root.join(value).exists(),
+                        "README.md:{}: {value} was written by an earlier example: {}",
+                        ex.line,
+                        ex.text
+                    );
+                }
+            }
+            let t = Instant::now();
+            let out = Command::new(env!("CARGO_BIN_EXE_cubeforge"))
+                .args(args)
+                .current_dir(&root)
+                .output()
+                .expect("cubeforge runs");
+            println!(
+                "{:6.2} s  README.md:{}: cubeforge {}",
+                t.elapsed().as_secs_f64(),
+                ex.line,
+                args.join(" ")
+            );
+            assert!(
+                out.status.success(),
+                "README.md:{}: {} failed:\n{}",
+                ex.line,
+                ex.text,
+                String::from_utf8_lossy(&out.stderr)
+            );
+            ran += 1;
+        }
+    }
+    println!(
+        "{ran} commands in {:.2} s, {skipped} examples skipped",
+        start.elapsed().as_secs_f64()
+    );
+    let outputs: Vec<PathBuf> = std::fs::read_dir(root.join("out"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert!(!outputs.is_empty());
+}
+
+/// The convention itself, on a made-up README.
+#[test]
+fn examples_follow_the_convention() {
+    let text = "intro\n```sh\ncargo test   # set-up\n# a comment\ncubeforge info a.exr  # why\n\
+                cubeforge convert a.exr \\\n    -o b.exr && cubeforge info b.exr\n```\n\
+                ```text\nnot run\n```\n";
+    let ex = examples(text).unwrap();
+    assert_eq!(ex.len(), 2);
+    assert_eq!(
+        (ex[0].line, ex[0].commands.clone()),
+        (5, vec![vec!["info".to_string(), "a.exr".into()]])
+    );
+    assert_eq!(ex[1].line, 6);
+    assert_eq!(
+        ex[1].commands,
+        vec![
+            vec!["convert", "a.exr", "-o", "b.exr"],
+            vec!["info", "b.exr"]
+        ]
+        .into_iter()
+        .map(|c| c.into_iter().map(String::from).collect::<Vec<_>>())
+        .collect::<Vec<_>>()
+    );
+    for bad in [
+        "```sh\nls out/\n```\n",
+        "```sh\ncubeforge info *.exr\n```\n",
+        "```sh\ncubeforge info a.exr && ls\n```\n",
+        "```sh\ncubeforge info a.exr\n",
+    ] {
+        assert!(examples(bad).is_err(), "{bad}");
+    }
+}
