@@ -31,6 +31,23 @@ pub struct Loaded {
 }
 
 impl Loaded {
+    /// A cube map made in memory (a filter's result, say) as an input to convert from.
+    pub fn from_cube(cube: CubeMap) -> Loaded {
+        Loaded {
+            source: Source::Cube(cube),
+            kind: Kind::Faces,
+            hdr: true,
+            meta: Meta {
+                file_format: FileFormat::Exr,
+                pixel_format: "RGBA32F".into(),
+                color_space: crate::image::ColorSpace::Linear,
+                hdr: true,
+                replaced_values: 0,
+            },
+            files: Vec::new(),
+        }
+    }
+
     /// Keeps only level `n` of a cube map's mip chain (a prefiltered chain's blurrier level,
     /// say) as the input.
     pub fn keep_level(&mut self, n: usize) -> Result<()> {
@@ -289,24 +306,39 @@ pub enum Output {
     Cube(CubeMap),
 }
 
-/// Renders `to` at face edge `size`. A cube input written as a cube of the same size and
-/// orientation is copied texel for texel, never resampled.
+/// Renders `to` at face edge `size`: a cube map for faces and containers, an image for the
+/// others.
 pub fn convert(loaded: &Loaded, to: Kind, size: usize, resampler: &Resampler) -> Output {
-    let as_is = resampler.orientation.is_identity();
-    let cube = |size: usize| match &loaded.source {
-        Source::Cube(c) if as_is && c.size() == size => CubeMap {
+    match to {
+        Kind::Faces | Kind::Ktx2 | Kind::Dds => Output::Cube(to_cube(loaded, size, resampler)),
+        _ => Output::Image(to_image(loaded, to, size, resampler)),
+    }
+}
+
+/// The input as a cube map of face edge `size`. A cube input of that size and orientation is
+/// copied texel for texel, never resampled.
+pub fn to_cube(loaded: &Loaded, size: usize, resampler: &Resampler) -> CubeMap {
+    match &loaded.source {
+        Source::Cube(c) if resampler.orientation.is_identity() && c.size() == size => CubeMap {
             levels: vec![c.levels[0].clone()],
         },
         _ => resampler.to_cube(loaded.environment(Some(2.0 / size as f32)).as_ref(), size),
-    };
+    }
+}
+
+/// The input as one image in layout `to` (a projection, cross or strip) for face edge
+/// `size`; `to` naming faces or a container gives a horizontal cross.
+pub fn to_image(loaded: &Loaded, to: Kind, size: usize, resampler: &Resampler) -> Image {
     match to.projection() {
         Some(p) => {
             let (w, h) = to.image_size(size);
             let footprint =
                 (p == layout::Projection::Equirect).then(|| std::f32::consts::PI / h as f32);
-            Output::Image(resampler.to_projection(loaded.environment(footprint).as_ref(), p, w, h))
+            resampler.to_projection(loaded.environment(footprint).as_ref(), p, w, h)
         }
-        None if to.is_cells() => Output::Image(cross::assemble(to, &cube(size).levels[0])),
-        None => Output::Cube(cube(size)),
+        None => {
+            let cells = if to.is_cells() { to } else { Kind::Hcross };
+            cross::assemble(cells, &to_cube(loaded, size, resampler).levels[0])
+        }
     }
 }

@@ -109,7 +109,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let mut inputs = vec![a.recipe.clone()];
     inputs.extend(recipe.images().iter().map(|f| f.path.clone()));
     // Never over the recipe or an image it reads.
-    super::convert::refuse_inputs(&[a.output.clone(), sidecar_path.clone()], &inputs)?;
+    cubeforge::output::refuse_inputs(&[a.output.clone(), sidecar_path.clone()], &inputs)?;
 
     let size = recipe
         .output_size(a.size)

@@ -1,14 +1,14 @@
 //! `cubeforge convert`: any layout to any other.
 
 use super::{warn, Stages};
-use cubeforge::convert::{self, Output};
-use cubeforge::cube::{CubeMap, Faces, Interp, FACE_NAMES};
+use cubeforge::convert;
+use cubeforge::cube::{CubeMap, Interp};
 use cubeforge::io::{self, FileFormat, GpuFormat, WriteOptions};
 use cubeforge::layout::Kind;
-use cubeforge::preview::tonemap;
+use cubeforge::output::{self, Target};
 use cubeforge::resample::{Orientation, Resampler};
 use cubeforge::{Error, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -71,8 +71,9 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     a.output = output;
     let limits = a.input.limits();
     let read = a.input.read_options();
-    let to = output_kind(&a)?;
-    // Say which options this output ignores, and refuse the impossible, before the decode.
+    // The output's layout and type, and the options it ignores, before the decode.
+    let mut target = Target::new(&a.output, a.to, false)?;
+    let to = target.kind;
     let container = matches!(to, Kind::Ktx2 | Kind::Dds);
     if !container {
         if a.levels.is_some() {
@@ -91,9 +92,8 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
             a.output.display()
         ));
     }
-    // Check the options before the (possibly slow) decode.
-    let face_format = match to {
-        Kind::Faces => face_format(&a)?,
+    let face_format = match (to, &a.format) {
+        (Kind::Faces, Some(f)) => Some(output::face_format(f)?),
         _ => None,
     };
     let loaded = load_level(&a.inputs, a.input.from, &read, a.level)?;
@@ -134,12 +134,18 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
         format_args!("--size {size} ({w}x{h} output)"),
         (texels * 2 + input / 2) * 16,
     )?;
-    let hdr_out = loaded.hdr;
-    let face_format = face_format.unwrap_or(if hdr_out {
+    target.face_format = face_format.unwrap_or(if loaded.hdr {
         FileFormat::Exr
     } else {
         FileFormat::Png
     });
+    target.write = WriteOptions {
+        linear: a.input.linear,
+        png16: a.png16,
+        gpu_format: a.gpu_format.unwrap_or_default(),
+    };
+    target.levels = a.levels;
+    target.tone = a.tone.for_target(&target);
 
     let resampler = Resampler {
         interp: a.interp,
@@ -153,24 +159,12 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     };
     let out = convert::convert(&loaded, to, size, &resampler);
     stages.done("resample");
-
-    let write = WriteOptions {
-        linear: a.input.linear,
-        png16: a.png16,
-        gpu_format: a.gpu_format.unwrap_or_default(),
-    };
-    let files = encode_output(
-        &a.output,
-        to,
-        out,
-        face_format,
-        &write,
-        a.levels,
-        &a.tone,
-        &loaded.files,
-    )?;
+    let encoded = target.encode(out, &loaded.files)?;
+    if let Some(w) = &encoded.clamped {
+        warn(w);
+    }
     stages.done("encode");
-    super::deliver(&files, to_stdout)?;
+    super::deliver(&encoded.files, to_stdout)?;
     stages.done("write");
     stages.total();
     Ok(())
@@ -199,171 +193,4 @@ pub(super) fn load_level(
     let mut loaded = convert::load(inputs, from, read)?;
     loaded.keep_level(level)?;
     Ok(loaded)
-}
-
-/// Encodes a conversion's result as the files it becomes: six faces in a folder, a container
-/// with `levels` box mips (None: the full chain), or one image. 8-bit outputs get the
-/// exposure and tone curve. Refuses to overwrite inputs.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn encode_output(
-    output: &Path,
-    to: Kind,
-    mut out: Output,
-    face_format: FileFormat,
-    write: &WriteOptions,
-    levels: Option<usize>,
-    tone: &super::ToneArgs,
-    inputs: &[PathBuf],
-) -> Result<Vec<(PathBuf, Vec<u8>)>> {
-    let format = match to {
-        Kind::Faces => Some(face_format),
-        _ => FileFormat::from_extension(output),
-    };
-    let mut images: Vec<&mut cubeforge::image::Image> = match &mut out {
-        Output::Cube(c) => c.levels[0].iter_mut().collect(),
-        Output::Image(img) => vec![img],
-    };
-    if let Some(f) = format {
-        if tone.applies(output, f, write.gpu_format) {
-            for img in &mut images {
-                tonemap::apply(img, tone.tonemap, tone.exposure);
-            }
-        }
-    }
-    let images = images.into_iter().map(|i| &*i);
-    if let Some(f) = format {
-        // Box mips are means of level 0: they fit where it fits.
-        if let Some(w) = io::clamp_warning(output, f, write.gpu_format, images) {
-            super::warn(w);
-        }
-    }
-    match (to, out) {
-        (Kind::Faces, Output::Cube(cube)) => {
-            encode_faces(output, &cube.levels[0], face_format, write, inputs)
-        }
-        (Kind::Ktx2 | Kind::Dds, Output::Cube(cube)) => {
-            refuse_inputs(&[output.to_path_buf()], inputs)?;
-            let cube: CubeMap = cube.with_box_mips(levels);
-            Ok(vec![(
-                output.to_path_buf(),
-                io::encode_cube(output, &cube, write.gpu_format)?,
-            )])
-        }
-        (_, Output::Image(img)) => {
-            refuse_inputs(&[output.to_path_buf()], inputs)?;
-            Ok(vec![(
-                output.to_path_buf(),
-                io::encode_image(output, &img, write)?,
-            )])
-        }
-        (_, Output::Cube(_)) => unreachable!("only faces and containers produce cube output"),
-    }
-}
-
-/// Six face images `dir/px.EXT` ... encoded in parallel; the folder is created.
-pub(super) fn encode_faces(
-    dir: &Path,
-    faces: &Faces,
-    format: FileFormat,
-    write: &WriteOptions,
-    inputs: &[PathBuf],
-) -> Result<Vec<(PathBuf, Vec<u8>)>> {
-    let ext = match format {
-        FileFormat::Jpeg => "jpg",
-        FileFormat::Png => "png",
-        FileFormat::Tga => "tga",
-        FileFormat::Hdr => "hdr",
-        _ => "exr",
-    };
-    let paths: Vec<PathBuf> = FACE_NAMES
-        .iter()
-        .map(|n| dir.join(format!("{n}.{ext}")))
-        .collect();
-    refuse_inputs(&paths, inputs)?;
-    let encoded: Vec<Result<Vec<u8>>> = {
-        use rayon::prelude::*;
-        paths
-            .par_iter()
-            .zip(faces.par_iter())
-            .map(|(p, f)| io::encode_image(p, f, write))
-            .collect()
-    };
-    paths
-        .into_iter()
-        .zip(encoded)
-        .map(|(p, e)| e.map(|b| (p, b)))
-        .collect()
-}
-
-/// The output layout: --to, or what the output's name implies.
-fn output_kind(a: &Args) -> Result<Kind> {
-    output_kind_for(&a.output, a.to)
-}
-
-pub(super) fn output_kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
-    let by_name = FileFormat::from_extension(output);
-    match (to, by_name) {
-        (Some(Kind::Ktx2), Some(FileFormat::Ktx2)) | (Some(Kind::Dds), Some(FileFormat::Dds)) => {
-            Ok(to.unwrap())
-        }
-        (Some(k @ (Kind::Ktx2 | Kind::Dds)), _) => Err(Error::file(
-            output,
-            format!("--to {} needs an output named .{}", k.name(), k.name()),
-        )),
-        (Some(Kind::Faces), Some(_)) => Err(Error::file(
-            output,
-            "--to faces writes a folder: give a folder name without an image extension",
-        )),
-        (Some(Kind::Faces), None) => Ok(Kind::Faces),
-        (Some(k), Some(f)) if f.is_container() => Err(Error::file(
-            output,
-            format!(
-                "{} holds cube maps, not a {} image: use --to {}",
-                f.name(),
-                k.name(),
-                if f == FileFormat::Dds { "dds" } else { "ktx2" }
-            ),
-        )),
-        (Some(k), Some(_)) => Ok(k),
-        (Some(k), None) => Err(Error::file(
-            output,
-            format!(
-                "a {} image needs a file name ending in .png .jpg .tga .hdr or .exr",
-                k.name()
-            ),
-        )),
-        (None, Some(FileFormat::Ktx2)) => Ok(Kind::Ktx2),
-        (None, Some(FileFormat::Dds)) => Ok(Kind::Dds),
-        (None, Some(_)) => Ok(Kind::Hcross),
-        (None, None) if output.extension().is_some() && !output.is_dir() => {
-            Err(io::unknown_ext(output))
-        }
-        (None, None) => Ok(Kind::Faces),
-    }
-}
-
-fn face_format(a: &Args) -> Result<Option<FileFormat>> {
-    match &a.format {
-        None => Ok(None),
-        Some(f) => match FileFormat::from_ext_str(f) {
-            Some(ff) if !ff.is_container() => Ok(Some(ff)),
-            _ => Err(Error::usage(format!(
-                "--format {f}: face images are png, jpg, tga, hdr or exr"
-            ))),
-        },
-    }
-}
-
-/// Refuses to write over any input file.
-pub(super) fn refuse_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<()> {
-    let canon = |p: &Path| std::fs::canonicalize(p).ok();
-    let ins: Vec<PathBuf> = inputs.iter().filter_map(|p| canon(p)).collect();
-    for o in outputs {
-        if let Some(c) = canon(o) {
-            if ins.contains(&c) {
-                return Err(Error::file(o, "refusing to overwrite an input file"));
-            }
-        }
-    }
-    Ok(())
 }

@@ -1,10 +1,11 @@
 //! `cubeforge irradiance`: the diffuse side: an irradiance cube map and 9 SH coefficients.
 
-use super::{convert::encode_output, convert::output_kind_for, Stages};
-use cubeforge::convert::{self, Loaded, Output, Source};
+use super::Stages;
+use cubeforge::convert::{self, Loaded, Output};
 use cubeforge::filter::{self, sh, IrradianceMethod};
-use cubeforge::io::{FileFormat, GpuFormat, WriteOptions};
+use cubeforge::io::{GpuFormat, WriteOptions};
 use cubeforge::layout::Kind;
+use cubeforge::output::{self, Target};
 use cubeforge::resample::Resampler;
 use cubeforge::{Error, Result};
 use std::path::PathBuf;
@@ -43,15 +44,15 @@ pub struct Args {
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
     let mut stages = Stages::new(verbose);
-    let to = output_kind_for(&a.output, a.to)?;
-    let face_format = FileFormat::from_ext_str(&a.format)
-        .filter(|f| !f.is_container())
-        .ok_or_else(|| {
-            Error::usage(format!(
-                "--format {}: use exr, hdr, png, tga or jpg",
-                a.format
-            ))
-        })?;
+    let mut target = Target::new(&a.output, a.to, true)?;
+    target.face_format = output::face_format(&a.format)?;
+    target.write = WriteOptions {
+        linear: a.input.linear,
+        gpu_format: a.gpu_format,
+        ..WriteOptions::default()
+    };
+    target.levels = Some(1);
+    target.tone = a.tone.for_target(&target);
     if a.size == 0 || a.size > 4096 {
         return Err(Error::usage(format!("--size {}: use 1 to 4096", a.size)));
     }
@@ -60,11 +61,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     stages.done("decode");
     // 256 faces hold everything the integral and the SH can see.
     let base_size = loaded.face_size().min(256);
-    let Output::Cube(base) =
-        convert::convert(&loaded, Kind::Faces, base_size, &Resampler::default())
-    else {
-        unreachable!("faces are a cube")
-    };
+    let base = convert::to_cube(&loaded, base_size, &Resampler::default());
     stages.done("resample");
     let bar = super::progress(6 * a.size as u64, format!("irradiance {}", a.size));
     let (irr, coeffs) = filter::irradiance_with_progress(&base, a.size, a.method, &|n| {
@@ -77,38 +74,24 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     }
     stages.done("filter");
 
-    let out = match to {
+    let out = match target.kind {
         Kind::Faces | Kind::Ktx2 | Kind::Dds => Output::Cube(irr),
-        _ => {
-            let as_input = Loaded {
-                source: Source::Cube(irr),
-                kind: Kind::Faces,
-                hdr: true,
-                meta: loaded.meta.clone(),
-                files: loaded.files.clone(),
-            };
-            convert::convert(&as_input, to, a.size, &Resampler::default())
-        }
+        to => Output::Image(convert::to_image(
+            &Loaded::from_cube(irr),
+            to,
+            a.size,
+            &Resampler::default(),
+        )),
     };
-    let write = WriteOptions {
-        linear: a.input.linear,
-        gpu_format: a.gpu_format,
-        ..WriteOptions::default()
-    };
-    let mut files = encode_output(
-        &a.output,
-        to,
-        out,
-        face_format,
-        &write,
-        Some(1),
-        &a.tone,
-        &loaded.files,
-    )?;
+    let encoded = target.encode(out, &loaded.files)?;
+    if let Some(w) = &encoded.clamped {
+        super::warn(w);
+    }
+    let mut files = encoded.files;
     if let Some(p) = &a.sh {
         let json = serde_json::to_vec_pretty(&sh::ShFile::new(&coeffs))
             .map_err(|e| Error::usage(e.to_string()))?;
-        super::convert::refuse_inputs(std::slice::from_ref(p), &loaded.files)?;
+        output::refuse_inputs(std::slice::from_ref(p), &loaded.files)?;
         files.push((p.clone(), json));
     }
     stages.done("encode");

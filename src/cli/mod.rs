@@ -103,13 +103,21 @@ pub struct ToneArgs {
 }
 
 impl ToneArgs {
-    /// Whether an output in `format` gets the curve; says so when the options are ignored.
-    pub fn applies(&self, output: &std::path::Path, format: FileFormat, gpu: GpuFormat) -> bool {
-        tone_applies(output, format, gpu, self.exposure, self.tonemap)
+    /// What the target gets: the curve for 8-bit outputs; for others, None and a warning
+    /// when the options were given.
+    pub fn for_target(&self, target: &cubeforge::output::Target) -> Option<(f32, Tonemap)> {
+        let given = self.exposure != 0.0 || self.tonemap != Tonemap::None;
+        if given && !target.is_8bit() {
+            warn(format_args!(
+                "{}: --exposure and --tonemap apply to 8-bit outputs; this one keeps linear radiance",
+                target.path.display()
+            ));
+        }
+        (given && target.is_8bit()).then_some((self.exposure, self.tonemap))
     }
 }
 
-/// See [`ToneArgs::applies`].
+/// Whether an output in `format` is tone-mapped; says so when the options are ignored.
 pub fn tone_applies(
     output: &std::path::Path,
     format: FileFormat,

@@ -1,10 +1,10 @@
 //! `cubeforge prefilter`: mip chains for blurred and glossy reflections.
 
-use super::{convert::encode_faces, convert::refuse_inputs, Stages};
-use cubeforge::convert::{self, Output};
+use super::Stages;
+use cubeforge::convert;
 use cubeforge::filter::{self, ChainOptions, FilterKind, LevelInfo, LightingModel};
 use cubeforge::io::{self, FileFormat, GpuFormat, WriteOptions};
-use cubeforge::layout::Kind;
+use cubeforge::output::{encode_faces, refuse_inputs};
 use cubeforge::resample::Resampler;
 use cubeforge::{Error, Result};
 use serde::Serialize;
@@ -106,10 +106,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         format_args!("--size {size}"),
         6 * (size as u64).pow(2) * 16 * 4,
     )?;
-    let Output::Cube(base) = convert::convert(&loaded, Kind::Faces, size, &Resampler::default())
-    else {
-        unreachable!("faces are a cube")
-    };
+    let base = convert::to_cube(&loaded, size, &Resampler::default());
     stages.done("resample");
 
     let opts = ChainOptions {

@@ -345,7 +345,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     };
     stages.done("render");
 
-    super::convert::refuse_inputs(std::slice::from_ref(output), &inputs)?;
+    cubeforge::output::refuse_inputs(std::slice::from_ref(output), &inputs)?;
     if let Some(f) = io::FileFormat::from_extension(output) {
         if let Some(w) = io::clamp_warning(output, f, Default::default(), [&img]) {
             super::warn(w);

@@ -22,7 +22,7 @@ pub mod material;
 pub mod sphere;
 pub mod tonemap;
 
-use crate::convert::{self, Output, Source};
+use crate::convert::{self, Source};
 use crate::cube::{CubeMap, CubeSampler, Environment};
 use crate::error::{Error, Result};
 use crate::image::Image;
@@ -805,10 +805,7 @@ pub fn load_environment(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> 
         Source::Cube(c) => CubeSampler::new(c),
         Source::Projection(..) => {
             let size = loaded.face_size().max(1);
-            match convert::convert(&loaded, Kind::Faces, size, &Resampler::default()) {
-                Output::Cube(c) => CubeSampler::new(&c),
-                Output::Image(_) => unreachable!("faces are a cube map"),
-            }
+            CubeSampler::new(&convert::to_cube(&loaded, size, &Resampler::default()))
         }
     };
     Ok(LoadedEnv {

@@ -1,0 +1,233 @@
+//! Where a result goes: the output's layout and file type from its name and options, the
+//! files it becomes (six faces, a container with its mips, one image), and a write that lands
+//! whole or not at all. The writing half of [`crate::io`]'s reading.
+
+use crate::convert::Output;
+use crate::cube::{CubeMap, Faces, FACE_NAMES};
+use crate::error::{Error, Result};
+use crate::image::Image;
+use crate::io::{self, FileFormat, WriteOptions};
+use crate::layout::Kind;
+use crate::preview::tonemap::Tonemap;
+use std::path::{Path, PathBuf};
+
+/// An output: where, in which layout and format, with which options.
+#[derive(Clone, Debug)]
+pub struct Target {
+    pub path: PathBuf,
+    pub kind: Kind,
+    /// File type of face images (faces only; others take theirs from the name).
+    pub face_format: FileFormat,
+    pub write: WriteOptions,
+    /// Mip levels of a KTX2 or DDS container (None: the full chain down to 1x1).
+    pub levels: Option<usize>,
+    /// Exposure (stops) and tone curve for 8-bit outputs; float outputs stay linear.
+    pub tone: Option<(f32, Tonemap)>,
+}
+
+/// A result as the bytes of its files, with what the encoders had to clamp.
+pub struct Encoded {
+    pub files: Vec<(PathBuf, Vec<u8>)>,
+    /// Texels beyond the format's largest value, written as that value (None: none).
+    pub clamped: Option<String>,
+}
+
+impl Encoded {
+    /// Writes every file, all or none ([`io::atomic`]).
+    pub fn write(&self) -> Result<()> {
+        io::write_all_atomic(&self.files)
+    }
+}
+
+impl Target {
+    /// The output at `path`: layout `to`, or what the name implies (a container for .ktx2 and
+    /// .dds, a horizontal cross for other images, six faces for a name with no extension).
+    /// Faces are EXR for HDR results and PNG otherwise until `face_format` is set.
+    pub fn new(path: &Path, to: Option<Kind>, hdr: bool) -> Result<Target> {
+        Ok(Target {
+            path: path.to_path_buf(),
+            kind: kind_for(path, to)?,
+            face_format: if hdr {
+                FileFormat::Exr
+            } else {
+                FileFormat::Png
+            },
+            write: WriteOptions::default(),
+            levels: None,
+            tone: None,
+        })
+    }
+
+    /// The file type the result is encoded in (None: a name with an unknown extension).
+    pub fn format(&self) -> Option<FileFormat> {
+        match self.kind {
+            Kind::Faces => Some(self.face_format),
+            _ => FileFormat::from_extension(&self.path),
+        }
+    }
+
+    /// Whether the result is stored in 8 bits a channel, where a tone curve applies.
+    pub fn is_8bit(&self) -> bool {
+        self.format()
+            .is_some_and(|f| io::largest_value(f, self.write.gpu_format).is_none())
+    }
+
+    /// The files `out` becomes. Refuses to overwrite any of `inputs`, and a result whose
+    /// shape the layout cannot hold (a cube map as an equirect, an image as faces).
+    pub fn encode(&self, mut out: Output, inputs: &[PathBuf]) -> Result<Encoded> {
+        let wrong = |what: &str| {
+            Error::file(
+                &self.path,
+                format!("a {what} cannot be written as {}", self.kind.name()),
+            )
+        };
+        match (&out, self.kind) {
+            (Output::Cube(_), Kind::Faces | Kind::Ktx2 | Kind::Dds) => {}
+            (Output::Cube(_), _) => return Err(wrong("cube map")),
+            (Output::Image(_), Kind::Faces | Kind::Ktx2 | Kind::Dds) => {
+                return Err(wrong("single image"))
+            }
+            (Output::Image(_), _) => {}
+        }
+        let images: Vec<&mut Image> = match &mut out {
+            Output::Cube(c) => c.levels[0].iter_mut().collect(),
+            Output::Image(img) => vec![img],
+        };
+        if let (Some((exposure, curve)), true) = (self.tone, self.is_8bit()) {
+            for img in images {
+                crate::preview::tonemap::apply(img, curve, exposure);
+            }
+        }
+        // Box mips are means of level 0: they fit where it fits.
+        let clamped = self.format().and_then(|f| {
+            let images: Vec<&Image> = match &out {
+                Output::Cube(c) => c.levels[0].iter().collect(),
+                Output::Image(img) => vec![img],
+            };
+            io::clamp_warning(&self.path, f, self.write.gpu_format, images)
+        });
+        let files = match out {
+            Output::Cube(cube) if self.kind == Kind::Faces => encode_faces(
+                &self.path,
+                &cube.levels[0],
+                self.face_format,
+                &self.write,
+                inputs,
+            )?,
+            Output::Cube(cube) => {
+                refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
+                let cube: CubeMap = cube.with_box_mips(self.levels);
+                let bytes = io::encode_cube(&self.path, &cube, self.write.gpu_format)?;
+                vec![(self.path.clone(), bytes)]
+            }
+            Output::Image(img) => {
+                refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
+                let bytes = io::encode_image(&self.path, &img, &self.write)?;
+                vec![(self.path.clone(), bytes)]
+            }
+        };
+        Ok(Encoded { files, clamped })
+    }
+}
+
+/// The layout an output gets: `to`, checked against the name, or what the name implies.
+pub fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
+    let by_name = FileFormat::from_extension(output);
+    match (to, by_name) {
+        (Some(Kind::Ktx2), Some(FileFormat::Ktx2)) | (Some(Kind::Dds), Some(FileFormat::Dds)) => {
+            Ok(to.unwrap_or(Kind::Ktx2))
+        }
+        (Some(k @ (Kind::Ktx2 | Kind::Dds)), _) => Err(Error::file(
+            output,
+            format!("--to {} needs an output named .{}", k.name(), k.name()),
+        )),
+        (Some(Kind::Faces), Some(_)) => Err(Error::file(
+            output,
+            "--to faces writes a folder: give a folder name without an image extension",
+        )),
+        (Some(Kind::Faces), None) => Ok(Kind::Faces),
+        (Some(k), Some(f)) if f.is_container() => Err(Error::file(
+            output,
+            format!(
+                "{} holds cube maps, not a {} image: use --to {}",
+                f.name(),
+                k.name(),
+                if f == FileFormat::Dds { "dds" } else { "ktx2" }
+            ),
+        )),
+        (Some(k), Some(_)) => Ok(k),
+        (Some(k), None) => Err(Error::file(
+            output,
+            format!(
+                "a {} image needs a file name ending in .png .jpg .tga .hdr or .exr",
+                k.name()
+            ),
+        )),
+        (None, Some(FileFormat::Ktx2)) => Ok(Kind::Ktx2),
+        (None, Some(FileFormat::Dds)) => Ok(Kind::Dds),
+        (None, Some(_)) => Ok(Kind::Hcross),
+        (None, None) if output.extension().is_some() && !output.is_dir() => {
+            Err(io::unknown_ext(output))
+        }
+        (None, None) => Ok(Kind::Faces),
+    }
+}
+
+/// The file type of face images from its name (png, jpg, tga, hdr, exr).
+pub fn face_format(name: &str) -> Result<FileFormat> {
+    match FileFormat::from_ext_str(name) {
+        Some(f) if !f.is_container() => Ok(f),
+        _ => Err(Error::usage(format!(
+            "--format {name}: face images are png, jpg, tga, hdr or exr"
+        ))),
+    }
+}
+
+/// Six face images `dir/px.EXT` ..., encoded in parallel. Refuses to overwrite `inputs`.
+pub fn encode_faces(
+    dir: &Path,
+    faces: &Faces,
+    format: FileFormat,
+    write: &WriteOptions,
+    inputs: &[PathBuf],
+) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    let ext = match format {
+        FileFormat::Jpeg => "jpg",
+        FileFormat::Png => "png",
+        FileFormat::Tga => "tga",
+        FileFormat::Hdr => "hdr",
+        _ => "exr",
+    };
+    let paths: Vec<PathBuf> = FACE_NAMES
+        .iter()
+        .map(|n| dir.join(format!("{n}.{ext}")))
+        .collect();
+    refuse_inputs(&paths, inputs)?;
+    let encoded: Vec<Result<Vec<u8>>> = {
+        use rayon::prelude::*;
+        paths
+            .par_iter()
+            .zip(faces.par_iter())
+            .map(|(p, f)| io::encode_image(p, f, write))
+            .collect()
+    };
+    paths
+        .into_iter()
+        .zip(encoded)
+        .map(|(p, e)| e.map(|b| (p, b)))
+        .collect()
+}
+
+/// Refuses to write over any input file.
+pub fn refuse_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<()> {
+    let canon = |p: &Path| std::fs::canonicalize(p).ok();
+    let ins: Vec<PathBuf> = inputs.iter().filter_map(|p| canon(p)).collect();
+    for o in outputs {
+        if let Some(c) = canon(o) {
+            if ins.contains(&c) {
+                return Err(Error::file(o, "refusing to overwrite an input file"));
+            }
+        }
+    }
+    Ok(())
+}
