@@ -781,6 +781,7 @@ fn load_image(name: &str) -> std::result::Result<ImageFile, String> {
         let read = ReadOptions {
             limits: ctx.limits,
             linear: true,
+            as_stored: false,
         };
         let (decoded, meta) = io::read(&path, &read).map_err(|e| e.to_string())?;
         let image = match decoded {

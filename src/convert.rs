@@ -123,7 +123,7 @@ impl Loaded {
                 let peaks = self.peaks();
                 let ceiling = ceiling(&peaks);
                 // Box mips of level 0 (stored levels may be prefiltered, not plain mips).
-                let angle = std::f32::consts::FRAC_PI_2 / c.size() as f32;
+                let angle = crate::cube::texel_angle(c.size());
                 let env = CubeSampler::with_box_mips_below(&c.levels[0], levels(angle), ceiling);
                 split(env, peaks)
             }
@@ -224,9 +224,13 @@ fn load_faces(files: &[PathBuf], opts: &ReadOptions) -> Result<Loaded> {
     let mut images = Vec::with_capacity(6);
     let mut meta: Option<Meta> = None;
     let mut replaced = 0;
+    let mut formats: Vec<String> = Vec::new();
     for f in files {
         let (decoded, m) = io::read(f, opts)?;
         replaced += m.replaced_values;
+        if !formats.contains(&m.pixel_format) {
+            formats.push(m.pixel_format.clone());
+        }
         match decoded {
             Decoded::Image(img) => images.push(img),
             Decoded::Cube(_) => {
@@ -238,8 +242,13 @@ fn load_faces(files: &[PathBuf], opts: &ReadOptions) -> Result<Loaded> {
         }
         meta.get_or_insert(m);
     }
-    let mut meta = meta.expect("six faces were read");
+    let Some(mut meta) = meta else {
+        return Err(Error::usage("no face images given"));
+    };
     meta.replaced_values = replaced;
+    if formats.len() > 1 {
+        meta.pixel_format = format!("mixed: {}", formats.join(", "));
+    }
     let cube = faces_from_images(images, files)?;
     Ok(Loaded {
         source: Source::Cube(cube),

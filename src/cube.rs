@@ -35,6 +35,11 @@ pub fn dir_face(d: Vec3) -> (usize, f32, f32) {
 
 /// Solid angle of texel (x, y) on a face of edge `n` (exact, from the area of a projected
 /// rectangle), so averages over the sphere weight texels by the part of the sphere they cover.
+/// Angle one texel of a face of edge `size` spans on average: a quarter turn over the edge.
+pub fn texel_angle(size: usize) -> f32 {
+    std::f32::consts::FRAC_PI_2 / size.max(1) as f32
+}
+
 pub fn texel_solid_angle(n: usize, x: usize, y: usize) -> f32 {
     let c = |i: usize| corner(n, i);
     (corner_area(c(x), c(y)) - corner_area(c(x), c(y + 1)) - corner_area(c(x + 1), c(y))
@@ -200,6 +205,20 @@ pub trait Environment: Sync {
     fn texel_angle(&self) -> f32;
     /// Number of pyramid levels available (each halves the resolution).
     fn levels(&self) -> usize;
+    /// `texCUBE` along `v` (any length, non-zero) at a fractional level of detail `lod` (0 the
+    /// sharpest; clamped to the chain): what the preview samples. By default the nearest
+    /// level, bilinear.
+    fn lookup(&self, v: Vec3, lod: f32) -> Vec4 {
+        let top = self.levels().saturating_sub(1);
+        let level = (lod.max(0.0).round() as usize).min(top);
+        self.sample(v.normalize(), level, Interp::Bilinear)
+    }
+    /// Face edge of level 0 in texels: a quarter turn over the texel angle.
+    fn face_size(&self) -> usize {
+        (std::f32::consts::FRAC_PI_2 / self.texel_angle())
+            .round()
+            .clamp(1.0, 1e9) as usize
+    }
     /// `out[i]` = `sample(dirs[i], level, interp)` for a whole batch. Layouts override it with
     /// loops over the batch's arrays that the compiler vectorises; the default asks one by one.
     fn sample_many(&self, dirs: &Dirs, level: usize, interp: Interp, out: &mut [Vec4]) {
@@ -580,10 +599,22 @@ impl Environment for CubeSampler {
         faces[face].bicubic(x, y, false)
     }
     fn texel_angle(&self) -> f32 {
-        std::f32::consts::FRAC_PI_2 / self.size() as f32
+        texel_angle(self.size())
     }
     fn levels(&self) -> usize {
         self.levels.len()
+    }
+    /// Trilinear between the two levels around `lod`; plain bilinear at level 0.
+    #[inline]
+    fn lookup(&self, v: Vec3, lod: f32) -> Vec4 {
+        if lod <= 0.0 {
+            self.bilinear(v, 0)
+        } else {
+            self.sample_lod(v, lod)
+        }
+    }
+    fn face_size(&self) -> usize {
+        self.size()
     }
 }
 

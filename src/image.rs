@@ -118,6 +118,16 @@ impl Image {
         self.downsample_2x_weighted(|_, _| 1.0, Vec4::INFINITY)
     }
 
+    /// This image and `count - 1` box-filtered halvings of it (a 2D texture's mip chain).
+    pub fn mip_chain(&self, count: usize) -> Vec<Image> {
+        let mut levels = vec![self.clone()];
+        while levels.len() < count {
+            let next = levels[levels.len() - 1].downsample_2x();
+            levels.push(next);
+        }
+        levels
+    }
+
     /// `downsample_2x` with each texel above weighted by `weight(x, y)` (the part of the
     /// sphere it covers, so a pyramid keeps the flux) and first clamped to `ceiling`.
     pub fn downsample_2x_weighted(

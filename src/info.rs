@@ -1,16 +1,17 @@
 //! What a file or folder holds: layout, sizes, levels, pixel format, colour space and value
 //! statistics.
 
-use crate::convert::find_faces;
-use crate::cube::{faces_from_images, CubeMap, Faces, FACE_LONG_NAMES, FACE_NAMES};
+use crate::chain::{self, LevelsFile};
+use crate::convert::{self, Source};
+use crate::cube::{CubeMap, Faces, FACE_LONG_NAMES, FACE_NAMES};
 use crate::error::{Error, Result};
 use crate::flux;
 use crate::image::{luminance, Image};
-use crate::io::{self, Decoded, Meta, ReadOptions};
+use crate::io::{self, Decoded, ReadOptions};
 use crate::layout::{self, Kind};
 use glam::Vec4;
 use serde::Serialize;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Stats {
@@ -46,24 +47,7 @@ pub struct Report {
     /// What each level of a prefiltered chain holds (KTX2 metadata, or a DDS's
     /// `NAME.dds.levels.json` sidecar), as `cubeforge prefilter` wrote it.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub levels: Option<serde_json::Value>,
-}
-
-/// The levels description of a prefiltered KTX2 or DDS chain, if it has one.
-fn levels_description(path: &Path, format: io::FileFormat) -> Option<serde_json::Value> {
-    let bytes = match format {
-        io::FileFormat::Ktx2 => io::ktx2::metadata_from_file(path)
-            .into_iter()
-            .find(|(k, _)| k == io::ktx2::LEVELS_KEY)
-            .map(|(_, v)| v)?,
-        io::FileFormat::Dds => {
-            let mut s = path.as_os_str().to_owned();
-            s.push(".levels.json");
-            std::fs::read(s).ok()?
-        }
-        _ => return None,
-    };
-    serde_json::from_slice(&bytes).ok()
+    pub levels: Option<LevelsFile>,
 }
 
 /// Statistics over images; luminance ignores non-finite values, sums run in a fixed order.
@@ -163,6 +147,10 @@ fn square_note(n: usize) -> String {
 /// describes it. `from` settles the layout of a single image (a square one needs it) or
 /// overrides what its shape says.
 pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Report> {
+    let opts = &ReadOptions {
+        as_stored: true,
+        ..*opts
+    };
     if path.is_dir() {
         return describe_folder(path, from, opts);
     }
@@ -199,7 +187,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 color_space: meta.color_space,
                 stats: stats(cube.levels[0].iter()),
                 flux: Some(cube_flux(&cube.levels[0])),
-                levels: levels_description(path, meta.file_format),
+                levels: chain::container_levels(path, meta.file_format),
             }
         }
         Decoded::Image(img) => {
@@ -247,40 +235,6 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
     })
 }
 
-/// Six faces read as stored, with the first face's description (and a note where the faces'
-/// pixel formats differ).
-fn read_faces(dir: &Path, opts: &ReadOptions) -> Result<(Faces, Meta)> {
-    let files = find_faces(dir)?;
-    let mut images = Vec::with_capacity(6);
-    let mut metas: Vec<Meta> = Vec::with_capacity(6);
-    for f in &files {
-        let (decoded, m) = io::read_raw(f, opts)?;
-        match decoded {
-            Decoded::Image(img) => images.push(img),
-            Decoded::Cube(_) => {
-                return Err(Error::file(
-                    f,
-                    "a face must be a single image, not a cube map",
-                ))
-            }
-        }
-        metas.push(m);
-    }
-    let cube = faces_from_images(images, &files)?;
-    let mut meta = metas.swap_remove(0);
-    let mut formats = vec![meta.pixel_format.clone()];
-    for m in &metas {
-        if !formats.contains(&m.pixel_format) {
-            formats.push(m.pixel_format.clone());
-        }
-    }
-    if formats.len() > 1 {
-        meta.pixel_format = format!("mixed: {}", formats.join(", "));
-    }
-    let CubeMap { mut levels } = cube;
-    Ok((levels.swap_remove(0), meta))
-}
-
 /// A folder of six faces, or a prefiltered chain `m0/`, `m1/`, ... (each a folder of faces,
 /// each level half the size of the one before) with its `levels.json`.
 fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Report> {
@@ -293,33 +247,11 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
             ),
         ));
     }
-    let chain = dir.join("m0").is_dir();
-    let (base, meta, mip_levels, levels) = if chain {
-        let (base, meta) = read_faces(&dir.join("m0"), opts)?;
-        let mut size = base[0].width;
-        let mut count = 1;
-        loop {
-            let sub = dir.join(format!("m{count}"));
-            if !sub.is_dir() {
-                break;
-            }
-            let (faces, _) = read_faces(&sub, opts)?;
-            let want = (size / 2).max(1);
-            if faces[0].width != want {
-                return Err(Error::file(
-                    &sub,
-                    format!(
-                        "faces are {0}x{0}, but level m{count} of a chain must be {1}x{1} (half of m{2})",
-                        faces[0].width,
-                        want,
-                        count - 1
-                    ),
-                ));
-            }
-            size = want;
-            count += 1;
-        }
-        (base, meta, count, chain_levels(dir, count)?)
+    let (base, meta, mip_levels, levels) = if chain::is_chain_dir(dir) {
+        let c = chain::read_dir(dir, opts)?;
+        let count = c.cube.levels.len();
+        let CubeMap { mut levels } = c.cube;
+        (levels.swap_remove(0), c.meta, count, c.levels)
     } else {
         if !holds_a_face(dir) {
             // Say what a folder may hold when it holds none of it.
@@ -328,8 +260,11 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
                 "holds neither six faces (px.EXT nx.EXT ... or posx.EXT negx.EXT ...) nor a prefiltered chain (m0/ m1/ ... and levels.json)",
             ));
         }
-        let (base, meta) = read_faces(dir, opts)?;
-        (base, meta, 1, None)
+        let loaded = convert::load(&[dir.to_path_buf()], None, opts)?;
+        let Source::Cube(CubeMap { mut levels }) = loaded.source else {
+            return Err(Error::file(dir, "a folder must hold six faces"));
+        };
+        (levels.swap_remove(0), loaded.meta, 1, None)
     };
     let n = base[0].width;
     Ok(Report {
@@ -359,31 +294,6 @@ fn holds_a_face(dir: &Path) -> bool {
         let stem = name.split('.').next().unwrap_or_default().to_owned();
         FACE_NAMES.contains(&stem.as_str()) || FACE_LONG_NAMES.contains(&stem.as_str())
     })
-}
-
-/// A chain folder's `levels.json`, if there is one; it must be JSON and list as many levels
-/// as the folder holds.
-fn chain_levels(dir: &Path, count: usize) -> Result<Option<serde_json::Value>> {
-    let path: PathBuf = dir.join("levels.json");
-    if !path.exists() {
-        return Ok(None);
-    }
-    let bytes = io::read_file(&path)?;
-    let json: serde_json::Value = serde_json::from_slice(&bytes)
-        .map_err(|e| Error::file(&path, format!("not valid JSON: {e}")))?;
-    if let Some(list) = json.get("levels").and_then(|l| l.as_array()) {
-        if list.len() != count {
-            return Err(Error::file(
-                &path,
-                format!(
-                    "lists {} levels but the folder holds {count} (m0 to m{})",
-                    list.len(),
-                    count - 1
-                ),
-            ));
-        }
-    }
-    Ok(Some(json))
 }
 
 impl std::fmt::Display for Report {
@@ -440,31 +350,20 @@ impl std::fmt::Display for Report {
                 "\n  flux:         {r:.6} {g:.6} {b:.6} (mean radiance over the sphere)"
             )?;
         }
-        if let Some(levels) = self
-            .levels
-            .as_ref()
-            .and_then(|l| l.get("levels"))
-            .and_then(|l| l.as_array())
-        {
-            for l in levels {
-                let get = |k: &str| l.get(k).and_then(|v| v.as_f64());
-                let what = if let Some(r) = get("roughness") {
-                    format!("roughness {r:.3}")
-                } else if let Some(p) = get("power") {
-                    format!("power {p:.1}")
-                } else if let Some(s) = get("sigma") {
-                    format!("sigma {s:.5} rad")
-                } else {
-                    "box".to_string()
-                };
-                write!(
-                    f,
-                    "\n  level {:>2}:     {:>5} px, {} {what}",
-                    get("level").unwrap_or(0.0),
-                    get("size").unwrap_or(0.0),
-                    l.get("filter").and_then(|v| v.as_str()).unwrap_or("")
-                )?;
-            }
+        for l in self.levels.iter().flat_map(|d| &d.levels) {
+            let what = match (l.roughness, l.power, l.sigma) {
+                (Some(r), _, _) => format!("roughness {r:.3}"),
+                (_, Some(p), _) => format!("power {p:.1}"),
+                (_, _, Some(s)) => format!("sigma {s:.5} rad"),
+                _ => "box".to_string(),
+            };
+            write!(
+                f,
+                "\n  level {:>2}:     {:>5} px, {} {what}",
+                l.level,
+                l.size,
+                l.filter.name()
+            )?;
         }
         Ok(())
     }

@@ -20,6 +20,7 @@
 //! # }
 //! ```
 
+pub mod chain;
 pub mod control;
 pub mod convert;
 pub mod cube;

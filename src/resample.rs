@@ -1,7 +1,7 @@
 //! Every conversion: for each output texel, its direction; look the direction up in the input.
 //! Coarse outputs are antialiased by supersampling the texel's footprint on a pyramid level.
 
-use crate::cube::{dir_face, face_dir, CubeMap, Dirs, Environment, Interp, BATCH};
+use crate::cube::{face_dir, CubeMap, Dirs, Environment, Interp, BATCH};
 use crate::flux::Grid;
 use crate::image::Image;
 use crate::layout::{equirect, Projection};
@@ -313,12 +313,4 @@ impl<F: Fn(Vec3) -> Vec4 + Sync> Environment for FnEnv<F> {
     fn levels(&self) -> usize {
         1
     }
-}
-
-/// Which face and texel a direction falls on, for tests and tools that need the exact cell.
-pub fn dir_texel(d: Vec3, size: usize) -> (usize, usize, usize) {
-    let (f, s, t) = dir_face(d);
-    let x = ((s * size as f32) as usize).min(size - 1);
-    let y = ((t * size as f32) as usize).min(size - 1);
-    (f, x, y)
 }

@@ -12,8 +12,9 @@ use cubeforge::layout::sphere as sphere_map;
 use cubeforge::preview::camera::sample_offsets;
 use cubeforge::preview::material::{self, Material, Model};
 use cubeforge::preview::{
-    self, Analytic, Background, Control, Options, Parallax, ParallaxMode, Shading, Surface,
+    self, Background, Control, Options, Parallax, ParallaxMode, Shading, Surface,
 };
+use cubeforge::resample::FnEnv;
 use cubeforge::synthetic;
 use glam::{DVec3, Vec3, Vec4};
 use std::path::Path;
@@ -115,8 +116,8 @@ fn expected(m: &Material, x: usize, y: usize, n: usize) -> Option<DVec3> {
     })
 }
 
-fn smooth_env() -> Analytic<fn(Vec3) -> Vec4> {
-    Analytic(synthetic::smooth as fn(Vec3) -> Vec4)
+fn smooth_env() -> FnEnv<fn(Vec3) -> Vec4> {
+    FnEnv(synthetic::smooth as fn(Vec3) -> Vec4)
 }
 
 fn opts(n: usize) -> Options {
@@ -366,7 +367,7 @@ fn vertex_vs_fragment(a: &Image, b: &Image) -> (f64, f64) {
 
 #[test]
 fn per_vertex_converges_to_per_fragment() {
-    let env = Analytic(synthetic::demo_sky);
+    let env = FnEnv(synthetic::demo_sky);
     let base = Options {
         size: 128,
         samples: 1,
@@ -407,7 +408,7 @@ fn per_vertex_interpolates_the_vertex_outputs_perspective_correctly() {
     // vectors. Simplest exact check: the vertex at the sphere's front (+Z, u = 0 seam) is on
     // the mesh for an even number of longitude segments and reflects straight back.
     let m = material::preset("chrome").unwrap();
-    let env = Analytic(synthetic::smooth);
+    let env = FnEnv(synthetic::smooth);
     let o = Options {
         size: 65,
         samples: 1,
@@ -1009,7 +1010,7 @@ fn prefilter_folder_chains_load_level_by_level() {
     .unwrap();
     let env = preview::load_environment(dir.path(), None, &ReadOptions::default()).unwrap();
     assert_eq!(env.levels(), 4);
-    use cubeforge::preview::Lookup;
+    use cubeforge::cube::Environment;
     assert_eq!(env.sampler.lookup(Vec3::X, 2.0).x, 2.0);
     assert_eq!(env.sampler.lookup(Vec3::X, 1.5).x, 1.5);
     // A level of the wrong size is named.

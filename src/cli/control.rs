@@ -3,7 +3,6 @@
 
 use super::{warn, Stages};
 use cubeforge::control::{self, Baked, Size};
-use cubeforge::image::Image;
 use cubeforge::io::{self, ktx2, FileFormat, GpuFormat, Limits, WriteOptions};
 use cubeforge::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -114,7 +113,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let size = recipe
         .output_size(a.size)
         .map_err(|e| Error::file(&a.recipe, e.to_string()))?;
-    let full_chain = (usize::BITS - size.width.max(size.height).leading_zeros()) as usize;
+    let full_chain = cubeforge::cube::CubeMap::full_chain_len(size.width.max(size.height));
     if let Some(n) = a.levels {
         if n == 0 || n > full_chain {
             return Err(Error::usage(format!(
@@ -145,7 +144,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
 
     let (bytes, what) = match format {
         FileFormat::Ktx2 => {
-            let levels = mip_chain(&baked.image, a.levels.unwrap_or(full_chain));
+            let levels = baked.image.mip_chain(a.levels.unwrap_or(full_chain));
             let gpu = a.gpu_format.gpu();
             let what = format!("KTX2 {} with {} mip levels", gpu.name(), levels.len());
             (ktx2::encode_2d(&levels, gpu), what)
@@ -192,15 +191,6 @@ fn sidecar_path(output: &Path) -> PathBuf {
 }
 
 /// Level 0 and each half-size level after it, `count` in all.
-fn mip_chain(img: &Image, count: usize) -> Vec<Image> {
-    let mut levels = vec![img.clone()];
-    while levels.len() < count {
-        let next = levels[levels.len() - 1].downsample_2x();
-        levels.push(next);
-    }
-    levels
-}
-
 fn report(output: &Path, sidecar: &Path, baked: &Baked, what: &str) -> Result<()> {
     for w in &baked.warnings {
         warn(w);

@@ -179,8 +179,8 @@ pub(super) fn load_level(
     level: usize,
 ) -> Result<convert::Loaded> {
     if let [dir] = inputs {
-        let sub = dir.join(format!("m{level}"));
-        if dir.is_dir() && dir.join("m0").is_dir() {
+        let sub = cubeforge::chain::level_dir(dir, level);
+        if cubeforge::chain::is_chain_dir(dir) {
             if !sub.is_dir() {
                 return Err(Error::file(
                     dir,

@@ -33,6 +33,7 @@ pub fn run(args: Args) -> Result<()> {
     let opts = ReadOptions {
         limits: super::limits(args.max_pixels, args.max_memory),
         linear: args.linear,
+        as_stored: true,
     };
     let mut reports = Vec::new();
     let mut failed = 0;

@@ -86,6 +86,7 @@ impl InputArgs {
         cubeforge::io::ReadOptions {
             limits: self.limits(),
             linear: self.linear,
+            as_stored: false,
         }
     }
 }

@@ -1,14 +1,13 @@
 //! `cubeforge prefilter`: mip chains for blurred and glossy reflections.
 
 use super::Stages;
+use cubeforge::chain::LevelsFile;
 use cubeforge::convert;
 use cubeforge::filter::{self, ChainOptions, FilterKind, LevelInfo, LightingModel};
 use cubeforge::io::{self, FileFormat, GpuFormat, WriteOptions};
-use cubeforge::output::{encode_faces, refuse_inputs};
 use cubeforge::resample::Resampler;
 use cubeforge::{Error, Result};
-use serde::Serialize;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -50,21 +49,6 @@ pub struct Args {
     pub gpu_format: GpuFormat,
     #[command(flatten)]
     pub input: super::InputArgs,
-}
-
-/// levels.json: what each level holds.
-#[derive(Serialize)]
-pub struct LevelsFile<'a> {
-    pub filter: FilterKind,
-    pub face_size: usize,
-    pub level_count: usize,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub lighting: Option<LightingModel>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub gloss_scale: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub gloss_bias: Option<f32>,
-    pub levels: &'a [LevelInfo],
 }
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
@@ -132,61 +116,29 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     }
     stages.done("filter");
 
-    let levels_json = serde_json::to_vec_pretty(&LevelsFile {
-        filter: a.filter,
-        face_size: size,
-        level_count: infos.len(),
-        lighting: (a.filter == FilterKind::Cosine).then_some(a.lighting),
-        gloss_scale: (a.filter == FilterKind::Cosine).then_some(a.gloss_scale),
-        gloss_bias: (a.filter == FilterKind::Cosine).then_some(a.gloss_bias),
-        levels: &infos,
-    })
-    .map_err(|e| Error::usage(e.to_string()))?;
+    let description = LevelsFile::new(&opts, size, infos);
     let format = container.unwrap_or(face_format);
     let all = chain.levels.iter().flatten();
     if let Some(w) = io::clamp_warning(&a.output, format, a.gpu_format, all) {
         super::warn(w);
     }
-    let mut files = Vec::new();
-    match container {
-        Some(f) => {
-            refuse_inputs(std::slice::from_ref(&a.output), &loaded.files)?;
-            let bytes = match f {
-                FileFormat::Ktx2 => io::ktx2::encode_with_metadata(
-                    &chain,
-                    a.gpu_format,
-                    &[(io::ktx2::LEVELS_KEY, &levels_json)],
-                ),
-                _ => io::encode_cube(&a.output, &chain, a.gpu_format)?,
-            };
-            files.push((a.output.clone(), bytes));
-            if f == FileFormat::Dds {
-                // DDS has no room for metadata: a sidecar that `info` reads.
-                files.push((sidecar(&a.output), levels_json));
-            }
-        }
-        None => {
-            let write = WriteOptions {
-                linear: a.input.linear,
-                ..WriteOptions::default()
-            };
-            for (m, faces) in chain.levels.iter().enumerate() {
-                let dir = a.output.join(format!("m{m}"));
-                files.extend(encode_faces(
-                    &dir,
-                    faces,
-                    face_format,
-                    &write,
-                    &loaded.files,
-                )?);
-            }
-            files.push((a.output.join("levels.json"), levels_json));
-        }
-    }
+    let write = WriteOptions {
+        linear: a.input.linear,
+        ..WriteOptions::default()
+    };
+    let files = cubeforge::chain::encode(
+        &a.output,
+        &chain,
+        &description,
+        face_format,
+        &write,
+        a.gpu_format,
+        &loaded.files,
+    )?;
     stages.done("encode");
     super::write_files(&files)?;
     stages.done("write");
-    for i in &infos {
+    for i in &description.levels {
         let what = match (i.roughness, i.power, i.sigma) {
             (Some(r), _, _) => format!("roughness {r:.3} (alpha {:.4})", r * r),
             (_, Some(p), _) => format!("power {p:.1}"),
@@ -204,11 +156,4 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     }
     stages.total();
     Ok(())
-}
-
-/// Where a DDS chain's levels description goes: `NAME.dds.levels.json`.
-pub fn sidecar(output: &Path) -> PathBuf {
-    let mut s = output.as_os_str().to_owned();
-    s.push(".levels.json");
-    PathBuf::from(s)
 }

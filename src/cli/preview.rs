@@ -233,6 +233,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let read = ReadOptions {
         limits,
         linear: false,
+        as_stored: false,
     };
     let env = preview::load_environment(env_path, a.from, &read)?;
     if env.replaced_values > 0 {

@@ -35,7 +35,7 @@ impl FilterKind {
 }
 
 /// cmft's lighting models: how a gloss level's specular power is adjusted.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LightingModel {
     #[default]
@@ -116,10 +116,7 @@ pub fn specular_power(level: usize, count: usize, scale: f32, bias: f32) -> f32 
     2f32.powf(scale * gloss + bias)
 }
 
-/// Angle one texel of a level spans on average: a quarter turn over the face edge.
-pub fn texel_angle(size: usize) -> f32 {
-    std::f32::consts::FRAC_PI_2 / size as f32
-}
+use crate::cube::texel_angle;
 
 /// Per-level lobes (None: the level is copied or box-reduced, not convolved).
 pub fn plan(opts: &ChainOptions, base: usize) -> Vec<(LevelInfo, Option<Lobe>)> {

@@ -412,12 +412,18 @@ pub struct ReadOptions {
     pub limits: Limits,
     /// Treat 8- and 16-bit values as data: no sRGB decode.
     pub linear: bool,
+    /// Keep values as stored (NaN, infinities, negatives): for inspecting a file, not for
+    /// computing with it.
+    pub as_stored: bool,
 }
 
 /// Reads any supported file and replaces NaN, infinite and negative values by 0, counting
 /// them in `Meta::replaced_values`.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     let (decoded, mut meta) = read_raw(path, opts)?;
+    if opts.as_stored {
+        return Ok((decoded, meta));
+    }
     // Integer and shared-exponent encodings hold only finite values >= 0: no pass needed
     // (it cost a quarter of a 4K panorama's decode).
     if matches!(

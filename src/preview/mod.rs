@@ -23,7 +23,7 @@ pub mod sphere;
 pub mod tonemap;
 
 use crate::convert::{self, Source};
-use crate::cube::{CubeMap, CubeSampler, Environment};
+use crate::cube::{CubeSampler, Environment};
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::io::{self, Decoded, ReadOptions};
@@ -33,51 +33,6 @@ use camera::{sample_offsets, Camera};
 use glam::{Vec2, Vec3, Vec4};
 use material::{fresnel, reflect, refract, Material, Model};
 use std::path::{Path, PathBuf};
-
-/// An environment the preview can look up: `texCUBE(map, v)` at a level of detail.
-pub trait Lookup: Sync {
-    /// The environment along `v` (non-zero, any length) at level of detail `lod` (0 the
-    /// sharpest level; fractional values blend two levels; clamped to the chain).
-    fn lookup(&self, v: Vec3, lod: f32) -> Vec4;
-    /// Levels in the chain (1: no chain, the level of detail is ignored).
-    fn levels(&self) -> usize;
-    /// Face edge of level 0 in texels, for choosing levels.
-    fn size(&self) -> usize;
-}
-
-impl Lookup for CubeSampler {
-    #[inline]
-    fn lookup(&self, v: Vec3, lod: f32) -> Vec4 {
-        if lod <= 0.0 {
-            self.bilinear(v, 0)
-        } else {
-            self.sample_lod(v, lod)
-        }
-    }
-    fn levels(&self) -> usize {
-        Environment::levels(self)
-    }
-    fn size(&self) -> usize {
-        CubeSampler::size(self)
-    }
-}
-
-/// An environment given as a function of unit direction (exact; one level), for tests and
-/// analytic previews.
-pub struct Analytic<F>(pub F);
-
-impl<F: Fn(Vec3) -> Vec4 + Sync> Lookup for Analytic<F> {
-    #[inline]
-    fn lookup(&self, v: Vec3, _lod: f32) -> Vec4 {
-        (self.0)(v.normalize())
-    }
-    fn levels(&self) -> usize {
-        1
-    }
-    fn size(&self) -> usize {
-        1
-    }
-}
 
 /// Where the vectors come from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -283,7 +238,7 @@ impl Varyings {
 }
 
 /// The texts' programs with their uniforms bound.
-pub struct Shader<'a, E: Lookup + ?Sized> {
+pub struct Shader<'a, E: Environment + ?Sized> {
     env: &'a E,
     mat: &'a Material,
     surface: Surface<'a>,
@@ -299,7 +254,7 @@ pub struct Shader<'a, E: Lookup + ?Sized> {
     uses_uv: bool,
 }
 
-impl<'a, E: Lookup + ?Sized> Shader<'a, E> {
+impl<'a, E: Environment + ?Sized> Shader<'a, E> {
     pub fn new(
         env: &'a E,
         mat: &'a Material,
@@ -315,7 +270,7 @@ impl<'a, E: Lookup + ?Sized> Shader<'a, E> {
             eye,
             parallax,
             lod_on: env.levels() > 1,
-            half_size: env.size() as f32 * 0.5,
+            half_size: env.face_size() as f32 * 0.5,
             lod_bias,
             lookups: if mat.model == Model::Dispersion { 4 } else { 1 },
             uses_uv: surface.decal.is_some() || surface.control.is_some(),
@@ -495,7 +450,7 @@ struct Raster {
     row_tris: Vec<u32>,
 }
 
-fn setup_raster<E: Lookup + ?Sized>(
+fn setup_raster<E: Environment + ?Sized>(
     shader: &Shader<'_, E>,
     cam: &Camera,
     tessellation: usize,
@@ -654,7 +609,7 @@ impl Raster {
 
 /// Renders the sphere: linear radiance, alpha the coverage of the background's alpha.
 /// Rows run in parallel; the result does not depend on the thread count.
-pub fn render<E: Lookup + ?Sized>(
+pub fn render<E: Environment + ?Sized>(
     env: &E,
     material: &Material,
     surface: &Surface<'_>,
@@ -665,7 +620,7 @@ pub fn render<E: Lookup + ?Sized>(
 
 /// [`render`], calling `progress(1)` as each of the `opts.size` rows is done (for a progress
 /// bar: a large preview with many samples takes seconds).
-pub fn render_with_progress<E: Lookup + ?Sized>(
+pub fn render_with_progress<E: Environment + ?Sized>(
     env: &E,
     material: &Material,
     surface: &Surface<'_>,
@@ -788,7 +743,7 @@ pub struct LoadedEnv {
 
 impl LoadedEnv {
     pub fn levels(&self) -> usize {
-        Lookup::levels(&self.sampler)
+        Environment::levels(&self.sampler)
     }
 }
 
@@ -797,7 +752,7 @@ impl LoadedEnv {
 /// `cubeforge prefilter`) is read level by level; anything else `convert` reads becomes a
 /// one-level cube map at the input's resolution.
 pub fn load_environment(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<LoadedEnv> {
-    if path.is_dir() && path.join("m0").is_dir() {
+    if path.is_dir() && crate::chain::is_chain_dir(path) {
         return load_chain_dir(path, opts);
     }
     let loaded = convert::load(&[path.to_path_buf()], from, opts)?;
@@ -819,64 +774,12 @@ pub fn load_environment(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> 
 /// Reads `DIR/m0`, `DIR/m1`, ... (each a folder of six faces) as one chain; each level must
 /// be half the size of the one before (down to 1).
 fn load_chain_dir(dir: &Path, opts: &ReadOptions) -> Result<LoadedEnv> {
-    let mut levels: Vec<crate::cube::Faces> = Vec::new();
-    let mut files = Vec::new();
-    let mut hdr = false;
-    let mut replaced = 0;
-    for k in 0.. {
-        let sub = dir.join(format!("m{k}"));
-        if !sub.is_dir() {
-            break;
-        }
-        let loaded = convert::load(std::slice::from_ref(&sub), None, opts)?;
-        let Source::Cube(mut c) = loaded.source else {
-            return Err(Error::file(
-                &sub,
-                "a chain level must be a folder of six faces",
-            ));
-        };
-        if let Some(prev) = levels.last() {
-            let want = (prev[0].width / 2).max(1);
-            if c.size() != want {
-                return Err(Error::file(
-                    &sub,
-                    format!(
-                        "faces are {0}x{0}, but level m{k} of a chain must be {1}x{1} (half of m{2})",
-                        c.size(),
-                        want,
-                        k - 1
-                    ),
-                ));
-            }
-        }
-        hdr |= loaded.hdr;
-        replaced += loaded.meta.replaced_values;
-        files.extend(loaded.files);
-        levels.push(c.levels.swap_remove(0));
-    }
-    if let Ok(text) = std::fs::read_to_string(dir.join("levels.json")) {
-        let json: serde_json::Value = serde_json::from_str(&text)
-            .map_err(|e| Error::file(dir.join("levels.json"), format!("not valid JSON: {e}")))?;
-        if let Some(list) = json.get("levels").and_then(|l| l.as_array()) {
-            if list.len() != levels.len() {
-                return Err(Error::file(
-                    dir.join("levels.json"),
-                    format!(
-                        "lists {} levels but the folder holds {} (m0 to m{})",
-                        list.len(),
-                        levels.len(),
-                        levels.len() - 1
-                    ),
-                ));
-            }
-        }
-    }
-    let cube = CubeMap { levels };
+    let c = crate::chain::read_dir(dir, opts)?;
     Ok(LoadedEnv {
-        sampler: CubeSampler::new(&cube),
-        files,
-        hdr,
-        replaced_values: replaced,
+        sampler: CubeSampler::new(&c.cube),
+        files: c.files,
+        hdr: c.meta.hdr,
+        replaced_values: c.meta.replaced_values,
     })
 }
 

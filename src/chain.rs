@@ -1,0 +1,228 @@
+//! Prefiltered chains on disk. A chain folder holds `m0/`, `m1/`, ... (each a folder of six
+//! faces, each level half the size of the one before) and `levels.json`; a KTX2 chain keeps
+//! the same description under [`crate::io::ktx2::LEVELS_KEY`], a DDS chain beside it in
+//! `NAME.dds.levels.json`. One schema, [`LevelsFile`], for all three.
+
+use crate::convert::{self, Source};
+use crate::cube::{CubeMap, Faces};
+use crate::error::{Error, Result};
+use crate::filter::{ChainOptions, FilterKind, LevelInfo, LightingModel};
+use crate::io::{self, FileFormat, GpuFormat, Meta, ReadOptions, WriteOptions};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The name of a chain folder's description.
+pub const LEVELS_JSON: &str = "levels.json";
+
+/// What a prefiltered chain holds, level by level: how `cubeforge prefilter` made it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LevelsFile {
+    pub filter: FilterKind,
+    pub face_size: usize,
+    pub level_count: usize,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub lighting: Option<LightingModel>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub gloss_scale: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub gloss_bias: Option<f32>,
+    pub levels: Vec<LevelInfo>,
+}
+
+impl LevelsFile {
+    /// The description of a chain made with `opts` from a base of `face_size`.
+    pub fn new(opts: &ChainOptions, face_size: usize, levels: Vec<LevelInfo>) -> LevelsFile {
+        let cosine = opts.filter == FilterKind::Cosine;
+        LevelsFile {
+            filter: opts.filter,
+            face_size,
+            level_count: levels.len(),
+            lighting: cosine.then_some(opts.lighting),
+            gloss_scale: cosine.then_some(opts.gloss_scale),
+            gloss_bias: cosine.then_some(opts.gloss_bias),
+            levels,
+        }
+    }
+
+    pub fn to_json(&self) -> Vec<u8> {
+        // Plain numbers, strings and lists: serialising cannot fail.
+        serde_json::to_vec_pretty(self).unwrap_or_default()
+    }
+
+    /// Parses a description; `path` names it in errors.
+    pub fn from_json(bytes: &[u8], path: &Path) -> Result<LevelsFile> {
+        serde_json::from_slice(bytes)
+            .map_err(|e| Error::file(path, format!("not a levels description: {e}")))
+    }
+}
+
+/// Whether `dir` is a chain folder (it holds `m0/`).
+pub fn is_chain_dir(dir: &Path) -> bool {
+    dir.join("m0").is_dir()
+}
+
+/// The folder of level `k`.
+pub fn level_dir(dir: &Path, k: usize) -> PathBuf {
+    dir.join(format!("m{k}"))
+}
+
+/// Where a DDS chain's description goes: `NAME.dds.levels.json`.
+pub fn dds_sidecar(dds: &Path) -> PathBuf {
+    let mut s = dds.as_os_str().to_owned();
+    s.push(".levels.json");
+    PathBuf::from(s)
+}
+
+/// The description stored with a KTX2 or DDS chain, if it has one that parses.
+pub fn container_levels(path: &Path, format: FileFormat) -> Option<LevelsFile> {
+    let bytes = match format {
+        FileFormat::Ktx2 => io::ktx2::metadata_from_file(path)
+            .into_iter()
+            .find(|(k, _)| k == io::ktx2::LEVELS_KEY)
+            .map(|(_, v)| v)?,
+        FileFormat::Dds => io::read_file(&dds_sidecar(path)).ok()?,
+        _ => return None,
+    };
+    LevelsFile::from_json(&bytes, path).ok()
+}
+
+/// A chain folder as read.
+pub struct ChainDir {
+    pub cube: CubeMap,
+    /// Every face file read.
+    pub files: Vec<PathBuf>,
+    /// Level 0's description; `hdr` if any level holds values above 1, `replaced_values`
+    /// summed over the levels.
+    pub meta: Meta,
+    pub levels: Option<LevelsFile>,
+}
+
+/// Reads a chain folder: every `mK/` while they last, each half the size of the one before,
+/// and `levels.json` if present (it must list as many levels).
+pub fn read_dir(dir: &Path, opts: &ReadOptions) -> Result<ChainDir> {
+    let mut levels: Vec<Faces> = Vec::new();
+    let mut files = Vec::new();
+    let mut meta: Option<Meta> = None;
+    for k in 0.. {
+        let sub = level_dir(dir, k);
+        if !sub.is_dir() {
+            break;
+        }
+        let loaded = convert::load(std::slice::from_ref(&sub), None, opts)?;
+        let Source::Cube(mut c) = loaded.source else {
+            return Err(Error::file(
+                &sub,
+                "a chain level must be a folder of six faces",
+            ));
+        };
+        if let Some(prev) = levels.last() {
+            let want = (prev[0].width / 2).max(1);
+            if c.size() != want {
+                return Err(Error::file(
+                    &sub,
+                    format!(
+                        "faces are {0}x{0}, but level m{k} of a chain must be {1}x{1} (half of m{2})",
+                        c.size(),
+                        want,
+                        k - 1
+                    ),
+                ));
+            }
+        }
+        match &mut meta {
+            None => meta = Some(loaded.meta),
+            Some(m) => {
+                m.hdr |= loaded.meta.hdr;
+                m.replaced_values += loaded.meta.replaced_values;
+            }
+        }
+        files.extend(loaded.files);
+        levels.push(c.levels.swap_remove(0));
+    }
+    let Some(meta) = meta else {
+        return Err(Error::file(dir, "not a chain folder: it holds no m0/"));
+    };
+    let json = dir.join(LEVELS_JSON);
+    let description = if json.exists() {
+        let d = LevelsFile::from_json(&io::read_file(&json)?, &json)?;
+        if d.levels.len() != levels.len() {
+            return Err(Error::file(
+                &json,
+                format!(
+                    "lists {} levels but the folder holds {} (m0 to m{})",
+                    d.levels.len(),
+                    levels.len(),
+                    levels.len() - 1
+                ),
+            ));
+        }
+        Some(d)
+    } else {
+        None
+    };
+    Ok(ChainDir {
+        cube: CubeMap { levels },
+        files,
+        meta,
+        levels: description,
+    })
+}
+
+/// The files of a chain folder: `mK/px.EXT` ... for every level, and `levels.json`.
+pub fn encode_dir(
+    dir: &Path,
+    chain: &CubeMap,
+    description: &LevelsFile,
+    face_format: FileFormat,
+    write: &WriteOptions,
+    inputs: &[PathBuf],
+) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    let mut files = Vec::new();
+    for (k, faces) in chain.levels.iter().enumerate() {
+        files.extend(crate::output::encode_faces(
+            &level_dir(dir, k),
+            faces,
+            face_format,
+            write,
+            inputs,
+        )?);
+    }
+    files.push((dir.join(LEVELS_JSON), description.to_json()));
+    Ok(files)
+}
+
+/// The files a chain becomes at `path`: a KTX2 with its description in the metadata, a DDS
+/// and its sidecar, or (a name with no container extension) a chain folder of
+/// `face_format` faces. Refuses to overwrite any of `inputs`.
+#[allow(clippy::too_many_arguments)]
+pub fn encode(
+    path: &Path,
+    chain: &CubeMap,
+    description: &LevelsFile,
+    face_format: FileFormat,
+    write: &WriteOptions,
+    gpu_format: GpuFormat,
+    inputs: &[PathBuf],
+) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    let refuse = |p: &[PathBuf]| crate::output::refuse_inputs(p, inputs);
+    match FileFormat::from_extension(path) {
+        Some(FileFormat::Ktx2) => {
+            refuse(&[path.to_path_buf()])?;
+            let json = description.to_json();
+            let bytes =
+                io::ktx2::encode_with_metadata(chain, gpu_format, &[(io::ktx2::LEVELS_KEY, &json)]);
+            Ok(vec![(path.to_path_buf(), bytes)])
+        }
+        Some(FileFormat::Dds) => {
+            // DDS has no room for metadata: a sidecar that `info` reads.
+            let side = dds_sidecar(path);
+            refuse(&[path.to_path_buf(), side.clone()])?;
+            let bytes = io::encode_cube(path, chain, gpu_format)?;
+            Ok(vec![
+                (path.to_path_buf(), bytes),
+                (side, description.to_json()),
+            ])
+        }
+        _ => encode_dir(path, chain, description, face_format, write, inputs),
+    }
+}
