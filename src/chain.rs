@@ -144,19 +144,25 @@ pub fn read_dir(dir: &Path, opts: &ReadOptions) -> Result<ChainDir> {
     };
     let json = dir.join(LEVELS_JSON);
     let description = if json.exists() {
-        let d = LevelsFile::from_json(&io::read_file(&json)?, &json)?;
-        if d.levels.len() != levels.len() {
-            return Err(Error::file(
-                &json,
-                format!(
-                    "lists {} levels but the folder holds {} (m0 to m{})",
-                    d.levels.len(),
-                    levels.len(),
-                    levels.len() - 1
-                ),
-            ));
+        // A hand-made description may hold less than cubeforge writes: any JSON is taken,
+        // and a `levels` list must match the folders.
+        let bytes = io::read_file(&json)?;
+        let value: serde_json::Value = serde_json::from_slice(&bytes)
+            .map_err(|e| Error::file(&json, format!("not valid JSON: {e}")))?;
+        if let Some(listed) = value.get("levels").and_then(|l| l.as_array()) {
+            if listed.len() != levels.len() {
+                return Err(Error::file(
+                    &json,
+                    format!(
+                        "lists {} levels but the folder holds {} (m0 to m{})",
+                        listed.len(),
+                        levels.len(),
+                        levels.len() - 1
+                    ),
+                ));
+            }
         }
-        Some(d)
+        serde_json::from_value(value).ok()
     } else {
         None
     };

@@ -289,7 +289,7 @@ fn a_prefiltered_chain_folder_lists_its_levels() {
     std::fs::write(chain.join("levels.json"), "{ not json").unwrap();
     std::fs::remove_dir_all(&m3).unwrap();
     let e = one_error(&[chain.as_os_str()], "levels.json");
-    assert!(e.contains("not a levels description"), "{e}");
+    assert!(e.contains("not valid JSON"), "{e}");
 }
 
 /// Several inputs, one of them bad: a JSON array of the good ones, one line for the bad one.
