@@ -10,7 +10,8 @@ use lobe::{Kernel, Lobe};
 use serde::{Deserialize, Serialize};
 
 /// The filters of `cubeforge prefilter`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum FilterKind {
     /// Plain mipmaps: each level the solid-angle-weighted 2x2 mean of the one above.
@@ -35,7 +36,8 @@ impl FilterKind {
 }
 
 /// cmft's lighting models: how a gloss level's specular power is adjusted.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum LightingModel {
     #[default]
@@ -225,7 +227,8 @@ pub fn prefilter(
 }
 
 /// How the irradiance map is computed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum IrradianceMethod {
     /// Exact cosine-weighted integral over every texel of a 64-face copy of the source:

@@ -219,7 +219,8 @@ impl FileFormat {
 }
 
 /// Texel formats of GPU containers (KTX2, DDS).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum GpuFormat {
     /// RGBA half float (the default: HDR, half the memory of f32).

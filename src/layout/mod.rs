@@ -11,7 +11,8 @@ use crate::image::Image;
 use glam::{Vec2, Vec3, Vec4};
 
 /// Every kind of environment map cubeforge reads or writes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Kind {
     /// Lat-long panorama, 2:1.
