@@ -174,7 +174,7 @@ pub fn load(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Resul
 /// Finds px/nx/... or posx/negx/... files (any supported extension) in a folder.
 pub fn find_faces(dir: &Path) -> Result<Vec<PathBuf>> {
     let entries: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map_err(|e| Error::file(dir, io::io_msg(&e)))?
+        .map_err(|e| Error::io(dir, e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| FileFormat::from_extension(p).is_some())
         .collect();

@@ -1,27 +1,89 @@
-//! One error type whose message always names the file and the problem, so the CLI can print one line.
+//! One error type whose message always names the file and the problem, so the CLI can print
+//! one line, and whose kind a library user can match on (retry an I/O failure, raise a limit,
+//! point at a recipe's line).
 
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
-    /// A problem with a named file (input or output).
+    /// The operating system refused a read or a write.
+    #[error("{}: {}", path.display(), crate::io::io_msg(source))]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file whose content is malformed, truncated, or not what its name says.
     #[error("{}: {msg}", path.display())]
-    File { path: PathBuf, msg: String },
-    /// A problem with the request itself (options that do not fit together).
+    Decode { path: PathBuf, msg: String },
+    /// Over a limit on pixels, dimensions or memory (raise it if the input is genuine).
+    #[error("{}{msg}", path.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default())]
+    Limit { path: Option<PathBuf>, msg: String },
+    /// A well-formed file or request that cubeforge does not handle (a pixel format, a
+    /// layout, a container of another kind).
+    #[error("{}: {msg}", path.display())]
+    Unsupported { path: PathBuf, msg: String },
+    /// A recipe or material file that does not say something valid, at a line when known.
+    #[error("{}: {}{msg}", path.display(), line.map(|l| format!("line {l}: ")).unwrap_or_default())]
+    Recipe {
+        path: PathBuf,
+        line: Option<usize>,
+        msg: String,
+    },
+    /// A parameter out of range, or parameters that do not fit together.
     #[error("{0}")]
-    Usage(String),
+    InvalidOption(String),
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
+    /// A problem with what a named file holds (or where it would go).
     pub fn file(path: impl AsRef<Path>, msg: impl Into<String>) -> Self {
-        Error::File {
+        Error::Decode {
             path: path.as_ref().to_path_buf(),
             msg: msg.into(),
         }
     }
+    /// A parameter the caller gave that cannot work.
     pub fn usage(msg: impl Into<String>) -> Self {
-        Error::Usage(msg.into())
+        Error::InvalidOption(msg.into())
+    }
+    pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.as_ref().to_path_buf(),
+            source,
+        }
+    }
+    pub fn limit(path: Option<&Path>, msg: impl Into<String>) -> Self {
+        Error::Limit {
+            path: path.map(Path::to_path_buf),
+            msg: msg.into(),
+        }
+    }
+    pub fn unsupported(path: impl AsRef<Path>, msg: impl Into<String>) -> Self {
+        Error::Unsupported {
+            path: path.as_ref().to_path_buf(),
+            msg: msg.into(),
+        }
+    }
+    pub fn recipe(path: impl AsRef<Path>, line: Option<usize>, msg: impl Into<String>) -> Self {
+        Error::Recipe {
+            path: path.as_ref().to_path_buf(),
+            line,
+            msg: msg.into(),
+        }
+    }
+    /// The file the error is about, if any.
+    pub fn path(&self) -> Option<&Path> {
+        match self {
+            Error::Io { path, .. }
+            | Error::Decode { path, .. }
+            | Error::Unsupported { path, .. }
+            | Error::Recipe { path, .. } => Some(path),
+            Error::Limit { path, .. } => path.as_deref(),
+            Error::InvalidOption(_) => None,
+        }
     }
 }

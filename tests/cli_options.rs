@@ -324,3 +324,33 @@ fn an_oversized_control_map_names_where_its_size_came_from() {
         assert_eq!(err(&o).lines().count(), 1);
     }
 }
+
+#[test]
+fn library_errors_have_kinds() {
+    use cubeforge::io::{read, Limits, ReadOptions};
+    use cubeforge::Error;
+    let t = tempfile::tempdir().unwrap();
+    let missing = t.path().join("missing.exr");
+    match read(&missing, &ReadOptions::default()) {
+        Err(Error::Io { path, source }) => {
+            assert_eq!(path, missing);
+            assert_eq!(source.kind(), std::io::ErrorKind::NotFound);
+        }
+        other => panic!("{:?}", other.map(|_| ())),
+    }
+    let tiny = ReadOptions {
+        limits: Limits {
+            max_pixels: 16,
+            ..Limits::default()
+        },
+        ..ReadOptions::default()
+    };
+    let e = read(Path::new(SKY_PNG), &tiny).unwrap_err();
+    assert!(matches!(e, Error::Limit { .. }), "{e:?}");
+    assert_eq!(e.path(), Some(Path::new(SKY_PNG)));
+    let junk = t.path().join("junk.bin");
+    std::fs::write(&junk, b"not an image").unwrap();
+    let e = read(&junk, &ReadOptions::default()).unwrap_err();
+    assert!(matches!(e, Error::Unsupported { .. }), "{e:?}");
+    assert!(e.to_string().starts_with(&format!("{}: ", junk.display())));
+}

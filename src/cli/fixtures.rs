@@ -18,8 +18,7 @@ pub fn run(args: Args) -> Result<()> {
     // Antialiased by supersampling the function itself: 4 x 4 exact samples per pixel.
     let big = Resampler::default().to_projection(&env, Projection::Equirect, 2048, 1024);
     let img = big.downsample_2x().downsample_2x();
-    std::fs::create_dir_all(&args.dir)
-        .map_err(|e| cubeforge::Error::file(&args.dir, io::io_msg(&e)))?;
+    std::fs::create_dir_all(&args.dir).map_err(|e| cubeforge::Error::io(&args.dir, e))?;
     let mut files = Vec::new();
     for name in ["sky.exr", "sky.png"] {
         let path = args.dir.join(name);

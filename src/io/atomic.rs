@@ -11,8 +11,6 @@ use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-use super::io_msg;
-
 /// Temporary files and folders that exist now, for [`remove_temporaries`].
 static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
@@ -108,14 +106,14 @@ pub fn stage(files: &[(PathBuf, Vec<u8>)]) -> Result<Staged> {
                         let root = temp_name(&top);
                         register(&root);
                         staged.trees.push((root.clone(), top.clone()));
-                        std::fs::create_dir(&root).map_err(|e| Error::file(&top, io_msg(&e)))?;
+                        std::fs::create_dir(&root).map_err(|e| Error::io(&top, e))?;
                         root
                     }
                 };
                 // Within the new tree, the file keeps its place relative to the top.
                 let rel = path.strip_prefix(&top).unwrap_or(path);
                 let tmp = root.join(rel);
-                std::fs::create_dir_all(parent(&tmp)).map_err(|e| Error::file(path, io_msg(&e)))?;
+                std::fs::create_dir_all(parent(&tmp)).map_err(|e| Error::io(path, e))?;
                 tmp
             }
             None => {
@@ -125,7 +123,7 @@ pub fn stage(files: &[(PathBuf, Vec<u8>)]) -> Result<Staged> {
                 tmp
             }
         };
-        std::fs::write(&tmp, bytes).map_err(|e| Error::file(path, io_msg(&e)))?;
+        std::fs::write(&tmp, bytes).map_err(|e| Error::io(path, e))?;
     }
     Ok(staged)
 }
@@ -172,14 +170,14 @@ impl Staged {
                 Err(e) => {
                     self.trees.extend(trees[i..].iter().cloned());
                     rollback(&created);
-                    return Err(Error::file(top, io_msg(&e)));
+                    return Err(Error::io(top, e));
                 }
             }
         }
         for (_, p) in &self.files {
             if let Err(e) = std::fs::create_dir_all(parent(p)) {
                 rollback(&created);
-                return Err(Error::file(p, io_msg(&e)));
+                return Err(Error::io(p, e));
             }
         }
         let mut dirs: Vec<PathBuf> = self
@@ -197,7 +195,7 @@ impl Staged {
                 created.extend(made.map(|((_, p), _)| p.clone()));
                 drop(locks);
                 rollback(&created);
-                return Err(Error::file(path, io_msg(&e)));
+                return Err(Error::io(path, e));
             }
             forget(tmp);
         }

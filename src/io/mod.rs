@@ -71,8 +71,8 @@ impl Limits {
             || h > self.max_dimension as u64
             || w.saturating_mul(h) > self.max_pixels
         {
-            return Err(Error::file(
-                path,
+            return Err(Error::limit(
+                Some(path),
                 format!(
                     "image claims {w}x{h} pixels, over the limit of {} pixels ({} per side); raise it with --max-pixels if the file is genuine",
                     self.max_pixels, self.max_dimension
@@ -92,8 +92,8 @@ impl Limits {
         needs: u64,
     ) -> Result<()> {
         if needs > self.max_memory {
-            return Err(Error::file(
-                path,
+            return Err(Error::limit(
+                Some(path),
                 format!(
                     "{claim}, about {} of memory to decode, over the budget of {} (--max-memory)",
                     human_bytes(needs),
@@ -107,7 +107,7 @@ impl Limits {
     /// Refuses a plan that needs more than the memory budget, naming what needs it.
     pub fn check_memory(&self, what: impl std::fmt::Display, bytes: u64) -> Result<()> {
         if bytes > self.max_memory {
-            return Err(Error::usage(format!(
+            return Err(Error::limit(None, format!(
                 "{what} needs about {} of memory, over the budget of {} (half this machine's memory by default; --max-memory)",
                 human_bytes(bytes),
                 human_bytes(self.max_memory)
@@ -122,8 +122,8 @@ impl Limits {
     pub fn check_cube(&self, path: &Path, w: u64, h: u64) -> Result<()> {
         self.check(path, w, h)?;
         if w.saturating_mul(h).saturating_mul(6) > self.max_pixels {
-            return Err(Error::file(
-                path,
+            return Err(Error::limit(
+                Some(path),
                 format!(
                     "cube map claims six {w}x{h} faces, over the limit of {} pixels; raise it with --max-pixels if the file is genuine",
                     self.max_pixels
@@ -456,12 +456,12 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
 /// forever and a device (`/dev/zero`) read without end.
 pub fn read_file(path: &Path) -> Result<Vec<u8>> {
     regular_file(path)?;
-    std::fs::read(path).map_err(|e| Error::file(path, io_msg(&e)))
+    std::fs::read(path).map_err(|e| Error::io(path, e))
 }
 
 /// Fails unless `path` names a regular file (links followed), without opening it.
 pub fn regular_file(path: &Path) -> Result<()> {
-    let meta = std::fs::metadata(path).map_err(|e| Error::file(path, io_msg(&e)))?;
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if meta.is_file() {
         Ok(())
     } else if meta.is_dir() {
@@ -489,7 +489,7 @@ fn read_input<'a>(path: &'a Path, limits: &Limits) -> Result<(Vec<u8>, &'a Path)
         .lock()
         .take(limits.max_memory.saturating_add(1))
         .read_to_end(&mut bytes)
-        .map_err(|e| Error::file(name, io_msg(&e)))?;
+        .map_err(|e| Error::io(name, e))?;
     if bytes.len() as u64 > limits.max_memory {
         return Err(Error::file(
             name,
@@ -524,7 +524,7 @@ pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
                 format!("not a valid {} file (its signature is missing)", n.name()),
             ))
         }
-        (None, None) => return Err(Error::file(
+        (None, None) => return Err(Error::unsupported(
             path,
             "not a recognised image file (cubeforge reads PNG, JPEG, TGA, HDR, EXR, KTX2 and DDS)",
         )),
@@ -579,7 +579,7 @@ pub fn encode_cube(path: &Path, cube: &CubeMap, format: GpuFormat) -> Result<Vec
 }
 
 pub fn unknown_ext(path: &Path) -> Error {
-    Error::file(
+    Error::unsupported(
         path,
         "unknown output extension: use .png .jpg .tga .hdr .exr .ktx2 or .dds",
     )
