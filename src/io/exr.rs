@@ -110,14 +110,14 @@ fn guarded<T>(f: impl FnOnce() -> exr::error::Result<T>) -> std::result::Result<
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
     QUIET.with(|q| q.set(was));
     match result {
-        Ok(done) => done.map_err(|e| e.to_string()),
+        Ok(done) => done.map_err(|e| super::raster::one_line(&e.to_string())),
         Err(payload) => {
             let what = payload
                 .downcast_ref::<&str>()
                 .map(|s| s.to_string())
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown failure".into());
-            Err(format!("corrupt data ({what})"))
+            Err(format!("corrupt data ({})", super::raster::one_line(&what)))
         }
     }
 }
