@@ -7,8 +7,9 @@
 //! material files, a control map's sidecar, a DDS chain's levels.json) get the same.
 //!
 //! The same seeds give the same files on every run. `HOSTILE_ROUNDS=n` runs n times as many
-//! mutations (a long campaign: run it with `--release`), `HOSTILE_VERBOSE=1` prints every
-//! refusal, and every source prints its slowest mutation (for finding slow inputs by hand; no
+//! mutations (a long campaign), `HOSTILE_EXTRA=DIR` adds the files in DIR to it (say, progressive
+//! JPEGs from another program; never commit them), `HOSTILE_KEEP=DIR` writes each source's
+//! slowest mutation there, `HOSTILE_VERBOSE=1` prints every refusal, and every source prints its slowest mutation (for finding slow inputs by hand; no
 //! test here depends on time).
 
 use cubeforge::control::{self, Size, Syntax};
@@ -382,9 +383,12 @@ impl Tally {
 
 /// Checks one outcome of a front door: Ok, or an error of one line naming `name`. A panic
 /// fails the test, naming the mutation.
+/// `text`: the file is text, which a message may quote (an unknown key holding a newline):
+/// the command line puts such a message on one line (`cli::run`), so it may span several here.
 fn check(
     outcome: std::thread::Result<cubeforge::Result<()>>,
     name: &str,
+    text: bool,
     what: &dyn Fn() -> String,
 ) -> bool {
     match outcome {
@@ -397,7 +401,7 @@ fn check(
                 what()
             );
             assert!(
-                !e.contains('\n'),
+                text || !e.contains('\n'),
                 "{}: a message of several lines: {e}",
                 what()
             );
@@ -436,8 +440,16 @@ fn campaign(
         if took > tally.slowest {
             tally.slowest = took;
             tally.slowest_round = round;
+            if let Some(dir) = std::env::var_os("HOSTILE_KEEP") {
+                let name: String = what
+                    .chars()
+                    .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+                    .collect();
+                std::fs::write(Path::new(&dir).join(format!("slowest-{name}")), &b).unwrap();
+            }
         }
-        if check(outcome, name, &|| format!("{what}, mutation {round}")) {
+        let text = mutator.text;
+        if check(outcome, name, text, &|| format!("{what}, mutation {round}")) {
             tally.read += 1;
         } else {
             tally.refused += 1;
@@ -640,14 +652,44 @@ fn real_files(sub: &str, ext: &str) -> Vec<PathBuf> {
     files
 }
 
+/// Files of extension `ext` in the folder `HOSTILE_EXTRA` names, if any: other programs'
+/// files (progressive JPEG, Adam7 PNG, colour-mapped TGA) for a long campaign by hand.
+fn extra_files(ext: &str) -> Vec<PathBuf> {
+    let Some(dir) = std::env::var_os("HOSTILE_EXTRA") else {
+        return Vec::new();
+    };
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == ext))
+        .collect();
+    files.sort();
+    files
+}
+
 /// Runs a campaign over each source (name, bytes, fields) of one format, the valid file read
-/// first (it must decode).
-fn formats(sources: Vec<(String, Vec<u8>, Vec<Field>)>, ext: &str, seed: u64, rounds: usize) {
+/// first (it must decode), then over any `HOSTILE_EXTRA` files (which need not).
+fn formats(
+    mut sources: Vec<(String, Vec<u8>, Vec<Field>)>,
+    ext: &str,
+    seed: u64,
+    rounds: usize,
+    fields_of: fn(&[u8]) -> Vec<Field>,
+) {
+    let extra = extra_files(ext).into_iter().map(|path| {
+        let b = std::fs::read(&path).unwrap();
+        let fields = fields_of(&b);
+        (format!("extra {}", path.display()), b, fields)
+    });
+    sources.extend(extra);
     let dir = tempfile::tempdir().unwrap();
     let name = format!("mutated.{ext}");
     let door = image_door(dir.path(), &name);
     for (i, (what, bytes, fields)) in sources.into_iter().enumerate() {
-        door(&bytes).unwrap_or_else(|e| panic!("{what}: the valid file: {e}"));
+        if !what.starts_with("extra ") {
+            door(&bytes).unwrap_or_else(|e| panic!("{what}: the valid file: {e}"));
+        }
         // The real fixtures are larger and slower to read: a fifth as many by default.
         let rounds = if what.contains("fixtures/real") {
             rounds / 5
@@ -693,7 +735,7 @@ fn png_mutations() {
         let b = std::fs::read(&path).unwrap();
         sources.push((path.display().to_string(), b.clone(), png_fields(&b)));
     }
-    formats(sources, "png", 0x243f_6a88_85a3_08d3, 200);
+    formats(sources, "png", 0x243f_6a88_85a3_08d3, 200, png_fields);
 }
 
 #[test]
@@ -710,7 +752,7 @@ fn jpeg_mutations() {
         let b = std::fs::read(&path).unwrap();
         sources.push((path.display().to_string(), b.clone(), jpeg_fields(&b)));
     }
-    formats(sources, "jpg", 0x1319_8a2e_0370_7344, 200);
+    formats(sources, "jpg", 0x1319_8a2e_0370_7344, 200, jpeg_fields);
 }
 
 #[test]
@@ -728,7 +770,7 @@ fn tga_mutations() {
         .encode(rgba.as_raw(), 19, 11, image::ExtendedColorType::Rgba8)
         .unwrap();
     sources.push(("TGA (flat)".to_string(), b, tga_fields()));
-    formats(sources, "tga", 0xa409_3822_299f_31d0, 200);
+    formats(sources, "tga", 0xa409_3822_299f_31d0, 200, |_| tga_fields());
 }
 
 #[test]
@@ -743,7 +785,7 @@ fn hdr_mutations() {
         let b = std::fs::read(&path).unwrap();
         sources.push((path.display().to_string(), b.clone(), hdr_fields(&b)));
     }
-    formats(sources, "hdr", 0x082e_fa98_ec4e_6c89, 200);
+    formats(sources, "hdr", 0x082e_fa98_ec4e_6c89, 200, hdr_fields);
 }
 
 #[test]
@@ -755,6 +797,7 @@ fn exr_mutations() {
         "exr",
         0x4528_21e6_38d0_1377,
         150,
+        |_| Vec::new(),
     );
 }
 
@@ -775,7 +818,7 @@ fn ktx2_mutations() {
     .collect();
     let b = io::ktx2::encode_2d(&levels, GpuFormat::Rgba8);
     sources.push(("KTX2 2D".to_string(), b.clone(), ktx2_fields(&b)));
-    formats(sources, "ktx2", 0xbe54_66cf_34e9_0c6c, 200);
+    formats(sources, "ktx2", 0xbe54_66cf_34e9_0c6c, 200, ktx2_fields);
 }
 
 #[test]
@@ -785,7 +828,7 @@ fn dds_mutations() {
         let b = io::dds::encode(&test_cube(8), format).unwrap();
         sources.push((format!("DDS cube {}", format.name()), b, dds_fields()));
     }
-    formats(sources, "dds", 0xc0ac_29b7_c97c_50dd, 200);
+    formats(sources, "dds", 0xc0ac_29b7_c97c_50dd, 200, |_| dds_fields());
 }
 
 /// Control recipes (TOML and JSON) through `control::parse`, and baked at 16x16 when they
@@ -1025,4 +1068,31 @@ fn a_tiny_png_claiming_a_huge_size_stops_where_its_data_ends() {
     let img = read_with(&path, &b, generous()).unwrap();
     assert_eq!((img.width, img.height), (2048, 2048));
     assert_eq!(img.get(2047, 2047), Vec4::ONE);
+}
+
+/// The same for the other formats whose header states a size: a TGA (run-length and flat)
+/// and a Radiance HDR claiming 16384x16384 in a few dozen bytes stop where their data ends.
+#[test]
+fn tiny_tga_and_hdr_files_claiming_a_huge_size_stop_where_their_data_ends() {
+    let dir = tempfile::tempdir().unwrap();
+    for image_type in [2u8, 10] {
+        let path = dir.path().join(format!("claims{image_type}.tga"));
+        let mut b = vec![0, 0, image_type, 0, 0, 0, 0, 0, 0, 0, 0, 0];
+        b.extend_from_slice(&16384u16.to_le_bytes());
+        b.extend_from_slice(&16384u16.to_le_bytes());
+        b.extend_from_slice(&[32, 8]);
+        // One run of 128 texels, or 8 flat texels.
+        b.extend_from_slice(&[0xff, 1, 2, 3, 4]);
+        b.extend_from_slice(&[9; 28]);
+        let e = read_with(&path, &b, generous()).unwrap_err().to_string();
+        assert!(e.contains(&format!("claims{image_type}.tga")), "{e}");
+    }
+    let path = dir.path().join("claims.hdr");
+    let mut b = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16384 +X 16384\n".to_vec();
+    b.extend_from_slice(&[2, 2, 0x40, 0]);
+    for _ in 0..4 {
+        b.extend_from_slice(&[128 + 127, 7]);
+    }
+    let e = read_with(&path, &b, generous()).unwrap_err().to_string();
+    assert!(e.contains("claims.hdr") && e.contains("scanline 1"), "{e}");
 }

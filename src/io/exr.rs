@@ -29,12 +29,16 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
     limits.check(path, size.0 as u64, size.1 as u64)?;
     let channel = |n: &str| header.channels.list.iter().find(|c| c.name.eq(n));
     if channel("R").is_none() || channel("G").is_none() || channel("B").is_none() {
-        let names: Vec<String> = header
-            .channels
-            .list
+        // Quoted with escapes (a corrupt name can hold a newline), at most eight of them.
+        let list = &header.channels.list;
+        let mut names: Vec<String> = list
             .iter()
-            .map(|c| c.name.to_string())
+            .take(8)
+            .map(|c| format!("{:?}", c.name.to_string()))
             .collect();
+        if list.len() > 8 {
+            names.push(format!("and {} more", list.len() - 8));
+        }
         return Err(Error::file(
             path,
             format!(
