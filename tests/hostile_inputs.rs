@@ -365,6 +365,8 @@ impl Mutator {
 struct Tally {
     read: usize,
     refused: usize,
+    /// Refusals where a decoder panicked and cubeforge caught it ("corrupt data (...)").
+    caught: usize,
     slowest: Duration,
     slowest_round: usize,
 }
@@ -372,17 +374,18 @@ struct Tally {
 impl Tally {
     fn report(&self, what: &str) {
         println!(
-            "{what}: {} read, {} refused; slowest mutation {} took {:.1} ms",
+            "{what}: {} read, {} refused ({} caught panics); slowest mutation {} took {:.1} ms",
             self.read,
             self.refused,
+            self.caught,
             self.slowest_round,
             self.slowest.as_secs_f64() * 1e3
         );
     }
 }
 
-/// Checks one outcome of a front door: Ok, or an error of one line naming `name`. A panic
-/// fails the test, naming the mutation.
+/// Checks one outcome of a front door: Ok (None), or an error of one line naming `name` (its
+/// message). A panic fails the test, naming the mutation.
 /// `text`: the file is text, which a message may quote (an unknown key holding a newline):
 /// the command line puts such a message on one line (`cli::run`), so it may span several here.
 fn check(
@@ -390,9 +393,9 @@ fn check(
     name: &str,
     text: bool,
     what: &dyn Fn() -> String,
-) -> bool {
+) -> Option<String> {
     match outcome {
-        Ok(Ok(())) => true,
+        Ok(Ok(())) => None,
         Ok(Err(e)) => {
             let e = e.to_string();
             assert!(
@@ -408,7 +411,7 @@ fn check(
             if verbose() {
                 println!("{}: {e}", what());
             }
-            false
+            Some(e)
         }
         Err(payload) => {
             let msg = payload
@@ -449,10 +452,15 @@ fn campaign(
             }
         }
         let text = mutator.text;
-        if check(outcome, name, text, &|| format!("{what}, mutation {round}")) {
-            tally.read += 1;
-        } else {
-            tally.refused += 1;
+        match check(outcome, name, text, &|| format!("{what}, mutation {round}")) {
+            None => tally.read += 1,
+            Some(e) => {
+                tally.refused += 1;
+                if e.contains("corrupt data (") {
+                    tally.caught += 1;
+                    println!("{what}, mutation {round}: a caught panic: {e}");
+                }
+            }
         }
     }
     tally.report(what);

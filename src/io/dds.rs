@@ -10,6 +10,7 @@
 //! The headers are parsed with `ddsfile`; every size is checked here, with checked arithmetic,
 //! against the file's length and against [`Limits`] before any texel is allocated.
 
+use super::guard::{caught, one_line};
 use super::{Decoded, FileFormat, GpuFormat, Limits, Meta};
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
@@ -130,8 +131,11 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             "truncated DDS file: {file_len} bytes, shorter than the {HEADER_END}-byte header"
         )));
     }
-    let header =
-        Header::read(&bytes[4..HEADER_END]).map_err(|e| err(format!("invalid DDS header: {e}")))?;
+    // ddsfile's parsing is caught like every third-party decoder's (`guard::caught`).
+    let invalid = |e: String| err(format!("invalid DDS header: {}", one_line(&e)));
+    let header = caught(|| Header::read(&bytes[4..HEADER_END]))
+        .map_err(invalid)?
+        .map_err(|e| invalid(e.to_string()))?;
 
     let is_dx10 = header.spf.fourcc == Some(FourCC(FourCC::DX10));
     let (format, order, data_start, cube) = if is_dx10 {
@@ -143,8 +147,10 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         let raw = le_u32(bytes, HEADER_END).unwrap_or(0);
         let format = from_dxgi(raw)
             .ok_or_else(|| err(format!("unsupported DXGI format {raw} ({SUPPORTED})")))?;
-        let h10 = Header10::read(&bytes[HEADER_END..HEADER10_END])
-            .map_err(|e| err(format!("invalid DDS DX10 header: {e}")))?;
+        let invalid = |e: String| err(format!("invalid DDS DX10 header: {}", one_line(&e)));
+        let h10 = caught(|| Header10::read(&bytes[HEADER_END..HEADER10_END]))
+            .map_err(invalid)?
+            .map_err(|e| invalid(e.to_string()))?;
         if h10.resource_dimension != D3D10ResourceDimension::Texture2D {
             return Err(err(format!(
                 "a {:?} resource is not supported: cubeforge reads 2D textures and cube maps",
@@ -163,7 +169,7 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         }
         (format, Order::Rgba, HEADER10_END, cube)
     } else {
-        let d3d = D3DFormat::try_from_pixel_format(&header.spf);
+        let d3d = caught(|| D3DFormat::try_from_pixel_format(&header.spf)).map_err(invalid)?;
         let (format, order) = match d3d {
             Some(D3DFormat::A16B16G16R16F) => (GpuFormat::Rgba16f, Order::Rgba),
             Some(D3DFormat::A32B32G32R32F) => (GpuFormat::Rgba32f, Order::Rgba),

@@ -3,6 +3,7 @@
 
 pub mod dds;
 pub mod exr;
+mod guard;
 pub mod ktx2;
 pub mod raster;
 pub mod rgbe;

@@ -1,5 +1,6 @@
 //! PNG, JPEG, TGA and Radiance HDR through the `image` crate, converted to and from linear f32.
 
+use super::guard::{caught, one_line};
 use super::{unorm8, Decoded, FileFormat, Meta, ReadOptions, WriteOptions};
 use crate::error::{Error, Result};
 use crate::image::{linear_to_srgb, srgb_to_linear, ColorSpace, Image};
@@ -26,18 +27,18 @@ pub fn decode(
     opts: &ReadOptions,
 ) -> Result<(Decoded, Meta)> {
     let what = f.name();
-    let err = |e: ::image::ImageError| {
-        Error::file(
-            path,
-            format!("cannot decode {what}: {}", one_line(&e.to_string())),
-        )
-    };
+    let fail = |msg: String| Error::file(path, format!("cannot decode {what}: {msg}"));
+    let err = |e: ::image::ImageError| fail(one_line(&e.to_string()));
     // The PNG decoder reads on to the first IDAT before it tells the size: check IHDR first.
     if let Some((w, h)) = png_ihdr_size(bytes).filter(|_| f == FileFormat::Png) {
         opts.limits.check(path, w as u64, h as u64)?;
     }
+    // Every call into the image crate is caught (`guard::caught`): a panic on corrupt data
+    // becomes this file's error. None of them hands work to rayon.
     let reader = ::image::ImageReader::with_format(Cursor::new(bytes), image_format(f));
-    let mut decoder = reader.into_decoder().map_err(err)?;
+    let mut decoder = caught(|| reader.into_decoder())
+        .map_err(fail)?
+        .map_err(err)?;
     let (w, h) = decoder.dimensions();
     opts.limits.check(path, w as u64, h as u64)?;
     if f == FileFormat::Jpeg {
@@ -47,7 +48,9 @@ pub fn decode(
     limits.max_alloc = Some(opts.limits.max_pixels.saturating_mul(16).max(1 << 20));
     decoder.set_limits(limits).map_err(err)?;
     let color = decoder.color_type();
-    let img = DynamicImage::from_decoder(decoder).map_err(err)?;
+    let img = caught(|| DynamicImage::from_decoder(decoder))
+        .map_err(fail)?
+        .map_err(err)?;
     let (w, h) = (w as usize, h as usize);
     let float = matches!(color, ColorType::Rgb32F | ColorType::Rgba32F);
     let srgb = !float && !opts.linear;
@@ -121,12 +124,6 @@ pub fn decode(
         }),
         meta,
     ))
-}
-
-/// A third-party decoder's message on one line (some span several: "I/O errors\nNot enough
-/// bytes"), its runs of whitespace made single spaces.
-pub(super) fn one_line(msg: &str) -> String {
-    msg.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
 /// Refuses a JPEG too small to hold the pixels its frame header claims, before the decoder
