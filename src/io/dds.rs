@@ -1,4 +1,4 @@
-//! DDS cube maps with every mip level.
+//! DDS cube maps with every mip level (and 2D textures, read as their level 0 image).
 //!
 //! Writes a DX10-header cube map (DXGI R16G16B16A16_FLOAT, R32G32B32A32_FLOAT,
 //! R8G8B8A8_UNORM_SRGB or R8G8B8A8_UNORM) with the cube-map caps and the TEXTURECUBE misc flag;
@@ -10,6 +10,7 @@
 //! The headers are parsed with `ddsfile`; every size is checked here, with checked arithmetic,
 //! against the file's length and against [`Limits`] before any texel is allocated.
 
+use super::guard::{caught, one_line};
 use super::{Decoded, FileFormat, GpuFormat, Limits, Meta};
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
@@ -118,7 +119,7 @@ fn le_u32(bytes: &[u8], offset: usize) -> Option<u32> {
     Some(u32::from_le_bytes(b.try_into().ok()?))
 }
 
-/// Reads a DDS cube map with all its levels.
+/// Reads a DDS cube map with all its levels, or level 0 of a 2D texture as an image.
 pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
     let err = |msg: String| Error::file(path, msg);
     let file_len = bytes.len();
@@ -130,11 +131,14 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             "truncated DDS file: {file_len} bytes, shorter than the {HEADER_END}-byte header"
         )));
     }
-    let header =
-        Header::read(&bytes[4..HEADER_END]).map_err(|e| err(format!("invalid DDS header: {e}")))?;
+    // ddsfile's parsing is caught like every third-party decoder's (`guard::caught`).
+    let invalid = |e: String| err(format!("invalid DDS header: {}", one_line(&e)));
+    let header = caught(|| Header::read(&bytes[4..HEADER_END]))
+        .map_err(invalid)?
+        .map_err(|e| invalid(e.to_string()))?;
 
     let is_dx10 = header.spf.fourcc == Some(FourCC(FourCC::DX10));
-    let (format, order, data_start) = if is_dx10 {
+    let (format, order, data_start, cube) = if is_dx10 {
         if file_len < HEADER10_END {
             return Err(err(format!(
                 "truncated DDS file: {file_len} bytes, shorter than its {HEADER10_END}-byte DX10 header"
@@ -143,26 +147,29 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         let raw = le_u32(bytes, HEADER_END).unwrap_or(0);
         let format = from_dxgi(raw)
             .ok_or_else(|| err(format!("unsupported DXGI format {raw} ({SUPPORTED})")))?;
-        let h10 = Header10::read(&bytes[HEADER_END..HEADER10_END])
-            .map_err(|e| err(format!("invalid DDS DX10 header: {e}")))?;
+        let invalid = |e: String| err(format!("invalid DDS DX10 header: {}", one_line(&e)));
+        let h10 = caught(|| Header10::read(&bytes[HEADER_END..HEADER10_END]))
+            .map_err(invalid)?
+            .map_err(|e| invalid(e.to_string()))?;
         if h10.resource_dimension != D3D10ResourceDimension::Texture2D {
             return Err(err(format!(
-                "not a cube map (a {:?} resource)",
+                "a {:?} resource is not supported: cubeforge reads 2D textures and cube maps",
                 h10.resource_dimension
             )));
         }
-        if !h10.misc_flag.contains(MiscFlag::TEXTURECUBE) {
-            return Err(err("not a cube map (a 2D texture)".into()));
-        }
+        let cube = h10.misc_flag.contains(MiscFlag::TEXTURECUBE);
         if h10.array_size > 1 {
-            return Err(err("cube-map arrays are not supported".into()));
+            return Err(err(format!(
+                "texture arrays are not supported (arraySize {})",
+                h10.array_size
+            )));
         }
         if h10.array_size == 0 {
             return Err(err("invalid DDS DX10 header: arraySize is 0".into()));
         }
-        (format, Order::Rgba, HEADER10_END)
+        (format, Order::Rgba, HEADER10_END, cube)
     } else {
-        let d3d = D3DFormat::try_from_pixel_format(&header.spf);
+        let d3d = caught(|| D3DFormat::try_from_pixel_format(&header.spf)).map_err(invalid)?;
         let (format, order) = match d3d {
             Some(D3DFormat::A16B16G16R16F) => (GpuFormat::Rgba16f, Order::Rgba),
             Some(D3DFormat::A32B32G32R32F) => (GpuFormat::Rgba32f, Order::Rgba),
@@ -181,21 +188,26 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
                 )))
             }
         };
-        if !header.caps2.contains(Caps2::CUBEMAP) {
-            return Err(err("not a cube map (a 2D texture)".into()));
-        }
-        if !header.caps2.contains(Caps2::CUBEMAP_ALLFACES) {
+        let cube = header.caps2.contains(Caps2::CUBEMAP);
+        if cube && !header.caps2.contains(Caps2::CUBEMAP_ALLFACES) {
             return Err(err(
                 "not a cube map (a partial cube map: some faces are missing)".into(),
             ));
         }
-        (format, order, HEADER_END)
+        (format, order, HEADER_END, cube)
     };
     if header.caps2.contains(Caps2::VOLUME) || header.depth.is_some_and(|d| d > 1) {
-        return Err(err("not a cube map (a volume texture)".into()));
+        return Err(err(
+            "a volume texture is not supported: cubeforge reads 2D textures and cube maps".into(),
+        ));
     }
 
     let (width, height) = (header.width, header.height);
+    if !cube {
+        limits.check(path, width as u64, height as u64)?;
+        let size = (width as usize, height as usize);
+        return decode_2d(bytes, path, size, format, order, data_start);
+    }
     limits.check_cube(path, width as u64, height as u64)?;
     if width != height {
         return Err(err(format!(
@@ -245,26 +257,7 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             let len = n * n * bpt as usize;
             let texels = &data[pos..pos + len];
             pos += len;
-            let texels = if order == Order::Rgba {
-                texels
-            } else {
-                scratch.clear();
-                scratch.extend_from_slice(texels);
-                for t in scratch.chunks_exact_mut(4) {
-                    if matches!(order, Order::Bgra | Order::Bgrx) {
-                        t.swap(0, 2);
-                    }
-                    if matches!(order, Order::Rgbx | Order::Bgrx) {
-                        t[3] = 255;
-                    }
-                }
-                &scratch[..]
-            };
-            faces.push(Image {
-                width: n,
-                height: n,
-                pixels: format.decode(texels, n * n),
-            });
+            faces.push(texels_image(texels, n, n, format, order, &mut scratch));
         }
     }
     let levels = levels
@@ -275,7 +268,71 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         })
         .collect::<Result<Vec<_>>>()?;
 
-    let meta = Meta {
+    Ok((Decoded::Cube(CubeMap { levels }), meta(format)))
+}
+
+/// Level 0 of a 2D texture (its size checked against the limits), as an image: its mips, when
+/// it has them, follow and are not needed.
+fn decode_2d(
+    bytes: &[u8],
+    path: &Path,
+    (width, height): (usize, usize),
+    format: GpuFormat,
+    order: Order,
+    data_start: usize,
+) -> Result<(Decoded, Meta)> {
+    let needed = (width as u64)
+        .checked_mul(height as u64)
+        .and_then(|t| t.checked_mul(format.bytes_per_texel() as u64))
+        .ok_or_else(|| Error::file(path, "invalid DDS header: sizes overflow"))?;
+    let have = (bytes.len() - data_start) as u64;
+    if have < needed {
+        return Err(Error::file(
+            path,
+            format!(
+                "truncated DDS file: a {width}x{height} {} texture needs {needed} bytes of texels, but only {have} follow the header",
+                format.name()
+            ),
+        ));
+    }
+    let texels = &bytes[data_start..data_start + needed as usize];
+    let img = texels_image(texels, width, height, format, order, &mut Vec::new());
+    Ok((Decoded::Image(img), meta(format)))
+}
+
+/// One stored image of `w` x `h` texels, put in RGBA order first when stored otherwise.
+fn texels_image(
+    texels: &[u8],
+    w: usize,
+    h: usize,
+    format: GpuFormat,
+    order: Order,
+    scratch: &mut Vec<u8>,
+) -> Image {
+    let texels = if order == Order::Rgba {
+        texels
+    } else {
+        scratch.clear();
+        scratch.extend_from_slice(texels);
+        for t in scratch.chunks_exact_mut(4) {
+            if matches!(order, Order::Bgra | Order::Bgrx) {
+                t.swap(0, 2);
+            }
+            if matches!(order, Order::Rgbx | Order::Bgrx) {
+                t[3] = 255;
+            }
+        }
+        &scratch[..]
+    };
+    Image {
+        width: w,
+        height: h,
+        pixels: format.decode(texels, w * h),
+    }
+}
+
+fn meta(format: GpuFormat) -> Meta {
+    Meta {
         file_format: FileFormat::Dds,
         pixel_format: format.name().into(),
         color_space: if format == GpuFormat::Rgba8Srgb {
@@ -285,6 +342,5 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         },
         hdr: matches!(format, GpuFormat::Rgba16f | GpuFormat::Rgba32f),
         replaced_values: 0,
-    };
-    Ok((Decoded::Cube(CubeMap { levels }), meta))
+    }
 }

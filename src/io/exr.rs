@@ -29,12 +29,16 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
     limits.check(path, size.0 as u64, size.1 as u64)?;
     let channel = |n: &str| header.channels.list.iter().find(|c| c.name.eq(n));
     if channel("R").is_none() || channel("G").is_none() || channel("B").is_none() {
-        let names: Vec<String> = header
-            .channels
-            .list
+        // Quoted with escapes (a corrupt name can hold a newline), at most eight of them.
+        let list = &header.channels.list;
+        let mut names: Vec<String> = list
             .iter()
-            .map(|c| c.name.to_string())
+            .take(8)
+            .map(|c| format!("{:?}", c.name.to_string()))
             .collect();
+        if list.len() > 8 {
+            names.push(format!("and {} more", list.len() - 8));
+        }
         return Err(Error::file(
             path,
             format!(
@@ -85,41 +89,11 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
     Ok((Decoded::Image(image), meta))
 }
 
-thread_local! {
-    /// Set while this thread is inside a guarded call into the exr crate.
-    static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
-}
-
-/// Runs one call into the exr crate: its errors become messages, and so do its panics (an
-/// index out of range or a capacity overflow on corrupt data), caught here and not printed.
-/// The panic hook stays quiet only on a thread inside such a call (none of which reaches
-/// rayon, so no other job can run there meanwhile); every other panic goes to the hook that
-/// was there before. Aborts on failed allocations cannot be caught: `read_chunks` bounds the
+/// Runs one call into the exr crate: its errors become messages, and so do its panics (see
+/// [`super::guard::caught`]; none of these calls reaches rayon). `read_chunks` bounds the
 /// sizes the crate allocates from before it sees them.
 fn guarded<T>(f: impl FnOnce() -> exr::error::Result<T>) -> std::result::Result<T, String> {
-    static HOOK: std::sync::Once = std::sync::Once::new();
-    HOOK.call_once(|| {
-        let previous = std::panic::take_hook();
-        std::panic::set_hook(Box::new(move |info| {
-            if !QUIET.try_with(|q| q.get()).unwrap_or(false) {
-                previous(info)
-            }
-        }));
-    });
-    let was = QUIET.with(|q| q.replace(true));
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
-    QUIET.with(|q| q.set(was));
-    match result {
-        Ok(done) => done.map_err(|e| e.to_string()),
-        Err(payload) => {
-            let what = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown failure".into());
-            Err(format!("corrupt data ({what})"))
-        }
-    }
+    super::guard::caught(f)?.map_err(|e| super::guard::one_line(&e.to_string()))
 }
 
 fn u32_at(bytes: &[u8], at: usize) -> Option<u32> {

@@ -8,7 +8,8 @@
 //! on a multiple of lcm(texel size, 4). Nothing in the output depends on the time or the machine,
 //! so the same cube map always gives the same bytes.
 //!
-//! The reader checks every header field, index entry and size against the file's length with
+//! The reader takes both: a cube map with its levels, a 2D texture as its level 0 image. It
+//! checks every header field, index entry and size against the file's length with
 //! checked arithmetic, and the declared size against [`Limits`], before it allocates any texels.
 
 use super::{Decoded, FileFormat, GpuFormat, Limits, Meta};
@@ -348,7 +349,8 @@ fn in_file(offset: u64, len: u64, file_len: usize) -> bool {
         .is_some_and(|end| end <= file_len as u64)
 }
 
-/// Reads a KTX2 cube map with all its levels.
+/// Reads a KTX2 cube map with all its levels, or level 0 of a 2D texture (what `cubeforge
+/// control` writes) as an image; every level's index entry is checked either way.
 pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
     let err = |msg: String| Error::file(path, msg);
     let file_len = bytes.len();
@@ -377,16 +379,31 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
     let sgd_offset = le_u64(bytes, 64).unwrap_or(0);
     let sgd_len = le_u64(bytes, 72).unwrap_or(0);
 
-    if face_count != 6 {
-        return Err(err(format!("not a cube map (faceCount {face_count})")));
-    }
+    // A cube map, or a 2D texture (a control map): level 0 of the latter is read as an image.
+    let cube = match face_count {
+        6 => true,
+        1 => false,
+        _ => {
+            return Err(err(format!(
+                "invalid header: faceCount is {face_count}, but a 2D texture has 1 and a cube map 6"
+            )))
+        }
+    };
+    let what = if cube { "cube map" } else { "2D texture" };
     if layer_count > 0 {
-        return Err(err("cube-map arrays are not supported".into()));
+        return Err(err(format!(
+            "texture arrays are not supported (layerCount {layer_count})"
+        )));
     }
     if depth != 0 {
         return Err(err(format!(
-            "invalid cube map: pixelDepth is {depth}, but a cube map's must be 0"
+            "a 3D texture (pixelDepth {depth}) is not supported: cubeforge reads 2D textures and cube maps"
         )));
+    }
+    if !cube && height == 0 {
+        return Err(err(
+            "a 1D texture (pixelHeight 0) is not supported: cubeforge reads 2D textures and cube maps".into(),
+        ));
     }
     if scheme != 0 {
         let name = match scheme {
@@ -411,19 +428,24 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             type_size(format)
         )));
     }
-    limits.check_cube(path, width as u64, height as u64)?;
-    if width != height {
-        return Err(err(format!(
-            "invalid cube map: faces must be square, but they are {width}x{height}"
-        )));
+    if cube {
+        limits.check_cube(path, width as u64, height as u64)?;
+        if width != height {
+            return Err(err(format!(
+                "invalid cube map: faces must be square, but they are {width}x{height}"
+            )));
+        }
+    } else {
+        limits.check(path, width as u64, height as u64)?;
     }
-    let size = width as usize;
-    let max_levels = CubeMap::full_chain_len(size);
+    // Both fit the limits, so in usize.
+    let (width, height) = (width as usize, height as usize);
+    let max_levels = CubeMap::full_chain_len(width.max(height));
     // levelCount 0 asks the loader to make the mips; the file then holds level 0 only.
     let level_count = (level_count_field as usize).max(1);
     if level_count > max_levels {
         return Err(err(format!(
-            "invalid header: levelCount is {level_count_field}, but a {size}x{size} face has at most {max_levels} levels"
+            "invalid header: levelCount is {level_count_field}, but a {width}x{height} {what} has at most {max_levels} levels"
         )));
     }
     let index_end = HEADER_LEN + level_count * LEVEL_ENTRY_LEN;
@@ -470,15 +492,19 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         let offset = le_u64(bytes, entry).unwrap_or(0);
         let len = le_u64(bytes, entry + 8).unwrap_or(0);
         let uncompressed = le_u64(bytes, entry + 16).unwrap_or(0);
-        let n = (size >> l).max(1) as u64;
-        let expected = n
-            .checked_mul(n)
-            .and_then(|t| t.checked_mul(6 * bpt))
+        let (w, h) = ((width >> l).max(1) as u64, (height >> l).max(1) as u64);
+        let expected = w
+            .checked_mul(h)
+            .and_then(|t| t.checked_mul(face_count as u64 * bpt))
             .ok_or_else(|| err("invalid header: level size overflows".into()))?;
         if len != expected || uncompressed != expected {
+            let holds = if cube {
+                format!("six {w}x{h} {} faces take", format.name())
+            } else {
+                format!("a {w}x{h} {} image takes", format.name())
+            };
             return Err(err(format!(
-                "invalid level index: level {l} claims {len} bytes ({uncompressed} uncompressed), but six {n}x{n} {} faces take {expected}",
-                format.name()
+                "invalid level index: level {l} claims {len} bytes ({uncompressed} uncompressed), but {holds} {expected}"
             )));
         }
         if !in_file(offset, len, file_len) {
@@ -488,22 +514,29 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             )));
         }
         // Both fit in the file, so in usize.
-        spans.push((offset as usize, n as usize));
+        spans.push((offset as usize, w as usize, h as usize));
     }
 
-    let mut levels = Vec::with_capacity(level_count);
-    for &(offset, n) in &spans {
-        let face_len = n * n * bpt as usize;
-        let faces: [Image; 6] = std::array::from_fn(|f| {
-            let start = offset + f * face_len;
-            Image {
-                width: n,
-                height: n,
-                pixels: format.decode(&bytes[start..start + face_len], n * n),
-            }
-        });
-        levels.push(faces);
-    }
+    let image = |&(offset, w, h): &(usize, usize, usize), face: usize| {
+        let len = w * h * bpt as usize;
+        let start = offset + face * len;
+        Image {
+            width: w,
+            height: h,
+            pixels: format.decode(&bytes[start..start + len], w * h),
+        }
+    };
+    let decoded = if cube {
+        Decoded::Cube(CubeMap {
+            levels: spans
+                .iter()
+                .map(|span| std::array::from_fn(|f| image(span, f)))
+                .collect(),
+        })
+    } else {
+        // Its mips are this image made smaller: level 0 is the whole of it.
+        Decoded::Image(image(&spans[0], 0))
+    };
 
     let meta = Meta {
         file_format: FileFormat::Ktx2,
@@ -516,7 +549,7 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         hdr: is_float(format),
         replaced_values: 0,
     };
-    Ok((Decoded::Cube(CubeMap { levels }), meta))
+    Ok((decoded, meta))
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 pub mod atomic;
 pub mod dds;
 pub mod exr;
+mod guard;
 pub mod ktx2;
 pub mod raster;
 pub mod rgbe;

@@ -1,5 +1,6 @@
 //! PNG, JPEG, TGA and Radiance HDR through the `image` crate, converted to and from linear f32.
 
+use super::guard::{caught, one_line};
 use super::{unorm8, Decoded, FileFormat, Meta, ReadOptions, WriteOptions};
 use crate::error::{Error, Result};
 use crate::image::{linear_to_srgb, srgb_to_linear, ColorSpace, Image};
@@ -26,20 +27,30 @@ pub fn decode(
     opts: &ReadOptions,
 ) -> Result<(Decoded, Meta)> {
     let what = f.name();
-    let err = |e: ::image::ImageError| Error::file(path, format!("cannot decode {what}: {e}"));
+    let fail = |msg: String| Error::file(path, format!("cannot decode {what}: {msg}"));
+    let err = |e: ::image::ImageError| fail(one_line(&e.to_string()));
     // The PNG decoder reads on to the first IDAT before it tells the size: check IHDR first.
     if let Some((w, h)) = png_ihdr_size(bytes).filter(|_| f == FileFormat::Png) {
         opts.limits.check(path, w as u64, h as u64)?;
     }
+    // Every call into the image crate is caught (`guard::caught`): a panic on corrupt data
+    // becomes this file's error. None of them hands work to rayon.
     let reader = ::image::ImageReader::with_format(Cursor::new(bytes), image_format(f));
-    let mut decoder = reader.into_decoder().map_err(err)?;
+    let mut decoder = caught(|| reader.into_decoder())
+        .map_err(fail)?
+        .map_err(err)?;
     let (w, h) = decoder.dimensions();
     opts.limits.check(path, w as u64, h as u64)?;
+    if f == FileFormat::Jpeg {
+        jpeg_can_hold(bytes.len(), w, h).map_err(|e| Error::file(path, e))?;
+    }
     let mut limits = ::image::Limits::default();
     limits.max_alloc = Some(opts.limits.max_pixels.saturating_mul(16).max(1 << 20));
     decoder.set_limits(limits).map_err(err)?;
     let color = decoder.color_type();
-    let img = DynamicImage::from_decoder(decoder).map_err(err)?;
+    let img = caught(|| DynamicImage::from_decoder(decoder))
+        .map_err(fail)?
+        .map_err(err)?;
     let (w, h) = (w as usize, h as usize);
     let float = matches!(color, ColorType::Rgb32F | ColorType::Rgba32F);
     let srgb = !float && !opts.linear;
@@ -113,6 +124,25 @@ pub fn decode(
         }),
         meta,
     ))
+}
+
+/// Refuses a JPEG too small to hold the pixels its frame header claims, before the decoder
+/// spends time on them: it decodes every block whether the file has data for it or not (a
+/// 1 KB file claiming 16384x16384 took 20 s). Every 8x8 block of the full-size component
+/// costs at least one bit in a complete file (its DC difference; Huffman codes are never
+/// shorter, progressive files included, and arithmetic coding is not decoded), so a file
+/// under a bit per block is truncated or lies. The floor here is half that, a byte per 16
+/// blocks: a blank baseline JPEG with the standard tables needs 6 bits a block, 12 times it.
+fn jpeg_can_hold(len: usize, w: u32, h: u32) -> std::result::Result<(), String> {
+    let blocks = (w as u64).div_ceil(8) * (h as u64).div_ceil(8);
+    let floor = blocks / 16;
+    if (len as u64) < floor {
+        return Err(format!(
+            "cannot decode JPEG: the file has {len} bytes, too few for the {w}x{h} pixels its header claims (even a blank image needs about {} bytes): it is truncated or its header is corrupt",
+            blocks / 8
+        ));
+    }
+    Ok(())
 }
 
 /// Width and height from a PNG's IHDR chunk (which must come first), if present.

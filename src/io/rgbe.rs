@@ -20,7 +20,10 @@ use std::path::Path;
 /// rejects, with its error message, or an empty image).
 pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(Image, Meta)>> {
     let mut cursor = Cursor::new(bytes);
-    let (w, h) = HdrDecoder::new(&mut cursor).ok()?.dimensions();
+    // A header that panics the crate's reader (caught) goes to the image crate's path too,
+    // which says why, caught likewise.
+    let (w, h) = super::guard::caught(|| HdrDecoder::new(&mut cursor).ok().map(|d| d.dimensions()))
+        .ok()??;
     let (w, h) = (w as usize, h as usize);
     if let Err(e) = opts.limits.check(path, w as u64, h as u64) {
         return Some(Err(e));
