@@ -476,6 +476,7 @@ fn image_door(dir: &Path, name: &str) -> impl Fn(&[u8]) -> cubeforge::Result<()>
         let opts = ReadOptions {
             limits: limits(),
             linear: false,
+            as_stored: false,
         };
         let (decoded, _) = io::read(&path, &opts)?;
         match decoded {
@@ -492,7 +493,7 @@ fn image_door(dir: &Path, name: &str) -> impl Fn(&[u8]) -> cubeforge::Result<()>
             FileFormat::from_extension(&path),
             Some(FileFormat::Ktx2 | FileFormat::Dds)
         ) {
-            cubeforge::info::describe(&path, &opts)?;
+            cubeforge::info::describe(&path, None, &opts)?;
         }
         Ok(())
     }
@@ -951,10 +952,11 @@ fn sidecar_mutations() {
     let opts = ReadOptions {
         limits: limits(),
         linear: false,
+        as_stored: false,
     };
     campaign("levels.json", text, mutator, 100, "chain.dds", &|b| {
         std::fs::write(&levels, b).unwrap();
-        cubeforge::info::describe(&dds, &opts).map(drop)
+        cubeforge::info::describe(&dds, None, &opts).map(drop)
     });
 }
 
@@ -971,7 +973,7 @@ fn read_with(path: &Path, bytes: &[u8], limits: Limits) -> cubeforge::Result<Ima
     std::fs::write(path, bytes).unwrap();
     let opts = ReadOptions {
         limits,
-        linear: false,
+        ..ReadOptions::default()
     };
     match io::read(path, &opts)?.0 {
         Decoded::Image(img) => Ok(img),
