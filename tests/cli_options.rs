@@ -354,3 +354,23 @@ fn library_errors_have_kinds() {
     assert!(matches!(e, Error::Unsupported { .. }), "{e:?}");
     assert!(e.to_string().starts_with(&format!("{}: ", junk.display())));
 }
+
+#[test]
+fn outputs_into_missing_folders_are_made() {
+    let t = tempfile::tempdir().unwrap();
+    run_ok(
+        &[
+            "irradiance",
+            SKY_EXR,
+            "-o",
+            "a/b/irr.ktx2",
+            "--size",
+            "4",
+            "--sh",
+            "c/d/sh.json",
+        ],
+        t.path(),
+    );
+    assert!(t.path().join("a/b/irr.ktx2").is_file());
+    assert!(t.path().join("c/d/sh.json").is_file());
+}
