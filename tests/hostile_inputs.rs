@@ -799,7 +799,7 @@ fn hdr_mutations() {
 
 #[test]
 fn exr_mutations() {
-    // The thorough EXR campaign is tests/hostile_exr.rs; this one keeps it in the same loop.
+    // The thorough EXR campaign is tests/it/hostile_exr.rs; this one keeps it in the same loop.
     let b = encoded("x.exr", &test_image(40, 24), &WriteOptions::default());
     formats(
         vec![("EXR".to_string(), b, Vec::new())],

@@ -1,7 +1,7 @@
 //! Conversions checked texel by texel against environments defined as functions of direction,
 //! plus the fixed conventions, orientation markers, seams, rotation and antialiasing.
 
-mod common;
+use crate::common;
 
 use cubeforge::convert::{self, Loaded, Output, Source};
 use cubeforge::cube::{dir_face, face_dir, CubeMap, Environment, Interp};

@@ -2,7 +2,7 @@
 //! of scanline (run-length channels, flat texels, old-style repeat markers), and refuses broken
 //! pixel data itself, before allocating the image.
 
-mod common;
+use crate::common;
 
 use cubeforge::image::Image;
 use cubeforge::io::{self, raster, rgbe, Decoded, FileFormat, ReadOptions, WriteOptions};

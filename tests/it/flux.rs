@@ -2,7 +2,7 @@
 //! radiance) within 0.5%, HDR suns included, and what is computed from a conversion (SH,
 //! irradiance, prefiltered levels) agrees with the input it came from.
 
-mod common;
+use crate::common;
 
 use cubeforge::convert::{self, Loaded, Output, Source};
 use cubeforge::cube::CubeMap;

@@ -1,7 +1,7 @@
 //! Prefiltered chains measured against brute-force integrals of their lobes, seams at every
 //! level, the Gaussian's stated sigma, box means, SH closed forms, HDR suns without fireflies.
 
-mod common;
+use crate::common;
 
 use cubeforge::cube::{face_dir, CubeMap, CubeSampler, Environment};
 use cubeforge::filter::{self, brute, lobe::Lobe, sh, ChainOptions, FilterKind};

@@ -3,7 +3,7 @@
 //! (ktx-parse for KTX2, Pillow and nvddsinfo for DDS): skipped with a line on stderr when one is
 //! not installed, failed when CI is set.
 
-mod common;
+use crate::common;
 
 use cubeforge::cube::CubeMap;
 use cubeforge::image::{linear_to_srgb, Image};
@@ -372,7 +372,7 @@ fn truncated_files_are_rejected() {
 fn non_cube_files_are_rejected() {
     // KTX2: a cube map's header saying faceCount 1 (its level index then does not fit), a
     // cube-map array, a 3D texture, supercompression. (A real 2D texture reads: see
-    // tests/control.rs.)
+    // tests/it/control.rs.)
     let k = ktx2::encode(&test_cube(GpuFormat::Rgba8), GpuFormat::Rgba8);
     let patch = |offset: usize, v: u32| {
         let mut b = k.clone();

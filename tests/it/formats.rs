@@ -1,7 +1,7 @@
 //! Every single-image format round-trips through the library within its precision, sRGB is
 //! decoded and encoded exactly, and an independent reader (OpenImageIO) reads our EXR and HDR.
 
-mod common;
+use crate::common;
 
 use cubeforge::image::{linear_to_srgb, srgb_to_linear, Image};
 use cubeforge::io::{self, Decoded, ReadOptions, WriteOptions};

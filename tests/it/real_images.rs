@@ -8,7 +8,7 @@
 //! little below what was measured (the measured numbers are in each comment); run with
 //! `--nocapture` to see them.
 
-mod common;
+use crate::common;
 
 use common::{clamped, max_abs_error, max_abs_error_where, psnr, psnr_where, read_image, run};
 use cubeforge::convert::{self, Output};

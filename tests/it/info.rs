@@ -2,7 +2,7 @@
 //! layout's convention, statistics over a layout's texels only (no empty cross cells, no
 //! corners outside a ball), folders of faces and prefiltered chains.
 
-mod common;
+use crate::common;
 
 use common::{run, stderr, write_image};
 use cubeforge::cube::FACE_NAMES;

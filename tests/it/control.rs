@@ -2,7 +2,7 @@
 //! it promises, `[pack]` moves parameters, bad recipes fail with the recipe's line and leave
 //! nothing behind, and the outputs (PNG, EXR, KTX2 with mips, sidecar JSON) read back as written.
 
-mod common;
+use crate::common;
 
 use cubeforge::control::{self, lattice, Noise, Recipe, Size, Slot, Syntax};
 use cubeforge::image::{luminance, srgb_to_linear};

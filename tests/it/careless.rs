@@ -2,7 +2,7 @@
 //! output, non-finite and out-of-range numbers, pipes and devices given as files, and clap's
 //! usage errors.
 
-mod common;
+use crate::common;
 
 use common::{run, stderr};
 use std::path::{Path, PathBuf};

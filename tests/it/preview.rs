@@ -3,7 +3,7 @@
 //! internal reflection, the Fresnel clamp, per-vertex converging to per-fragment, both
 //! parallax modes, LOD bias, control maps, orientation, determinism and the command line.
 
-mod common;
+use crate::common;
 
 use cubeforge::cube::{CubeMap, CubeSampler};
 use cubeforge::image::Image;

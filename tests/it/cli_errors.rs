@@ -3,7 +3,7 @@
 //! temporary `.*.tmp`). Bad values (NaN, Inf, negative) are not errors: they are replaced by 0
 //! with a warning, and `info` counts them.
 
-mod common;
+use crate::common;
 
 use common::{read_image, run, stderr, write_image};
 use cubeforge::cube::FACE_NAMES;

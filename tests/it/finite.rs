@@ -2,7 +2,7 @@
 //! largest finite value are written as that value, with a warning that counts them, and the
 //! maths stays finite on inputs near the f32 maximum (they are clamped to 1e28 on reading).
 
-mod common;
+use crate::common;
 
 use common::{run, stderr};
 use cubeforge::cube::CubeMap;

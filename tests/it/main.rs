@@ -1,0 +1,25 @@
+//! The integration tests, one binary so the suite links once. `tests/hostile_inputs.rs`
+//! stays apart: its allocator refuses any allocation over 1 GiB.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod atomic_writes;
+mod batched;
+mod careless;
+mod cli_errors;
+mod cli_options;
+mod containers;
+mod control;
+mod conversions;
+mod finite;
+mod flux;
+mod formats;
+mod hostile_exr;
+mod info;
+mod man_pages;
+mod prefilter;
+mod preview;
+mod readme;
+mod real_images;
+mod rgbe;
