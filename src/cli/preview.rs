@@ -8,11 +8,11 @@ use cubeforge::layout::Kind;
 use cubeforge::preview::material::{self, Material};
 use cubeforge::preview::tonemap::{self, Tonemap};
 use cubeforge::preview::{
-    self, grid, Background, Control, Options, Parallax, ParallaxMode, Shading, Surface,
+    self, grid, Background, Control, LoadedEnv, Options, Parallax, ParallaxMode, Shading, Surface,
 };
 use cubeforge::{Error, Result};
 use glam::{Vec3, Vec4};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
 #[command(
@@ -168,18 +168,43 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             "preview needs an environment and an output: cubeforge preview ENV -o OUTPUT",
         ));
     };
+    let plan = check(&a, output)?;
+    let env = load_env(env_path, a.from, plan.limits)?;
+    let mut inputs: Vec<PathBuf> = env.files.clone();
+    let textures = load_textures(&a, &plan.materials, verbose, &mut inputs)?;
+    stages.done("decode");
+    warn_without_chain(&a, env_path, &env, &textures);
+    let img = render_cells(&a, &plan, &env, &textures)?;
+    stages.done("render");
+    write(&plan, &inputs, &img, &mut stages)?;
+    stages.total();
+    Ok(())
+}
+
+/// What the options ask for, all checked before the (possibly slow) decode.
+struct Plan {
+    output: PathBuf,
+    to_stdout: bool,
+    tone_mapped: bool,
+    /// The material, or each of a --grid.
+    materials: Vec<Material>,
+    opts: Options,
+    limits: Limits,
+}
+
+/// Checks everything that can be checked before anything is read, in the order the errors
+/// are reported.
+fn check(a: &Args, output: &Path) -> Result<Plan> {
     let (output, to_stdout) = super::output_name(output, a.format.as_deref())?;
-    let output = &output;
-    // Everything that can be checked is checked before the (possibly slow) decode.
-    let tone_mapped = match FileFormat::from_extension(output) {
+    let tone_mapped = match FileFormat::from_extension(&output) {
         Some(f) if f.is_container() => {
             return Err(Error::file(
-                output,
+                &output,
                 "the preview is an image: name it .png .jpg .tga .exr or .hdr",
             ))
         }
-        Some(f) => super::tone_applies(output, f, Default::default(), a.exposure, a.tonemap),
-        None => return Err(io::unknown_ext(output)),
+        Some(f) => super::tone_applies(&output, f, Default::default(), a.exposure, a.tonemap),
+        None => return Err(io::unknown_ext(&output)),
     };
     let specs: Vec<String> = if a.grid.is_empty() {
         vec![a.material.clone()]
@@ -229,13 +254,24 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     }
     // Each cell's picture and its samples' buffers, RGBA f32.
     limits.check_memory(format_args!("--size {}", a.size), pixels * 16 * 3)?;
+    Ok(Plan {
+        output,
+        to_stdout,
+        tone_mapped,
+        materials,
+        opts,
+        limits,
+    })
+}
 
+/// Reads the environment, warning about values replaced on read.
+fn load_env(env_path: &Path, from: Option<Kind>, limits: Limits) -> Result<LoadedEnv> {
     let read = ReadOptions {
         limits,
         linear: false,
         as_stored: false,
     };
-    let env = preview::load_environment(env_path, a.from, &read)?;
+    let env = preview::load_environment(env_path, from, &read)?;
     if env.replaced_values > 0 {
         warn(format!(
             "{}: replaced {} NaN, infinite or negative values by 0 (and values above 1e28 by 1e28)",
@@ -243,7 +279,27 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             env.replaced_values
         ));
     }
-    let mut inputs: Vec<PathBuf> = env.files.clone();
+    Ok(env)
+}
+
+/// The textures on the sphere, each read once.
+struct Textures {
+    /// --decal, which overrides the materials' own.
+    decal: Option<Image>,
+    /// --control and the LOD bias its blur of 1 means.
+    control: Option<(Image, f32)>,
+    /// Decals named by material files.
+    file_decals: Vec<(PathBuf, Image)>,
+}
+
+/// Reads the decal, the control map (and its sidecar) and the materials' decals, adding each
+/// file to `inputs` (which the output must not overwrite).
+fn load_textures(
+    a: &Args,
+    materials: &[Material],
+    verbose: bool,
+    inputs: &mut Vec<PathBuf>,
+) -> Result<Textures> {
     let decal_img = a
         .decal
         .as_ref()
@@ -272,7 +328,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     // Decals named by material files, read once each.
     let mut file_decals: Vec<(PathBuf, Image)> = Vec::new();
     if decal_img.is_none() {
-        for m in &materials {
+        for m in materials {
             if let Some(p) = &m.decal {
                 if !file_decals.iter().any(|(q, _)| q == p) {
                     file_decals.push((p.clone(), preview::read_texture(p, false)?));
@@ -281,11 +337,20 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             }
         }
     }
-    stages.done("decode");
+    Ok(Textures {
+        decal: decal_img,
+        control,
+        file_decals,
+    })
+}
 
+/// Blur (a LOD bias, or a control map's) asked of an environment without a chain does nothing:
+/// say so rather than render a sharp picture silently.
+fn warn_without_chain(a: &Args, env_path: &Path, env: &LoadedEnv, textures: &Textures) {
     let wants_blur = a.lod_bias != 0.0
         || a.grid_bias.iter().any(|b| *b != 0.0)
-        || control
+        || textures
+            .control
             .as_ref()
             .is_some_and(|(img, max)| *max > 0.0 && img.pixels.iter().any(|p| p.z > 0.0));
     if env.levels() == 1 && wants_blur {
@@ -294,8 +359,12 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             env_path.display()
         ));
     }
+}
 
-    // One render per cell: materials, or biases of the one material.
+/// One render per cell (materials, or biases of the one material), tone-mapped when the
+/// output is; a grid becomes a contact sheet.
+fn render_cells(a: &Args, plan: &Plan, env: &LoadedEnv, textures: &Textures) -> Result<Image> {
+    let materials = &plan.materials;
     let jobs: Vec<(Material, f32, String)> = if !a.grid_bias.is_empty() {
         a.grid_bias
             .iter()
@@ -309,21 +378,25 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     };
     let mut rendered: Vec<(Image, String)> = Vec::with_capacity(jobs.len());
     for (m, bias, label) in jobs {
-        let decal = decal_img.as_ref().or_else(|| {
-            m.decal
-                .as_ref()
-                .and_then(|p| file_decals.iter().find(|(q, _)| q == p).map(|(_, i)| i))
+        let decal = textures.decal.as_ref().or_else(|| {
+            m.decal.as_ref().and_then(|p| {
+                textures
+                    .file_decals
+                    .iter()
+                    .find(|(q, _)| q == p)
+                    .map(|(_, i)| i)
+            })
         });
         let surface = Surface {
             decal,
-            control: control.as_ref().map(|(img, max)| Control {
+            control: textures.control.as_ref().map(|(img, max)| Control {
                 map: img,
                 max_lod_bias: *max,
             }),
         };
         let o = Options {
             lod_bias: bias,
-            ..opts
+            ..plan.opts
         };
         let bar = super::progress(o.size as u64, format!("preview {label}"));
         let mut img = preview::render_with_progress(&env.sampler, &m, &surface, &o, &|n| {
@@ -334,28 +407,31 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         if let Some(b) = bar {
             b.finish_and_clear();
         }
-        if tone_mapped {
+        if plan.tone_mapped {
             tonemap::apply(&mut img, a.tonemap, a.exposure);
         }
         rendered.push((img, label));
     }
-    let img = if a.grid.is_empty() && a.grid_bias.is_empty() {
+    Ok(if a.grid.is_empty() && a.grid_bias.is_empty() {
         rendered.swap_remove(0).0
     } else {
         grid::contact_sheet(&rendered)
-    };
-    stages.done("render");
+    })
+}
 
-    cubeforge::output::refuse_inputs(std::slice::from_ref(output), &inputs)?;
+/// Encodes the picture and writes it (or sends it to standard output), refusing to overwrite
+/// an input and warning about clamped values.
+fn write(plan: &Plan, inputs: &[PathBuf], img: &Image, stages: &mut Stages) -> Result<()> {
+    let output = &plan.output;
+    cubeforge::output::refuse_inputs(std::slice::from_ref(output), inputs)?;
     if let Some(f) = io::FileFormat::from_extension(output) {
-        if let Some(w) = io::clamp_warning(output, f, Default::default(), [&img]) {
+        if let Some(w) = io::clamp_warning(output, f, Default::default(), [img]) {
             super::warn(w);
         }
     }
-    let bytes = io::encode_image(output, &img, &WriteOptions::default())?;
+    let bytes = io::encode_image(output, img, &WriteOptions::default())?;
     stages.done("encode");
-    super::deliver(&[(output.clone(), bytes)], to_stdout)?;
+    super::deliver(&[(output.clone(), bytes)], plan.to_stdout)?;
     stages.done("write");
-    stages.total();
     Ok(())
 }

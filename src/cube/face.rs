@@ -1,0 +1,153 @@
+//! Face addressing, written once: the OpenGL face-selection convention between directions and
+//! face coordinates, and the angles texels span, so every layout and filter agrees on them.
+
+use glam::Vec3;
+
+/// Faces in file and container order: +X -X +Y -Y +Z -Z.
+pub const FACE_NAMES: [&str; 6] = ["px", "nx", "py", "ny", "pz", "nz"];
+/// Long names some tools use for the same faces.
+pub const FACE_LONG_NAMES: [&str; 6] = ["posx", "negx", "posy", "negy", "posz", "negz"];
+
+/// The direction through face coordinates (s, t) (0..1, row 0 is t = 0). Values outside
+/// 0..1 continue the face's plane, which is how border texels find their neighbours.
+#[inline]
+pub fn face_dir(face: usize, s: f32, t: f32) -> Vec3 {
+    let sc = 2.0 * s - 1.0;
+    let tc = 2.0 * t - 1.0;
+    match face {
+        0 => Vec3::new(1.0, -tc, -sc),
+        1 => Vec3::new(-1.0, -tc, sc),
+        2 => Vec3::new(sc, 1.0, tc),
+        3 => Vec3::new(sc, -1.0, -tc),
+        4 => Vec3::new(sc, -tc, 1.0),
+        _ => Vec3::new(-sc, -tc, -1.0),
+    }
+}
+
+/// The face a direction selects (largest component; ties go to X, then Y) and its (s, t).
+#[inline(always)]
+pub fn dir_face(d: Vec3) -> (usize, f32, f32) {
+    let (face, s, t) = dir_face_lanes(d.x, d.y, d.z);
+    (face as usize, s, t)
+}
+
+/// Angle one texel of a face of edge `size` spans on average: a quarter turn over the edge.
+pub fn texel_angle(size: usize) -> f32 {
+    std::f32::consts::FRAC_PI_2 / size.max(1) as f32
+}
+
+/// Solid angle of texel (x, y) on a face of edge `n` (exact, from the area of a projected
+/// rectangle), so averages over the sphere weight texels by the part of the sphere they cover.
+pub fn texel_solid_angle(n: usize, x: usize, y: usize) -> f32 {
+    let c = |i: usize| corner(n, i);
+    (corner_area(c(x), c(y)) - corner_area(c(x), c(y + 1)) - corner_area(c(x + 1), c(y))
+        + corner_area(c(x + 1), c(y + 1))) as f32
+}
+
+/// `texel_solid_angle` for every texel of a face (the same on all six), row by row: one
+/// arctangent per texel corner instead of four per texel.
+pub fn solid_angle_table(n: usize) -> Vec<f32> {
+    let row = |j: usize| -> Vec<f64> {
+        (0..=n)
+            .map(|i| corner_area(corner(n, i), corner(n, j)))
+            .collect()
+    };
+    let mut out = Vec::with_capacity(n * n);
+    let mut above = row(0);
+    for y in 0..n {
+        let below = row(y + 1);
+        for x in 0..n {
+            out.push((above[x] - below[x] - above[x + 1] + below[x + 1]) as f32);
+        }
+        above = below;
+    }
+    out
+}
+
+/// Face-plane coordinate (-1..1) of texel corner `i` on a face of edge `n`.
+#[inline]
+fn corner(n: usize, i: usize) -> f64 {
+    i as f64 * (2.0 / n as f64) - 1.0
+}
+
+/// Solid angle of the face-plane rectangle from the face centre to (x, y).
+#[inline]
+fn corner_area(x: f64, y: f64) -> f64 {
+    (x * y).atan2((x * x + y * y + 1.0).sqrt())
+}
+
+/// `dir_face`, written with every branch a select so loops over batches vectorise (the face
+/// as a byte keeps the lanes narrow).
+#[inline(always)]
+pub(super) fn dir_face_lanes(x: f32, y: f32, z: f32) -> (u8, f32, f32) {
+    let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
+    let xmaj = ax >= ay && ax >= az;
+    let ymaj = !xmaj && ay >= az;
+    let f = if xmaj {
+        if x >= 0.0 {
+            0
+        } else {
+            1
+        }
+    } else if ymaj {
+        if y >= 0.0 {
+            2
+        } else {
+            3
+        }
+    } else if z >= 0.0 {
+        4
+    } else {
+        5
+    };
+    let sc = if xmaj {
+        if x >= 0.0 {
+            -z
+        } else {
+            z
+        }
+    } else if ymaj || z >= 0.0 {
+        x
+    } else {
+        -x
+    };
+    let tc = if ymaj {
+        if y >= 0.0 {
+            z
+        } else {
+            -z
+        }
+    } else {
+        -y
+    };
+    let ma = if xmaj {
+        ax
+    } else if ymaj {
+        ay
+    } else {
+        az
+    };
+    let inv = if ma > 0.0 { 0.5 / ma } else { 0.0 };
+    (f, sc * inv + 0.5, tc * inv + 0.5)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn solid_angle_table_matches_texel_solid_angle() {
+        for n in [1, 2, 5, 64] {
+            let table = super::solid_angle_table(n);
+            let mut sum = 0.0f64;
+            for y in 0..n {
+                for x in 0..n {
+                    assert_eq!(table[y * n + x], super::texel_solid_angle(n, x, y));
+                    sum += table[y * n + x] as f64;
+                }
+            }
+            assert!(
+                (sum - 4.0 * std::f64::consts::PI / 6.0).abs() < 1e-5,
+                "{n}: {sum}"
+            );
+        }
+    }
+}

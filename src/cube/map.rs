@@ -1,0 +1,145 @@
+//! The stored cube map: six square faces per level, built from images or a function, and its
+//! solid-angle-weighted box mips.
+
+use super::face::{face_dir, solid_angle_table, FACE_NAMES};
+use crate::error::{Error, Result};
+use crate::image::Image;
+use glam::{Vec3, Vec4};
+
+/// Six square faces of one size.
+pub type Faces = [Image; 6];
+
+/// A cube map with one or more mip levels (level 0 the largest).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CubeMap {
+    pub levels: Vec<Faces>,
+}
+
+impl CubeMap {
+    /// Checks that six faces are square and of one size.
+    pub fn from_faces(faces: Faces) -> std::result::Result<CubeMap, String> {
+        let n = faces[0].width;
+        for (i, f) in faces.iter().enumerate() {
+            if f.width != f.height {
+                return Err(format!(
+                    "face {} is {}x{}, not square",
+                    FACE_NAMES[i], f.width, f.height
+                ));
+            }
+            if f.width != n {
+                return Err(format!(
+                    "face {} is {}x{} but face px is {}x{}: all faces must be the same size",
+                    FACE_NAMES[i], f.width, f.height, n, n
+                ));
+            }
+        }
+        if n == 0 {
+            return Err("faces are empty".into());
+        }
+        Ok(CubeMap {
+            levels: vec![faces],
+        })
+    }
+
+    /// Edge of level 0's faces.
+    pub fn size(&self) -> usize {
+        self.levels[0][0].width
+    }
+
+    /// Fills every texel of a `size` cube with `f(direction of its centre)`.
+    pub fn from_fn(size: usize, f: impl Fn(Vec3) -> Vec4 + Sync) -> CubeMap {
+        let inv = 1.0 / size as f32;
+        let faces = std::array::from_fn(|face| {
+            Image::from_fn(size, size, |x, y| {
+                f(face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize())
+            })
+        });
+        CubeMap {
+            levels: vec![faces],
+        }
+    }
+
+    /// Number of levels in a full chain for a face edge: down to 1 x 1.
+    pub fn full_chain_len(size: usize) -> usize {
+        (usize::BITS - size.max(1).leading_zeros()) as usize
+    }
+
+    /// Keeps level 0 and rebuilds `count` levels (None: the full chain) as plain mipmaps,
+    /// each texel the solid-angle-weighted mean of the 2x2 texels above it.
+    pub fn with_box_mips(mut self, count: Option<usize>) -> CubeMap {
+        let full = Self::full_chain_len(self.size());
+        let count = count.unwrap_or(full).clamp(1, full);
+        self.levels.truncate(1);
+        while self.levels.len() < count {
+            let prev = self.levels.last().unwrap();
+            let n = prev[0].width;
+            let weights = solid_angle_table(n);
+            let next =
+                std::array::from_fn(|f| box_reduce_face(&prev[f], n, &weights, Vec4::INFINITY));
+            self.levels.push(next);
+        }
+        self
+    }
+
+    /// Applies `f` to every texel of every level.
+    pub fn map_texels(&mut self, f: impl Fn(Vec4) -> Vec4 + Sync) {
+        use rayon::prelude::*;
+        for level in &mut self.levels {
+            for face in level.iter_mut() {
+                face.pixels.par_iter_mut().for_each(|p| *p = f(*p));
+            }
+        }
+    }
+}
+
+/// Each texel the mean of the 2x2 above it (each first clamped to `ceiling`), weighted by
+/// their solid angles (`weights`, one face's table) so the mean radiance over the sphere is kept.
+pub(super) fn box_reduce_face(src: &Image, n: usize, weights: &[f32], ceiling: Vec4) -> Image {
+    let m = (n / 2).max(1);
+    if n == 1 {
+        return src.clone();
+    }
+    Image::from_fn(m, m, |x, y| {
+        let mut acc = Vec4::ZERO;
+        let mut wsum = 0.0;
+        for dy in 0..2 {
+            for dx in 0..2 {
+                let (sx, sy) = (2 * x + dx, 2 * y + dy);
+                let w = weights[sy * n + sx];
+                acc += src.get(sx, sy).min(ceiling) * w;
+                wsum += w;
+            }
+        }
+        acc / wsum
+    })
+}
+
+/// Reads a cube map from six same-size images, naming the file of a face that does not fit.
+pub fn faces_from_images(images: Vec<Image>, names: &[std::path::PathBuf]) -> Result<CubeMap> {
+    let n = images[0].width;
+    for (i, img) in images.iter().enumerate() {
+        if img.width != img.height {
+            return Err(Error::file(
+                &names[i],
+                format!("face is {}x{}, not square", img.width, img.height),
+            ));
+        }
+        if img.width != n {
+            return Err(Error::file(
+                &names[i],
+                format!(
+                    "face is {}x{} but {} is {}x{}: all six faces must be the same size",
+                    img.width,
+                    img.height,
+                    names[0].display(),
+                    n,
+                    n
+                ),
+            ));
+        }
+    }
+    let faces: Faces = images
+        .try_into()
+        .map_err(|_| Error::usage("a cube map needs exactly six faces"))?;
+    CubeMap::from_faces(faces).map_err(|e| Error::file(&names[0], e))
+}

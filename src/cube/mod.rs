@@ -1,0 +1,18 @@
+//! Cube maps: six square faces in the OpenGL face-selection convention, their mip levels,
+//! direction <-> texel mapping (written once, here) and seamless sampling across face edges.
+
+// Face addressing (face), the stored map and its mips (map), what every layout is sampled
+// through (environment), and the bordered sampler with its batched lookups (sampler). The
+// public items are re-exported here: callers name `cube::X`.
+mod environment;
+mod face;
+mod map;
+mod sampler;
+
+pub use environment::{Dirs, Environment, Interp, BATCH};
+pub use face::{
+    dir_face, face_dir, solid_angle_table, texel_angle, texel_solid_angle, FACE_LONG_NAMES,
+    FACE_NAMES,
+};
+pub use map::{faces_from_images, CubeMap, Faces};
+pub use sampler::CubeSampler;

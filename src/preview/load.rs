@@ -1,0 +1,111 @@
+//! Reading what the preview shows: the environment (with its chain when it has one) and the
+//! textures on the sphere, with a control map's sidecar.
+
+use crate::convert::{self, Source};
+use crate::cube::{CubeSampler, Environment};
+use crate::error::{Error, Result};
+use crate::image::Image;
+use crate::io::{self, Decoded, ReadOptions};
+use crate::layout::Kind;
+use crate::resample::Resampler;
+use std::path::{Path, PathBuf};
+
+/// An environment ready for the preview, with what the user should be told about it.
+pub struct LoadedEnv {
+    pub sampler: CubeSampler,
+    /// Every file read.
+    pub files: Vec<PathBuf>,
+    /// Holds values above 1.
+    pub hdr: bool,
+    /// NaN, infinite or negative values replaced by 0 on read (values above 1e28 by 1e28).
+    pub replaced_values: usize,
+}
+
+impl LoadedEnv {
+    pub fn levels(&self) -> usize {
+        Environment::levels(&self.sampler)
+    }
+}
+
+/// Loads an environment for the preview. A KTX2 or DDS cube map keeps all its stored levels
+/// (they are the prefiltered chain); a directory holding `m0/`, `m1/`, ... (from
+/// `cubeforge prefilter`) is read level by level; anything else `convert` reads becomes a
+/// one-level cube map at the input's resolution.
+pub fn load_environment(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<LoadedEnv> {
+    if path.is_dir() && crate::chain::is_chain_dir(path) {
+        return load_chain_dir(path, opts);
+    }
+    let loaded = convert::load(&[path.to_path_buf()], from, opts)?;
+    let cube = match &loaded.source {
+        Source::Cube(c) => CubeSampler::new(c),
+        Source::Projection(..) => {
+            let size = loaded.face_size().max(1);
+            CubeSampler::new(&convert::to_cube(&loaded, size, &Resampler::default()))
+        }
+    };
+    Ok(LoadedEnv {
+        sampler: cube,
+        files: loaded.files.clone(),
+        hdr: loaded.hdr,
+        replaced_values: loaded.meta.replaced_values,
+    })
+}
+
+/// Reads `DIR/m0`, `DIR/m1`, ... (each a folder of six faces) as one chain; each level must
+/// be half the size of the one before (down to 1).
+fn load_chain_dir(dir: &Path, opts: &ReadOptions) -> Result<LoadedEnv> {
+    let c = crate::chain::read_dir(dir, opts)?;
+    Ok(LoadedEnv {
+        sampler: CubeSampler::new(&c.cube),
+        files: c.files,
+        hdr: c.meta.hdr,
+        replaced_values: c.meta.replaced_values,
+    })
+}
+
+/// Reads a 2D texture for the sphere (decal: colour, sRGB-decoded; control map: `linear`).
+pub fn read_texture(path: &Path, linear: bool) -> Result<Image> {
+    let opts = ReadOptions {
+        linear,
+        ..ReadOptions::default()
+    };
+    match io::read(path, &opts)?.0 {
+        Decoded::Image(img) => Ok(img),
+        Decoded::Cube(_) => Err(Error::file(
+            path,
+            "holds a cube map; a texture on the sphere must be a 2D image",
+        )),
+    }
+}
+
+/// The sidecar a control map's `max_lod_bias` is stored in: `MAP.json` (e.g. `mask.png.json`)
+/// or the map's name with `.json` for its extension (`mask.json`), whichever exists.
+pub fn control_sidecar(map: &Path) -> Option<PathBuf> {
+    let mut appended = map.as_os_str().to_owned();
+    appended.push(".json");
+    [PathBuf::from(appended), map.with_extension("json")]
+        .into_iter()
+        .find(|p| p.is_file() && p != map)
+}
+
+/// Reads a control map (linear data) and its `max_lod_bias`: from the sidecar when there is
+/// one, else `default_max`. Returns the map, the value and the sidecar used.
+pub fn read_control(path: &Path, default_max: f32) -> Result<(Image, f32, Option<PathBuf>)> {
+    let img = read_texture(path, true)?;
+    let Some(side) = control_sidecar(path) else {
+        return Ok((img, default_max, None));
+    };
+    let text = String::from_utf8(io::read_file(&side)?)
+        .map_err(|_| Error::file(&side, "not UTF-8 text"))?;
+    let json: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| Error::file(&side, format!("not valid JSON: {e}")))?;
+    let max = match json.get("max_lod_bias") {
+        None => default_max,
+        Some(v) => v
+            .as_f64()
+            .filter(|v| v.is_finite() && *v >= 0.0)
+            .ok_or_else(|| Error::file(&side, "max_lod_bias must be a number >= 0"))?
+            as f32,
+    };
+    Ok((img, max, Some(side)))
+}

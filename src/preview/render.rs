@@ -1,0 +1,136 @@
+//! The picture: every pixel's samples through the shader, per fragment at the exact hit or
+//! per vertex through the rasterizer, rows in parallel.
+
+use super::camera::{sample_offsets, Camera};
+use super::material::{self, Material};
+use super::options::{Background, Options, Shading};
+use super::raster::{setup_raster, Frag, NO_TRI};
+use super::shader::{Shader, Surface};
+use super::sphere;
+use crate::cube::Environment;
+use crate::error::{Error, Result};
+use crate::image::Image;
+use glam::{Vec2, Vec3, Vec4};
+
+/// Renders the sphere: linear radiance, alpha the coverage of the background's alpha.
+/// Rows run in parallel; the result does not depend on the thread count.
+pub fn render<E: Environment + ?Sized>(
+    env: &E,
+    material: &Material,
+    surface: &Surface<'_>,
+    opts: &Options,
+) -> Result<Image> {
+    render_with_progress(env, material, surface, opts, &|_| {})
+}
+
+/// [`render`], calling `progress(1)` as each of the `opts.size` rows is done (for a progress
+/// bar: a large preview with many samples takes seconds).
+pub fn render_with_progress<E: Environment + ?Sized>(
+    env: &E,
+    material: &Material,
+    surface: &Surface<'_>,
+    opts: &Options,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Image> {
+    use rayon::prelude::*;
+    opts.validate()?;
+    material::validate(material).map_err(Error::usage)?;
+    let n = opts.size;
+    let cam = Camera::new(opts.distance, opts.fov, opts.yaw, opts.pitch, n, n);
+    let shader = Shader::new(
+        env,
+        material,
+        *surface,
+        cam.eye,
+        opts.parallax,
+        opts.lod_bias,
+    );
+    let offsets = sample_offsets(opts.samples);
+    let s = offsets.len();
+    let inv_s = 1.0 / s as f32;
+    let raster = (opts.shading == Shading::PerVertex)
+        .then(|| setup_raster(&shader, &cam, opts.tessellation, &offsets));
+    let eye = cam.eye;
+    let background = |d: Vec3| match opts.background {
+        Background::Env => env.lookup(d, 0.0).truncate().extend(1.0),
+        Background::Color(c) => c,
+    };
+    // Per fragment: the vertex stage at the exact hit, and at the points where the rays one
+    // pixel right and below meet the hit's tangent plane (a GPU's neighbouring fragments on
+    // the surface's local plane).
+    let per_fragment = |sx: f32, sy: f32| -> Vec4 {
+        let d = cam.ray(sx, sy);
+        let Some(p) = sphere::hit(eye, d) else {
+            return background(d);
+        };
+        let nrm = p.normalize();
+        let uv = if shader.uses_uv {
+            sphere::uv(nrm)
+        } else {
+            Vec2::ZERO
+        };
+        let var = shader.vertex(p, nrm, uv);
+        if !shader.lod_on {
+            return shader.fragment(&var, None);
+        }
+        let plane = (p - eye).dot(nrm);
+        let at = |sx2: f32, sy2: f32| {
+            let d2 = cam.ray(sx2, sy2);
+            let den = d2.dot(nrm);
+            if den >= -1e-9 {
+                return None;
+            }
+            let p2 = eye + d2 * (plane / den);
+            Some(shader.vertex(p2, p2.normalize(), var.uv))
+        };
+        match (at(sx + 1.0, sy), at(sx, sy + 1.0)) {
+            (Some(vx), Some(vy)) => shader.fragment(&var, Some((&vx, &vy))),
+            _ => shader.fragment(&var, None),
+        }
+    };
+    let mut img = Image::new(n, n);
+    img.pixels.par_chunks_mut(n).enumerate().for_each_init(
+        || {
+            vec![
+                Frag {
+                    tri: NO_TRI,
+                    inv_z: 0.0
+                };
+                if raster.is_some() { n * s } else { 0 }
+            ]
+        },
+        |buf, (y, row)| {
+            if let Some(r) = &raster {
+                r.rasterize_row(y, n, &offsets, buf);
+            }
+            for (x, out) in row.iter_mut().enumerate() {
+                let mut acc = Vec4::ZERO;
+                for (k, &(ox, oy)) in offsets.iter().enumerate() {
+                    let (sx, sy) = (x as f32 + ox, y as f32 + oy);
+                    acc += match &raster {
+                        None => per_fragment(sx, sy),
+                        Some(r) => {
+                            let f = buf[x * s + k];
+                            if f.tri == NO_TRI {
+                                background(cam.ray(sx, sy))
+                            } else {
+                                let t = &r.tris[f.tri as usize];
+                                let var = r.interpolate(t, t.persp(sx, sy));
+                                if shader.lod_on {
+                                    let vx = r.interpolate(t, t.persp(sx + 1.0, sy));
+                                    let vy = r.interpolate(t, t.persp(sx, sy + 1.0));
+                                    shader.fragment(&var, Some((&vx, &vy)))
+                                } else {
+                                    shader.fragment(&var, None)
+                                }
+                            }
+                        }
+                    };
+                }
+                *out = acc * inv_s;
+            }
+            progress(1);
+        },
+    );
+    Ok(img)
+}

@@ -1,0 +1,219 @@
+//! The texts' vertex and fragment programs with their uniforms bound, and the level of detail
+//! a GPU would pick for a lookup: the per-pixel work both pipelines share.
+
+use super::material::{fresnel, reflect, refract, Material, Model};
+use super::options::Parallax;
+use crate::cube::Environment;
+use crate::image::Image;
+use glam::{Vec2, Vec3, Vec4};
+
+/// A control map (section 7.2.4) on the sphere's texture coordinates: R reflectivity,
+/// G transmittance, B blur (a fraction of `max_lod_bias`), A Fresnel mask.
+#[derive(Clone, Copy, Debug)]
+pub struct Control<'a> {
+    pub map: &'a Image,
+    pub max_lod_bias: f32,
+}
+
+/// Textures on the sphere's texture coordinates.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Surface<'a> {
+    /// The decal (`decalMap`); without it the material's `decal_color`.
+    pub decal: Option<&'a Image>,
+    pub control: Option<Control<'a>>,
+}
+
+/// What the vertex stage hands the fragment stage (the texts' TEXCOORDs and COLOR).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Varyings {
+    pub uv: Vec2,
+    /// Lookup vectors: R (reflect), T (refract), or R, TRed, TGreen, TBlue (dispersion),
+    /// after any parallax correction.
+    pub v: [Vec3; 4],
+    /// The clamped reflection factor (dispersion).
+    pub factor: f32,
+}
+
+impl Varyings {
+    /// Barycentric combination of three vertices' outputs.
+    #[inline]
+    pub(super) fn blend(a: &Varyings, b: &Varyings, c: &Varyings, l: Vec3) -> Varyings {
+        let mut v = [Vec3::ZERO; 4];
+        for (k, o) in v.iter_mut().enumerate() {
+            *o = a.v[k] * l.x + b.v[k] * l.y + c.v[k] * l.z;
+        }
+        Varyings {
+            uv: a.uv * l.x + b.uv * l.y + c.uv * l.z,
+            v,
+            factor: a.factor * l.x + b.factor * l.y + c.factor * l.z,
+        }
+    }
+}
+
+/// The texts' programs with their uniforms bound.
+pub struct Shader<'a, E: Environment + ?Sized> {
+    env: &'a E,
+    mat: &'a Material,
+    surface: Surface<'a>,
+    eye: Vec3,
+    parallax: Option<Parallax>,
+    /// Levels beyond 0 exist: compute derivatives and levels of detail.
+    pub(super) lod_on: bool,
+    /// Half the level-0 face edge: texels per unit of the face's sc / |ma|.
+    half_size: f32,
+    lod_bias: f32,
+    lookups: usize,
+    /// A decal texture or control map is read: texture coordinates are needed.
+    pub(super) uses_uv: bool,
+}
+
+impl<'a, E: Environment + ?Sized> Shader<'a, E> {
+    pub fn new(
+        env: &'a E,
+        mat: &'a Material,
+        surface: Surface<'a>,
+        eye: Vec3,
+        parallax: Option<Parallax>,
+        lod_bias: f32,
+    ) -> Self {
+        Shader {
+            env,
+            mat,
+            surface,
+            eye,
+            parallax,
+            lod_on: env.levels() > 1,
+            half_size: env.face_size() as f32 * 0.5,
+            lod_bias,
+            lookups: if mat.model == Model::Dispersion { 4 } else { 1 },
+            uses_uv: surface.decal.is_some() || surface.control.is_some(),
+        }
+    }
+
+    #[inline]
+    fn correct(&self, v: Vec3, p: Vec3) -> Vec3 {
+        match &self.parallax {
+            Some(px) => px.correct(v, p),
+            None => v,
+        }
+    }
+
+    /// The vertex programs (C7E1v, C7E3v, C7E5v) at world position `p` with unit normal `n`.
+    #[inline]
+    pub fn vertex(&self, p: Vec3, n: Vec3, uv: Vec2) -> Varyings {
+        let m = self.mat;
+        let i = p - self.eye;
+        let mut out = Varyings {
+            uv,
+            ..Varyings::default()
+        };
+        match m.model {
+            Model::Reflect => out.v[0] = self.correct(reflect(i, n), p),
+            Model::Refract => {
+                out.v[0] = self.correct(refract(i.normalize(), n, m.eta_ratio.x), p);
+            }
+            Model::Dispersion => {
+                out.v[0] = self.correct(reflect(i, n), p);
+                let iu = i.normalize();
+                out.v[1] = self.correct(refract(iu, n, m.eta_ratio.x), p);
+                out.v[2] = self.correct(refract(iu, n, m.eta_ratio.y), p);
+                out.v[3] = self.correct(refract(iu, n, m.eta_ratio.z), p);
+                out.factor = fresnel(iu, n, m.fresnel_bias, m.fresnel_scale, m.fresnel_power);
+            }
+        }
+        out
+    }
+
+    /// texCUBE; the zero vector (the texts' refract on total internal reflection) transmits
+    /// nothing: black.
+    #[inline]
+    fn tex_cube(&self, v: Vec3, lod: f32) -> Vec4 {
+        if v == Vec3::ZERO {
+            Vec4::ZERO
+        } else {
+            self.env.lookup(v, lod)
+        }
+    }
+
+    /// The fragment programs (C7E2f, C7E4f, C7E6f). `neighbours` are the varyings one pixel
+    /// to the right and one below (None: unbounded footprint, the coarsest level), used for
+    /// the level of detail when the environment has a chain.
+    #[inline]
+    pub fn fragment(&self, var: &Varyings, neighbours: Option<(&Varyings, &Varyings)>) -> Vec4 {
+        let m = self.mat;
+        // Control map: reflectivity, transmittance, blur, Fresnel mask.
+        let (reflectivity, transmittance, blur, mask) = match &self.surface.control {
+            Some(c) => {
+                let t = tex2d(c.map, var.uv);
+                (t.x, t.y, t.z * c.max_lod_bias, t.w)
+            }
+            None => (m.reflectivity, m.transmittance, 0.0, 1.0),
+        };
+        let mut lods = [0.0f32; 4];
+        if self.lod_on {
+            let bias = self.lod_bias + blur;
+            for (k, lod) in lods.iter_mut().enumerate().take(self.lookups) {
+                let base = match neighbours {
+                    Some((x, y)) => cube_lod(var.v[k], x.v[k], y.v[k], self.half_size),
+                    None => f32::INFINITY,
+                };
+                *lod = base + bias;
+            }
+        }
+        let decal = || match self.surface.decal {
+            Some(img) => tex2d(img, var.uv),
+            None => m.decal_color.extend(1.0),
+        };
+        let c = match m.model {
+            Model::Reflect => decal().lerp(self.tex_cube(var.v[0], lods[0]), reflectivity),
+            Model::Refract => decal().lerp(self.tex_cube(var.v[0], lods[0]), transmittance),
+            Model::Dispersion => {
+                let reflected = self.tex_cube(var.v[0], lods[0]);
+                let refracted = Vec4::new(
+                    self.tex_cube(var.v[1], lods[1]).x,
+                    self.tex_cube(var.v[2], lods[2]).y,
+                    self.tex_cube(var.v[3], lods[3]).z,
+                    1.0,
+                );
+                // Where the mask is 0 the Fresnel term does not apply: reflectivity instead.
+                let factor = mask * var.factor + (1.0 - mask) * reflectivity;
+                refracted.lerp(reflected, factor)
+            }
+        };
+        c.truncate().extend(1.0)
+    }
+}
+
+/// tex2D on the sphere's texture coordinates: bilinear, repeating around u, clamped in v.
+#[inline]
+fn tex2d(img: &Image, uv: Vec2) -> Vec4 {
+    img.bilinear(uv.x * img.width as f32, uv.y * img.height as f32, true)
+}
+
+/// The level of detail a GPU picks for lookup vector `v` whose neighbours one pixel to the
+/// right and one below are `vx` and `vy`: the vectors projected on `v`'s cube face (sc / |ma|,
+/// tc / |ma|), their differences scaled to texels of level 0 (`half_size` = face edge / 2),
+/// rho the longer, lod = log2(rho). A neighbour not in front of the face counts as unbounded.
+#[inline]
+pub fn cube_lod(v: Vec3, vx: Vec3, vy: Vec3, half_size: f32) -> f32 {
+    let a = v.abs();
+    let (axis, u, w) = if a.x >= a.y && a.x >= a.z {
+        (0, 2, 1)
+    } else if a.y >= a.z {
+        (1, 0, 2)
+    } else {
+        (2, 0, 1)
+    };
+    let ma = v[axis];
+    if ma == 0.0 {
+        return 0.0;
+    }
+    let proj = |q: Vec3| {
+        let m = q[axis] / ma.signum();
+        (m > 0.0).then(|| Vec2::new(q[u] / m, q[w] / m))
+    };
+    let p = Vec2::new(v[u] / a[axis], v[w] / a[axis]);
+    let d = |q: Vec3| proj(q).map_or(f32::INFINITY, |pq| (pq - p).length());
+    let rho = d(vx).max(d(vy)) * half_size;
+    rho.log2()
+}
