@@ -4,7 +4,8 @@
 use glam::{Vec3, Vec4};
 
 /// How a sample between texels is reconstructed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Interp {
     /// Bilinear: smooth, never rings.
     #[default]

@@ -5,7 +5,8 @@ use crate::error::{Error, Result};
 use glam::{Vec3, Vec4};
 
 /// Where the vectors come from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Shading {
     /// The vertex program runs at every sample's exact point on the sphere.
     #[default]
@@ -15,7 +16,8 @@ pub enum Shading {
 }
 
 /// Brennan's correction for an environment at finite distance.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum ParallaxMode {
     /// normalize(V) + (P - C) / R: the vertex-shader approximation of the paper.
     #[default]

@@ -4,7 +4,8 @@
 use crate::image::Image;
 use glam::Vec4;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Tonemap {
     /// Clip at 1 (values at or below 1 pass unchanged).
     #[default]
