@@ -3,6 +3,8 @@
 //! the same description under [`crate::io::ktx2::LEVELS_KEY`], a DDS chain beside it in
 //! `NAME.dds.levels.json`. One schema, [`LevelsFile`], for all three.
 
+#![warn(missing_docs)]
+
 use crate::convert::{self, Source};
 use crate::cube::{CubeMap, Faces};
 use crate::error::{Error, Result};
@@ -12,20 +14,27 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// The name of a chain folder's description.
-pub const LEVELS_JSON: &str = "levels.json";
+pub(crate) const LEVELS_JSON: &str = "levels.json";
 
 /// What a prefiltered chain holds, level by level: how `cubeforge prefilter` made it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LevelsFile {
+    /// The filter every level was made with.
     pub filter: FilterKind,
+    /// Edge of level 0's faces, texels.
     pub face_size: usize,
+    /// Levels in the chain (`levels.len()`).
     pub level_count: usize,
+    /// Cosine chains only: the lighting model applied to each level's power.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub lighting: Option<LightingModel>,
+    /// Cosine chains only: `--gloss-scale` of the level-to-power mapping.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub gloss_scale: Option<f32>,
+    /// Cosine chains only: `--gloss-bias` of the level-to-power mapping.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub gloss_bias: Option<f32>,
+    /// One entry per level, level 0 first.
     pub levels: Vec<LevelInfo>,
 }
 
@@ -44,13 +53,13 @@ impl LevelsFile {
         }
     }
 
-    pub fn to_json(&self) -> Vec<u8> {
+    pub(crate) fn to_json(&self) -> Vec<u8> {
         // Plain numbers, strings and lists: serialising cannot fail.
         serde_json::to_vec_pretty(self).unwrap_or_default()
     }
 
     /// Parses a description; `path` names it in errors.
-    pub fn from_json(bytes: &[u8], path: &Path) -> Result<LevelsFile> {
+    pub(crate) fn from_json(bytes: &[u8], path: &Path) -> Result<LevelsFile> {
         serde_json::from_slice(bytes)
             .map_err(|e| Error::file(path, format!("not a levels description: {e}")))
     }
@@ -67,14 +76,14 @@ pub fn level_dir(dir: &Path, k: usize) -> PathBuf {
 }
 
 /// Where a DDS chain's description goes: `NAME.dds.levels.json`.
-pub fn dds_sidecar(dds: &Path) -> PathBuf {
+pub(crate) fn dds_sidecar(dds: &Path) -> PathBuf {
     let mut s = dds.as_os_str().to_owned();
     s.push(".levels.json");
     PathBuf::from(s)
 }
 
 /// The description stored with a KTX2 or DDS chain, if it has one that parses.
-pub fn container_levels(path: &Path, format: FileFormat) -> Option<LevelsFile> {
+pub(crate) fn container_levels(path: &Path, format: FileFormat) -> Option<LevelsFile> {
     let bytes = match format {
         FileFormat::Ktx2 => io::ktx2::metadata_from_file(path)
             .into_iter()
@@ -87,7 +96,7 @@ pub fn container_levels(path: &Path, format: FileFormat) -> Option<LevelsFile> {
 }
 
 /// A chain folder as read.
-pub struct ChainDir {
+pub(crate) struct ChainDir {
     pub cube: CubeMap,
     /// Every face file read.
     pub files: Vec<PathBuf>,
@@ -99,7 +108,7 @@ pub struct ChainDir {
 
 /// Reads a chain folder: every `mK/` while they last, each half the size of the one before,
 /// and `levels.json` if present (it must list as many levels).
-pub fn read_dir(dir: &Path, opts: &ReadOptions) -> Result<ChainDir> {
+pub(crate) fn read_dir(dir: &Path, opts: &ReadOptions) -> Result<ChainDir> {
     let mut levels: Vec<Faces> = Vec::new();
     let mut files = Vec::new();
     let mut meta: Option<Meta> = None;
@@ -175,7 +184,7 @@ pub fn read_dir(dir: &Path, opts: &ReadOptions) -> Result<ChainDir> {
 }
 
 /// The files of a chain folder: `mK/px.EXT` ... for every level, and `levels.json`.
-pub fn encode_dir(
+pub(crate) fn encode_dir(
     dir: &Path,
     chain: &CubeMap,
     description: &LevelsFile,

@@ -1,6 +1,8 @@
 //! Conversion between layouts: load any input as a direction-addressed environment, then
 //! render the requested layout from it.
 
+#![warn(missing_docs)]
+
 use crate::cube::{
     faces_from_images, CubeMap, CubeSampler, Environment, FACE_LONG_NAMES, FACE_NAMES,
 };
@@ -15,16 +17,21 @@ use std::path::{Path, PathBuf};
 
 /// A loaded input: a cube map (faces, cross, strip, container) or a single-image projection.
 pub enum Source {
+    /// Six faces with their mip levels.
     Cube(CubeMap),
+    /// A panorama, mirror ball or angular map, looked up by direction.
     Projection(layout::Projection, Image),
 }
 
 /// An input with what was learned while reading it.
 pub struct Loaded {
+    /// The pixels, as a cube map or a projection.
     pub source: Source,
+    /// The input's layout (`Faces` for containers and face folders).
     pub kind: Kind,
     /// Holds values above 1: float outputs are the natural default.
     pub hdr: bool,
+    /// The first file's format, pixel format and colour space, and what was replaced on reading.
     pub meta: Meta,
     /// Every file read, so outputs can be checked against them.
     pub files: Vec<PathBuf>,
@@ -172,7 +179,7 @@ pub fn load(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Resul
 }
 
 /// Finds px/nx/... or posx/negx/... files (any supported extension) in a folder.
-pub fn find_faces(dir: &Path) -> Result<Vec<PathBuf>> {
+pub(crate) fn find_faces(dir: &Path) -> Result<Vec<PathBuf>> {
     let entries: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(|e| Error::io(dir, e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -311,7 +318,9 @@ fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Lo
 
 /// What a conversion produces: one image, or a cube map (faces and containers).
 pub enum Output {
+    /// Cross, strip or projection: one image.
     Image(Image),
+    /// Faces or a container: six faces with their mip levels.
     Cube(CubeMap),
 }
 

@@ -2,33 +2,56 @@
 //! one line, and whose kind a library user can match on (retry an I/O failure, raise a limit,
 //! point at a recipe's line).
 
+#![warn(missing_docs)]
+
 use std::path::{Path, PathBuf};
 
+/// Everything that can go wrong; the message names the file and says what to change.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
     /// The operating system refused a read or a write.
     #[error("{}: {}", path.display(), crate::io::io_msg(source))]
     Io {
+        /// The file read or written.
         path: PathBuf,
+        /// What the operating system said.
         #[source]
         source: std::io::Error,
     },
     /// A file whose content is malformed, truncated, or not what its name says.
     #[error("{}: {msg}", path.display())]
-    Decode { path: PathBuf, msg: String },
+    Decode {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        msg: String,
+    },
     /// Over a limit on pixels, dimensions or memory (raise it if the input is genuine).
     #[error("{}{msg}", path.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default())]
-    Limit { path: Option<PathBuf>, msg: String },
+    Limit {
+        /// The file, when the limit is about one.
+        path: Option<PathBuf>,
+        /// Which limit, and the option that raises it.
+        msg: String,
+    },
     /// A well-formed file or request that cubeforge does not handle (a pixel format, a
     /// layout, a container of another kind).
     #[error("{}: {msg}", path.display())]
-    Unsupported { path: PathBuf, msg: String },
+    Unsupported {
+        /// The file (or the output name).
+        path: PathBuf,
+        /// What is not handled.
+        msg: String,
+    },
     /// A recipe or material file that does not say something valid, at a line when known.
     #[error("{}: {}{msg}", path.display(), line.map(|l| format!("line {l}: ")).unwrap_or_default())]
     Recipe {
+        /// The recipe or material file.
         path: PathBuf,
+        /// Line of the problem, from 1.
         line: Option<usize>,
+        /// What is wrong there.
         msg: String,
     },
     /// A parameter out of range, or parameters that do not fit together.
@@ -36,6 +59,7 @@ pub enum Error {
     InvalidOption(String),
 }
 
+/// The result of every fallible call in cubeforge.
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
@@ -50,24 +74,28 @@ impl Error {
     pub fn usage(msg: impl Into<String>) -> Self {
         Error::InvalidOption(msg.into())
     }
+    /// The operating system's refusal to read or write `path`.
     pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.as_ref().to_path_buf(),
             source,
         }
     }
+    /// Over a limit; `msg` should name the option that raises it.
     pub fn limit(path: Option<&Path>, msg: impl Into<String>) -> Self {
         Error::Limit {
             path: path.map(Path::to_path_buf),
             msg: msg.into(),
         }
     }
+    /// Something valid in or about `path` that cubeforge does not handle.
     pub fn unsupported(path: impl AsRef<Path>, msg: impl Into<String>) -> Self {
         Error::Unsupported {
             path: path.as_ref().to_path_buf(),
             msg: msg.into(),
         }
     }
+    /// A mistake in a recipe or material file, at `line` (from 1) when known.
     pub fn recipe(path: impl AsRef<Path>, line: Option<usize>, msg: impl Into<String>) -> Self {
         Error::Recipe {
             path: path.as_ref().to_path_buf(),

@@ -11,6 +11,8 @@
 //! by its own solid angle. The peaks' flux arrives whole, whatever the two sizes; only a few
 //! texels pay for it, so the common path keeps its speed.
 
+#![warn(missing_docs)]
+
 use crate::cube::{dir_face, face_dir, solid_angle_table, texel_solid_angle};
 use crate::cube::{Dirs, Environment, Interp};
 use crate::image::Image;
@@ -22,7 +24,7 @@ use std::f64::consts::PI;
 /// Texels with a channel above this multiple of its mean hold peaks. Low enough that the
 /// bounded part's lookup error is far under the 0.5% flux budget on real panoramas, high
 /// enough that peaks stay a small share of the texels (at most 1/8 of the sphere).
-pub const PEAK_RATIO: f32 = 8.0;
+pub(crate) const PEAK_RATIO: f32 = 8.0;
 
 /// The texel grid of a layout: where each texel looks and how much of the sphere it covers.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,7 +45,7 @@ impl Grid {
     }
 
     /// Width and height of each image.
-    pub fn dims(self) -> (usize, usize) {
+    pub(crate) fn dims(self) -> (usize, usize) {
         match self {
             Grid::Cube(n) => (n, n),
             Grid::Projection(_, w, h) => (w, h),
@@ -66,7 +68,7 @@ impl Grid {
     /// The texel a unit direction falls in. On a ball the point is kept half a texel inside
     /// the rim, so the texel it names always covers some of the sphere.
     #[inline]
-    pub fn locate(self, d: Vec3) -> (usize, usize, usize) {
+    pub(crate) fn locate(self, d: Vec3) -> (usize, usize, usize) {
         let (f, x, y) = self.position(d);
         let (w, h) = self.dims();
         (f, (x as usize).min(w - 1), (y as usize).min(h - 1))
@@ -130,7 +132,7 @@ impl Grid {
     /// Solid angle per unit texel area at continuous texel coordinates (0 outside a ball):
     /// the weight of a point when a texel is cut into sub-cells.
     #[inline]
-    pub fn density(self, x: f32, y: f32) -> f32 {
+    pub(crate) fn density(self, x: f32, y: f32) -> f32 {
         match self {
             Grid::Cube(n) => {
                 let inv = 2.0 / n as f32;
@@ -199,7 +201,7 @@ impl Grid {
     }
 
     /// Every texel's solid angle, face by face, row by row.
-    pub fn solid_angles(self) -> Vec<f64> {
+    pub(crate) fn solid_angles(self) -> Vec<f64> {
         let (w, h) = self.dims();
         match self {
             Grid::Cube(n) => {
@@ -341,7 +343,11 @@ impl Peaks {
     /// `find` on a panorama, and in the same pass over it its 2x2 reduction below the
     /// ceiling (`Image::downsample_2x_rows(row_weight, ceiling)`, the same bytes): a large
     /// input is read once, not twice. Rows that hold a peak are reduced again with the ceiling.
-    pub fn find_reducing(grid: Grid, image: &Image, row_weight: &[f32]) -> (Option<Peaks>, Image) {
+    pub(crate) fn find_reducing(
+        grid: Grid,
+        image: &Image,
+        row_weight: &[f32],
+    ) -> (Option<Peaks>, Image) {
         let (w, h) = image.half_size();
         let mut half = Image::new(w, h);
         let stats: Vec<Vec<RowStats>> = half
@@ -426,7 +432,7 @@ impl Peaks {
     }
 
     /// Each colour channel clamped to the ceiling (alpha untouched): the bounded part.
-    pub fn ceiling_vec(&self) -> Vec4 {
+    pub(crate) fn ceiling_vec(&self) -> Vec4 {
         self.ceiling.extend(f32::INFINITY)
     }
 
@@ -550,7 +556,7 @@ fn merge(sorted: impl Iterator<Item = (u64, [f64; 3])>) -> Vec<(u64, [f64; 3])> 
 
 /// An environment whose lookups see the bounded part of an input, with the peaks that go on
 /// top of whatever is rendered from it.
-pub struct Split<E: Environment> {
+pub(crate) struct Split<E: Environment> {
     pub env: E,
     pub peaks: Peaks,
 }

@@ -1,5 +1,7 @@
 //! Linear-light RGBA f32 images: the one pixel type every layout, filter and writer shares.
 
+#![warn(missing_docs)]
+
 use glam::Vec4;
 
 /// How 8- and 16-bit values map to linear light. Float data is always linear.
@@ -20,12 +22,16 @@ pub const MAX_RADIANCE: f32 = 1e28;
 /// A linear RGBA f32 image, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
+    /// Columns.
     pub width: usize,
+    /// Rows.
     pub height: usize,
+    /// `width * height` pixels, row by row from the top.
     pub pixels: Vec<Vec4>,
 }
 
 impl Image {
+    /// An all-zero (transparent black) image.
     pub fn new(width: usize, height: usize) -> Self {
         Image {
             width,
@@ -37,6 +43,7 @@ impl Image {
         }
     }
 
+    /// An image of one value.
     pub fn filled(width: usize, height: usize, v: Vec4) -> Self {
         Image {
             width,
@@ -64,7 +71,11 @@ impl Image {
 
     /// Builds an image by letting `f(y, row)` fill each row, rows in parallel: for loops that
     /// keep per-row state (batches, scratch space) instead of working texel by texel.
-    pub fn from_rows(width: usize, height: usize, f: impl Fn(usize, &mut [Vec4]) + Sync) -> Self {
+    pub(crate) fn from_rows(
+        width: usize,
+        height: usize,
+        f: impl Fn(usize, &mut [Vec4]) + Sync,
+    ) -> Self {
         use rayon::prelude::*;
         let mut img = Image::new(width, height);
         if width > 0 {
@@ -76,18 +87,20 @@ impl Image {
         img
     }
 
+    /// The pixel at column `x`, row `y` (panics outside the image).
     #[inline]
     pub fn get(&self, x: usize, y: usize) -> Vec4 {
         self.pixels[y * self.width + x]
     }
 
+    /// Sets the pixel at column `x`, row `y` (panics outside the image).
     #[inline]
     pub fn set(&mut self, x: usize, y: usize, v: Vec4) {
         self.pixels[y * self.width + x] = v;
     }
 
     /// Copies a `w` x `h` block starting at (x0, y0).
-    pub fn crop(&self, x0: usize, y0: usize, w: usize, h: usize) -> Image {
+    pub(crate) fn crop(&self, x0: usize, y0: usize, w: usize, h: usize) -> Image {
         let mut out = Image::new(w, h);
         for y in 0..h {
             let src = (y0 + y) * self.width + x0;
@@ -97,7 +110,7 @@ impl Image {
     }
 
     /// Pastes `src` with its top-left corner at (x0, y0).
-    pub fn paste(&mut self, src: &Image, x0: usize, y0: usize) {
+    pub(crate) fn paste(&mut self, src: &Image, x0: usize, y0: usize) {
         for y in 0..src.height {
             let dst = (y0 + y) * self.width + x0;
             self.pixels[dst..dst + src.width]
@@ -106,7 +119,7 @@ impl Image {
     }
 
     /// Turned 180 degrees (the vertical cross stores -Z that way).
-    pub fn rotated_180(&self) -> Image {
+    pub(crate) fn rotated_180(&self) -> Image {
         let mut out = self.clone();
         out.pixels.reverse();
         out
@@ -130,7 +143,7 @@ impl Image {
 
     /// `downsample_2x` with each texel above weighted by `weight(x, y)` (the part of the
     /// sphere it covers, so a pyramid keeps the flux) and first clamped to `ceiling`.
-    pub fn downsample_2x_weighted(
+    pub(crate) fn downsample_2x_weighted(
         &self,
         weight: impl Fn(usize, usize) -> f32 + Sync,
         ceiling: Vec4,
@@ -141,7 +154,7 @@ impl Image {
 
     /// `downsample_2x_weighted` where the weight depends on the row only (a panorama's):
     /// the two rows' weights folded into two factors, four texels summed in pairs.
-    pub fn downsample_2x_rows(&self, row_weight: &[f32], ceiling: Vec4) -> Image {
+    pub(crate) fn downsample_2x_rows(&self, row_weight: &[f32], ceiling: Vec4) -> Image {
         let (w, h) = self.half_size();
         Image::from_rows(w, h, |y, out| {
             self.reduce_row_by_rows(y, out, row_weight, ceiling)
@@ -149,7 +162,7 @@ impl Image {
     }
 
     /// Row `y` of `downsample_2x_rows` into `out`.
-    pub fn reduce_row_by_rows(
+    pub(crate) fn reduce_row_by_rows(
         &self,
         y: usize,
         out: &mut [Vec4],
@@ -181,12 +194,12 @@ impl Image {
     }
 
     /// The size `downsample_2x*` gives.
-    pub fn half_size(&self) -> (usize, usize) {
+    pub(crate) fn half_size(&self) -> (usize, usize) {
         ((self.width / 2).max(1), (self.height / 2).max(1))
     }
 
     /// The source rows `y0..y1` that row `y` of the half-size image averages.
-    pub fn half_rows(&self, y: usize) -> std::ops::Range<usize> {
+    pub(crate) fn half_rows(&self, y: usize) -> std::ops::Range<usize> {
         let h = self.half_size().1;
         let sy = self.height as f32 / h as f32;
         let y0 = (y as f32 * sy) as usize;
@@ -197,7 +210,7 @@ impl Image {
     }
 
     /// Row `y` of `downsample_2x_weighted` into `out`.
-    pub fn reduce_row(
+    pub(crate) fn reduce_row(
         &self,
         y: usize,
         out: &mut [Vec4],
@@ -244,7 +257,7 @@ impl Image {
 
     /// Replaces NaN, infinite and negative values by 0, clamps values above [`MAX_RADIANCE`],
     /// and returns how many were replaced.
-    pub fn sanitize(&mut self) -> usize {
+    pub(crate) fn sanitize(&mut self) -> usize {
         use rayon::prelude::*;
         self.pixels
             .par_iter_mut()
@@ -274,7 +287,7 @@ impl Image {
 
     /// `bilinear` of the image with every texel first clamped to `ceiling` (per channel).
     #[inline]
-    pub fn bilinear_below(&self, x: f32, y: f32, wrap_x: bool, ceiling: Vec4) -> Vec4 {
+    pub(crate) fn bilinear_below(&self, x: f32, y: f32, wrap_x: bool, ceiling: Vec4) -> Vec4 {
         let fx = x - 0.5;
         let fy = y - 0.5;
         let x0 = floor_small(fx);
@@ -299,7 +312,7 @@ impl Image {
     /// image width of the image (all a projection produces), in three passes: the coordinate
     /// arithmetic in vector lanes, prefetches for every tap so many cache misses are in flight
     /// at once (a lookup at a time was bound by one miss at a time), then the texel reads.
-    pub fn bilinear_many_below(
+    pub(crate) fn bilinear_many_below(
         &self,
         x: &[f32],
         y: &[f32],
@@ -393,7 +406,7 @@ impl Image {
     }
 
     /// `bicubic` of the image with every texel first clamped to `ceiling` (per channel).
-    pub fn bicubic_below(&self, x: f32, y: f32, wrap_x: bool, ceiling: Vec4) -> Vec4 {
+    pub(crate) fn bicubic_below(&self, x: f32, y: f32, wrap_x: bool, ceiling: Vec4) -> Vec4 {
         let fx = x - 0.5;
         let fy = y - 0.5;
         let x0 = fx.floor();

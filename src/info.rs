@@ -1,6 +1,8 @@
 //! What a file or folder holds: layout, sizes, levels, pixel format, colour space and value
 //! statistics.
 
+#![warn(missing_docs)]
+
 use crate::chain::{self, LevelsFile};
 use crate::convert::{self, Source};
 use crate::cube::{CubeMap, Faces, FACE_LONG_NAMES, FACE_NAMES};
@@ -13,32 +15,48 @@ use glam::Vec4;
 use serde::Serialize;
 use std::path::Path;
 
+/// Value statistics of a file's texels, as `cubeforge info` prints them.
 #[derive(Clone, Debug, Serialize)]
 pub struct Stats {
+    /// Smallest Rec. 709 luminance, linear.
     pub min_luminance: f64,
+    /// Largest Rec. 709 luminance, linear.
     pub max_luminance: f64,
+    /// Mean Rec. 709 luminance per texel, linear (not weighted by solid angle).
     pub mean_luminance: f64,
-    /// Counts of channel values (RGBA) that are NaN, infinite, or negative.
+    /// Channel values (RGBA counted separately) that are NaN.
     pub nan: u64,
+    /// Channel values that are infinite.
     pub inf: u64,
+    /// Channel values below 0.
     pub negative: u64,
 }
 
+/// What `cubeforge info` says about one file or folder (also its `--json`).
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
+    /// The path as given.
     pub file: String,
+    /// The format of the (first) file, by content.
     pub file_format: io::FileFormat,
     /// The layout, when the shape tells it.
     pub kind: Option<Kind>,
     /// Why the layout is unknown or ambiguous.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub kind_note: Option<String>,
+    /// Image width in texels (a face's, for faces and containers).
     pub width: usize,
+    /// Image height in texels (a face's, for faces and containers).
     pub height: usize,
+    /// Edge of one cube face in texels (None where the layout is unknown).
     pub face_size: Option<usize>,
+    /// Mip levels stored (1 for plain images).
     pub mip_levels: usize,
+    /// Stored pixel format, e.g. "RGB8", "RGBA16F".
     pub pixel_format: String,
+    /// How stored values map to linear light.
     pub color_space: crate::image::ColorSpace,
+    /// Statistics over level 0, over the layout's texels only.
     pub stats: Stats,
     /// Solid-angle-weighted mean radiance per channel (R, G, B) over the sphere: what every
     /// conversion keeps (see [`crate::flux`]). None where the layout is unknown.
@@ -58,7 +76,7 @@ pub fn stats<'a>(images: impl IntoIterator<Item = &'a Image>) -> Stats {
 /// Statistics over the texels of `img` that hold part of a `kind` layout: a cross's or
 /// strip's six faces (not its empty cells), the disc of a sphere or angular map (not the
 /// corners outside it), every texel of a panorama. With no layout, every texel.
-pub fn layout_stats(kind: Option<Kind>, img: &Image) -> Stats {
+pub(crate) fn layout_stats(kind: Option<Kind>, img: &Image) -> Stats {
     match kind {
         Some(k) if k.is_cells() => stats(&layout::cross::extract(k, img)),
         Some(k) => match k.projection() {

@@ -2,6 +2,8 @@
 //! files it becomes (six faces, a container with its mips, one image), and a write that lands
 //! whole or not at all. The writing half of [`crate::io`]'s reading.
 
+#![warn(missing_docs)]
+
 use crate::convert::Output;
 use crate::cube::{CubeMap, Faces, FACE_NAMES};
 use crate::error::{Error, Result};
@@ -14,10 +16,13 @@ use std::path::{Path, PathBuf};
 /// An output: where, in which layout and format, with which options.
 #[derive(Clone, Debug)]
 pub struct Target {
+    /// Where the result goes (a folder for faces).
     pub path: PathBuf,
+    /// The layout written.
     pub kind: Kind,
     /// File type of face images (faces only; others take theirs from the name).
     pub face_format: FileFormat,
+    /// Pixel format, colour space and compression of the written files.
     pub write: WriteOptions,
     /// Mip levels of a KTX2 or DDS container (None: the full chain down to 1x1).
     pub levels: Option<usize>,
@@ -27,6 +32,7 @@ pub struct Target {
 
 /// A result as the bytes of its files, with what the encoders had to clamp.
 pub struct Encoded {
+    /// Each file's final path and its bytes, written in this order.
     pub files: Vec<(PathBuf, Vec<u8>)>,
     /// Texels beyond the format's largest value, written as that value (None: none).
     pub clamped: Option<String>,
@@ -131,7 +137,7 @@ impl Target {
 }
 
 /// The layout an output gets: `to`, checked against the name, or what the name implies.
-pub fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
+pub(crate) fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
     let by_name = FileFormat::from_extension(output);
     match (to, by_name) {
         (Some(Kind::Ktx2), Some(FileFormat::Ktx2)) | (Some(Kind::Dds), Some(FileFormat::Dds)) => {
@@ -184,7 +190,7 @@ pub fn face_format(name: &str) -> Result<FileFormat> {
 }
 
 /// Six face images `dir/px.EXT` ..., encoded in parallel. Refuses to overwrite `inputs`.
-pub fn encode_faces(
+pub(crate) fn encode_faces(
     dir: &Path,
     faces: &Faces,
     format: FileFormat,

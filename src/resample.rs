@@ -1,6 +1,8 @@
 //! Every conversion: for each output texel, its direction; look the direction up in the input.
 //! Coarse outputs are antialiased by supersampling the texel's footprint on a pyramid level.
 
+#![warn(missing_docs)]
+
 use crate::cube::{face_dir, CubeMap, Dirs, Environment, Interp, BATCH};
 use crate::flux::Grid;
 use crate::image::Image;
@@ -10,9 +12,13 @@ use glam::{Mat3, Vec3, Vec4};
 /// A rotation of the environment (degrees) and an optional handedness flip.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Orientation {
+    /// Turn about +Y, degrees (90 brings the old centre +Z to +X).
     pub yaw: f32,
+    /// Turn about +X, degrees, after yaw.
     pub pitch: f32,
+    /// Turn about +Z, degrees, after pitch.
     pub roll: f32,
+    /// Negate X of the input: the other handedness (some engines).
     pub mirror: bool,
 }
 
@@ -32,7 +38,7 @@ impl Orientation {
         }
     }
 
-    pub fn is_identity(&self) -> bool {
+    pub(crate) fn is_identity(&self) -> bool {
         *self == Orientation::default()
     }
 }
@@ -40,9 +46,11 @@ impl Orientation {
 /// How to resample: interpolation, antialiasing, orientation.
 #[derive(Clone, Copy, Debug)]
 pub struct Resampler {
+    /// Interpolation of the source's texels.
     pub interp: Interp,
     /// Supersample texels whose footprint covers more than a source texel or so.
     pub antialias: bool,
+    /// Rotation (and mirror) applied to the environment before sampling.
     pub orientation: Orientation,
 }
 
@@ -81,7 +89,7 @@ fn footprint_level(ratio: f32, sub: usize) -> usize {
 }
 
 /// The deepest pyramid level any output reads for a footprint of `ratio` source texels.
-pub fn deepest_level(ratio: f32) -> usize {
+pub(crate) fn deepest_level(ratio: f32) -> usize {
     footprint_level(ratio, MIN_SUB)
 }
 

@@ -1,6 +1,8 @@
 //! Environments defined as functions of direction: exact ground truth for tests, and the
 //! source of the project's own fixtures.
 
+#![warn(missing_docs)]
+
 use glam::{Vec3, Vec4};
 
 /// Colour from direction (each axis and its sign visible) plus a small bright marker above and

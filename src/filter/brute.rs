@@ -2,13 +2,15 @@
 //! weighted by exact texel solid angles. Slow (output x source texels) but exact: the
 //! reference the fast filters are measured against, and the irradiance default at small sizes.
 
+#![warn(missing_docs)]
+
 use super::lobe::Lobe;
 use crate::cube::{face_dir, solid_angle_table, CubeMap};
 use crate::image::Image;
 use glam::{Vec3, Vec4};
 
 /// Directions and solid angles of every texel of a face size, in face order.
-pub fn texel_table(n: usize) -> Vec<(Vec3, f32)> {
+pub(crate) fn texel_table(n: usize) -> Vec<(Vec3, f32)> {
     let inv = 1.0 / n as f32;
     let angles = solid_angle_table(n);
     let mut out = Vec::with_capacity(6 * n * n);
@@ -30,7 +32,7 @@ pub fn convolve(src: &CubeMap, lobe: Lobe, size: usize) -> [Image; 6] {
 }
 
 /// [`convolve`], calling `progress(1)` as each of the 6 x `size` output rows is done.
-pub fn convolve_with_progress(
+pub(crate) fn convolve_with_progress(
     src: &CubeMap,
     lobe: Lobe,
     size: usize,

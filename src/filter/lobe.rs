@@ -2,6 +2,8 @@
 //! one precomputed set of (local direction, weight, source lod) per level, rotated into every
 //! texel's frame and looked up trilinearly in a box-mipmapped, seamless source.
 
+#![warn(missing_docs)]
+
 use crate::cube::{face_dir, CubeMap, CubeSampler, Dirs, BATCH};
 use crate::image::Image;
 use glam::{Mat3, Vec3, Vec4};
@@ -12,17 +14,26 @@ use std::f32::consts::{PI, TAU};
 pub enum Lobe {
     /// GGX (Trowbridge-Reitz) with alpha = roughness^2, weighted by n.l, n = v = r: the
     /// split-sum radiance prefilter.
-    Ggx { alpha: f32 },
+    Ggx {
+        /// Width: roughness^2, 0 a mirror, 1 the widest.
+        alpha: f32,
+    },
     /// cos^power of the angle (Phong lobe around the reflection vector).
-    CosinePower { power: f32 },
+    CosinePower {
+        /// Exponent: higher is narrower.
+        power: f32,
+    },
     /// exp(-angle^2 / (2 sigma^2)).
-    Gaussian { sigma: f32 },
+    Gaussian {
+        /// Standard deviation, radians.
+        sigma: f32,
+    },
 }
 
 impl Lobe {
     /// Weight of a direction at cosine `c` from the lobe's axis (not normalised), as the
     /// brute-force reference integrates it.
-    pub fn weight(&self, c: f32) -> f32 {
+    pub(crate) fn weight(&self, c: f32) -> f32 {
         match *self {
             Lobe::Ggx { alpha } => {
                 if c <= 0.0 {
@@ -64,7 +75,7 @@ impl Lobe {
 
 /// GGX normal distribution D(h) for cos(n, h) = `nh`.
 #[inline]
-pub fn ggx_d(nh: f32, alpha: f32) -> f32 {
+pub(crate) fn ggx_d(nh: f32, alpha: f32) -> f32 {
     let a2 = alpha * alpha;
     let d = nh * nh * (a2 - 1.0) + 1.0;
     a2 / (PI * d * d)
@@ -72,7 +83,7 @@ pub fn ggx_d(nh: f32, alpha: f32) -> f32 {
 
 /// The i-th of n points of the Hammersley set: deterministic, low discrepancy.
 #[inline]
-pub fn hammersley(i: u32, n: u32) -> (f32, f32) {
+pub(crate) fn hammersley(i: u32, n: u32) -> (f32, f32) {
     (
         (i as f32 + 0.5) / n as f32,
         (i.reverse_bits() as f64 / 4_294_967_296.0) as f32,
@@ -82,17 +93,22 @@ pub fn hammersley(i: u32, n: u32) -> (f32, f32) {
 /// One sample of a kernel: direction in the lobe's frame (+Z is the axis), weight, source lod.
 #[derive(Clone, Copy, Debug)]
 pub struct Tap {
+    /// Sample direction in the lobe's frame (unit length, +Z the axis).
     pub dir: Vec3,
+    /// Weight in the texel's mean (the lobe value over the sampling density's).
     pub weight: f32,
+    /// Source mip level (fractional) whose texels cover the sample's solid angle.
     pub lod: f32,
     /// The lod split for the lookup: level below and the fraction towards the next.
     pub level: usize,
+    /// Fraction from `level` towards `level + 1`, in [0, 1).
     pub frac: f32,
 }
 
 /// The precomputed samples of one lobe.
 #[derive(Clone, Debug)]
 pub struct Kernel {
+    /// Samples in a fixed (Hammersley) order; those with no weight are left out.
     pub taps: Vec<Tap>,
 }
 
@@ -169,7 +185,7 @@ pub fn frame(n: Vec3) -> (Vec3, Vec3) {
 impl Lobe {
     /// The cosine below which the lobe's weight stays under 1e-10 of its peak: bright texels
     /// further out are skipped (a 10^5 sun then moves an output by under 1e-3).
-    pub fn cutoff_cos(&self) -> f32 {
+    pub(crate) fn cutoff_cos(&self) -> f32 {
         let floor = self.weight(1.0) * 1e-10;
         // The weights fall with the angle: bisect for where they cross the floor.
         let (mut lo, mut hi) = (-1.0f32, 1.0f32);
@@ -202,9 +218,11 @@ pub struct Bright {
 /// Bright texels close together: indices into `Bright::texels` and the cone around them.
 #[derive(Clone, Debug)]
 pub struct Patch {
+    /// Unit direction at the centre of the patch's cone.
     pub axis: Vec3,
     /// Angle from the axis to the furthest member.
     pub radius: f32,
+    /// Indices into `Bright::texels`.
     pub members: Vec<usize>,
 }
 
@@ -238,11 +256,11 @@ impl Bright {
 }
 
 /// Most texels handled exactly; beyond that the threshold rises.
-pub const MAX_BRIGHT: usize = 4096;
+pub(crate) const MAX_BRIGHT: usize = 4096;
 
 /// Splits `base` into a residual whose luminance is at most `ratio` times its mean (what the
 /// sampled filters see) and the excess of the brighter texels.
-pub fn split_bright(base: &CubeMap, ratio: f32) -> (CubeMap, Bright) {
+pub(crate) fn split_bright(base: &CubeMap, ratio: f32) -> (CubeMap, Bright) {
     use crate::image::luminance;
     let n = base.size();
     let table = super::brute::texel_table(n);

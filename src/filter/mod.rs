@@ -1,6 +1,8 @@
 //! Prefiltered mip chains (box, LOD-bias Gaussian, cosine power, GGX) and the diffuse side
 //! (irradiance, spherical harmonics). Every filter samples the same seamless cube map.
 
+#![warn(missing_docs)]
+
 pub mod brute;
 pub mod lobe;
 pub mod sh;
@@ -25,6 +27,7 @@ pub enum FilterKind {
 }
 
 impl FilterKind {
+    /// The name on the command line and in `levels.json`.
     pub fn name(self) -> &'static str {
         match self {
             FilterKind::Box => "box",
@@ -40,6 +43,7 @@ impl FilterKind {
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum LightingModel {
+    /// The power as cmft's mapping gives it.
     #[default]
     Phong,
     /// Phong with the n.l factor folded in: power + 1.
@@ -51,6 +55,7 @@ pub enum LightingModel {
 }
 
 impl LightingModel {
+    /// The specular power this model uses for a level of mapped power `power`.
     pub fn apply(self, power: f32) -> f32 {
         match self {
             LightingModel::Phong => power,
@@ -64,13 +69,17 @@ impl LightingModel {
 /// What to build.
 #[derive(Clone, Copy, Debug)]
 pub struct ChainOptions {
+    /// Which filter makes each level after the first.
     pub filter: FilterKind,
     /// Level count (None: down to 1 x 1).
     pub levels: Option<usize>,
     /// Importance samples per texel for gaussian, cosine and ggx.
     pub samples: u32,
+    /// Cosine only: how fast power rises with glossiness (power = 2^(scale * gloss + bias)).
     pub gloss_scale: f32,
+    /// Cosine only: the power exponent at glossiness 0 (the last level).
     pub gloss_bias: f32,
+    /// Cosine only: how each level's power is adjusted.
     pub lighting: LightingModel,
 }
 
@@ -87,33 +96,41 @@ impl Default for ChainOptions {
     }
 }
 
+/// Importance samples per texel when none are asked for: enough for smooth GGX levels at interactive sizes.
 pub const DEFAULT_SAMPLES: u32 = 64;
 
 /// Texels brighter than this many times the mean luminance are convolved exactly.
-pub const BRIGHT_RATIO: f32 = 64.0;
+pub(crate) const BRIGHT_RATIO: f32 = 64.0;
 
 /// What one level holds, for levels.json and container metadata.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LevelInfo {
+    /// Mip level, 0 the largest.
     pub level: usize,
+    /// Face edge of this level, texels.
     pub size: usize,
+    /// The chain's filter (level 0 is the source for every filter but box).
     pub filter: FilterKind,
+    /// GGX: perceptual roughness, level / (levels - 1).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub roughness: Option<f32>,
+    /// GGX: alpha = roughness^2, the value the distribution takes.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub alpha: Option<f32>,
+    /// Cosine: the specular power after the lighting model.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub power: Option<f32>,
     /// Gaussian standard deviation, radians.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub sigma: Option<f32>,
+    /// Importance samples per texel (None: the level was copied or box-reduced).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub samples: Option<u32>,
 }
 
 /// cmft's mapping of a level to a specular power: glossiness falls linearly from 1 at level
 /// 0 to 0 at the last level, power = 2^(scale * glossiness + bias).
-pub fn specular_power(level: usize, count: usize, scale: f32, bias: f32) -> f32 {
+pub(crate) fn specular_power(level: usize, count: usize, scale: f32, bias: f32) -> f32 {
     let gloss = (1.0 - level as f32 / (count as f32 - (1.0 + 1e-7))).max(0.0);
     2f32.powf(scale * gloss + bias)
 }
@@ -241,7 +258,7 @@ pub enum IrradianceMethod {
 }
 
 /// Face edge of the source copy the brute-force irradiance integrates.
-pub const IRRADIANCE_SOURCE_SIZE: usize = 64;
+pub(crate) const IRRADIANCE_SOURCE_SIZE: usize = 64;
 
 /// The Lambertian irradiance map at face edge `size`, stored as (1/pi) times the
 /// cosine-weighted integral of radiance (a constant environment c gives c), and the order-2

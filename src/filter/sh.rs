@@ -1,6 +1,8 @@
 //! Order-2 real spherical harmonics (9 coefficients per channel) of a cube map's radiance, and
 //! their convolution with the clamped cosine (Ramamoorthi and Hanrahan 2001).
 
+#![warn(missing_docs)]
+
 use super::brute::texel_table;
 use crate::cube::CubeMap;
 use glam::{Vec3, Vec4};
@@ -31,7 +33,7 @@ pub const BASIS: [(&str, i32, i32, f64); 9] = [
 ];
 
 /// The clamped-cosine convolution factors per band: pi, 2pi/3, pi/4.
-pub const COSINE_BAND: [f64; 3] = [PI, 2.0 * PI / 3.0, PI / 4.0];
+pub(crate) const COSINE_BAND: [f64; 3] = [PI, 2.0 * PI / 3.0, PI / 4.0];
 
 /// The 9 basis functions at unit direction `d`, in coefficient order.
 pub fn basis(d: Vec3) -> [f64; 9] {
@@ -81,7 +83,7 @@ pub fn irradiance(radiance: &[[f64; 3]; 9]) -> [[f64; 3]; 9] {
 }
 
 /// Evaluates coefficients at a direction.
-pub fn eval(coeffs: &[[f64; 3]; 9], d: Vec3) -> Vec4 {
+pub(crate) fn eval(coeffs: &[[f64; 3]; 9], d: Vec3) -> Vec4 {
     let y = basis(d);
     let mut out = [0.0f64; 3];
     for i in 0..9 {
@@ -95,9 +97,13 @@ pub fn eval(coeffs: &[[f64; 3]; 9], d: Vec3) -> Vec4 {
 /// What `--sh FILE.json` holds.
 #[derive(Serialize)]
 pub struct ShFile {
+    /// Highest band: 2, nine coefficients.
     pub order: u32,
+    /// Which basis and coordinate frame the coefficients are in.
     pub basis: &'static str,
+    /// (l, m) of each coefficient, in the order of the coefficient lists.
     pub ordering: Vec<[i32; 2]>,
+    /// How to evaluate each basis function, in the same order.
     pub constants: Vec<ShConstant>,
     /// Coefficients of the radiance L(d) = sum c_i Y_i(d), per channel [r, g, b].
     pub radiance: Vec<[f64; 3]>,
@@ -106,18 +112,25 @@ pub struct ShFile {
     /// Irradiance divided by pi: the value the irradiance cube map stores, and what a shader
     /// multiplies by the diffuse albedo.
     pub irradiance_over_pi: Vec<[f64; 3]>,
+    /// How a shader uses the coefficients.
     pub note: &'static str,
 }
 
+/// One basis function Y_l^m: its polynomial in (x, y, z) and constant factor.
 #[derive(Serialize)]
 pub struct ShConstant {
+    /// Band, 0 to 2.
     pub l: i32,
+    /// Index within the band, -l to l.
     pub m: i32,
+    /// Y as the constant times a polynomial in the direction's x, y, z.
     pub formula: &'static str,
+    /// The constant's value.
     pub value: f64,
 }
 
 impl ShFile {
+    /// The file for order-2 radiance coefficients (per channel, [`BASIS`] order).
     pub fn new(radiance: &[[f64; 3]; 9]) -> ShFile {
         let e = irradiance(radiance);
         ShFile {

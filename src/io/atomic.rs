@@ -7,6 +7,8 @@
 //! files: the last one to finish wins, whole. Temporaries are registered so that a signal
 //! handler ([`remove_temporaries`]) can take them back.
 
+#![warn(missing_docs)]
+
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;

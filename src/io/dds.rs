@@ -10,6 +10,8 @@
 //! The headers are parsed with `ddsfile`; every size is checked here, with checked arithmetic,
 //! against the file's length and against [`Limits`] before any texel is allocated.
 
+#![warn(missing_docs)]
+
 use super::guard::{caught, one_line};
 use super::{Decoded, FileFormat, GpuFormat, Limits, Meta};
 use crate::cube::CubeMap;

@@ -6,6 +6,8 @@
 //! allow), and every call into the crate runs behind `catch_unwind`, so a corrupt file is a
 //! one-line error, never a panic or an abort on a huge allocation.
 
+#![warn(missing_docs)]
+
 use super::{Decoded, FileFormat, Limits, Meta};
 use crate::error::{Error, Result};
 use crate::image::{ColorSpace, Image};
@@ -18,6 +20,7 @@ use std::collections::HashMap;
 use std::io::Cursor;
 use std::path::Path;
 
+/// Decodes an OpenEXR file's first RGB(A) layer; `path` names it in errors, `limits` are checked before any pixel is allocated.
 pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
     let fail = |msg: String| Error::file(path, format!("cannot decode OpenEXR: {msg}"));
     let (meta, table_start) = read_meta(bytes).map_err(fail)?;

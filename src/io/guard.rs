@@ -2,6 +2,8 @@
 //! capacity overflow): the panic is caught and becomes a message, not printed, and every
 //! message is put on one line.
 
+#![warn(missing_docs)]
+
 thread_local! {
     /// Set while this thread is inside a caught call.
     static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };

@@ -12,6 +12,8 @@
 //! checks every header field, index entry and size against the file's length with
 //! checked arithmetic, and the declared size against [`Limits`], before it allocates any texels.
 
+#![warn(missing_docs)]
+
 use super::{Decoded, FileFormat, GpuFormat, Limits, Meta};
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
@@ -179,7 +181,7 @@ fn key_value_data(extra: &[(&str, &[u8])]) -> Vec<u8> {
 
 /// Reads just the start of a KTX2 file, up to the end of its key/value data (at most 16 MiB),
 /// and returns its pairs: enough to describe a file without decoding its levels.
-pub fn metadata_from_file(path: &Path) -> Vec<(String, Vec<u8>)> {
+pub(crate) fn metadata_from_file(path: &Path) -> Vec<(String, Vec<u8>)> {
     use std::io::Read;
     if super::regular_file(path).is_err() {
         return Vec::new();

@@ -1,6 +1,8 @@
 //! Reading and writing files: codecs by content, size limits before allocation, and writes that
 //! land whole (temporary file, then rename) or not at all.
 
+#![warn(missing_docs)]
+
 pub mod atomic;
 pub mod dds;
 pub mod exr;
@@ -19,14 +21,16 @@ pub use atomic::{remove_temporaries, stage, write_all_atomic, Staged};
 /// Refuses images larger than this before any pixel memory is allocated.
 #[derive(Clone, Copy, Debug)]
 pub struct Limits {
+    /// Most pixels in one image (width x height).
     pub max_pixels: u64,
+    /// Longest edge in pixels.
     pub max_dimension: u32,
     /// Bytes a command may plan to use (default: half the machine's memory).
     pub max_memory: u64,
 }
 
 /// Half the machine's physical memory: the default memory budget.
-pub fn default_memory_budget() -> u64 {
+pub(crate) fn default_memory_budget() -> u64 {
     #[cfg(unix)]
     {
         // SAFETY: sysconf only reads system constants.
@@ -44,7 +48,7 @@ pub fn default_memory_budget() -> u64 {
 }
 
 /// Bytes as people read them (3.2 GiB, 512 MiB).
-pub fn human_bytes(b: u64) -> String {
+pub(crate) fn human_bytes(b: u64) -> String {
     if b >= 1 << 30 {
         format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
     } else {
@@ -120,7 +124,7 @@ impl Limits {
 
 impl Limits {
     /// Checks a cube map's declared face size: all six faces count against the pixel limit.
-    pub fn check_cube(&self, path: &Path, w: u64, h: u64) -> Result<()> {
+    pub(crate) fn check_cube(&self, path: &Path, w: u64, h: u64) -> Result<()> {
         self.check(path, w, h)?;
         if w.saturating_mul(h).saturating_mul(6) > self.max_pixels {
             return Err(Error::limit(
@@ -145,21 +149,30 @@ impl Limits {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum FileFormat {
+    /// PNG, 8 or 16 bits.
     Png,
+    /// JPEG, 8 bits, sRGB.
     Jpeg,
+    /// Truevision TGA, 8 bits; known by its name only.
     Tga,
+    /// Radiance HDR (RGBE).
     Hdr,
+    /// OpenEXR, half or full float.
     Exr,
+    /// KTX2 cube-map container.
     Ktx2,
+    /// DDS cube-map container.
     Dds,
 }
 
 impl FileFormat {
+    /// The format a file's name says (extension, any case); None for unknown ones.
     pub fn from_extension(path: &Path) -> Option<FileFormat> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         Self::from_ext_str(&ext)
     }
 
+    /// The format of an extension with or without its dot, any case (`hdr`, `rgbe` and `pic` are Radiance HDR).
     pub fn from_ext_str(ext: &str) -> Option<FileFormat> {
         Some(
             match ext.trim_start_matches('.').to_ascii_lowercase().as_str() {
@@ -175,7 +188,7 @@ impl FileFormat {
         )
     }
 
-    pub fn from_magic(bytes: &[u8]) -> Option<FileFormat> {
+    pub(crate) fn from_magic(bytes: &[u8]) -> Option<FileFormat> {
         let starts = |m: &[u8]| bytes.starts_with(m);
         Some(if starts(b"\x89PNG\r\n\x1a\n") {
             FileFormat::Png
@@ -194,6 +207,7 @@ impl FileFormat {
         })
     }
 
+    /// The format's name for messages ("OpenEXR").
     pub fn name(self) -> &'static str {
         match self {
             FileFormat::Png => "PNG",
@@ -206,6 +220,7 @@ impl FileFormat {
         }
     }
 
+    /// KTX2 and DDS: cube maps with mip levels, not single images.
     pub fn is_container(self) -> bool {
         matches!(self, FileFormat::Ktx2 | FileFormat::Dds)
     }
@@ -236,6 +251,7 @@ pub enum GpuFormat {
 }
 
 impl GpuFormat {
+    /// Size of one texel in bytes.
     pub fn bytes_per_texel(self) -> usize {
         match self {
             GpuFormat::Rgba16f => 8,
@@ -243,6 +259,7 @@ impl GpuFormat {
             GpuFormat::Rgba8Srgb | GpuFormat::Rgba8 => 4,
         }
     }
+    /// The format's name for messages and metadata ("RGBA16F").
     pub fn name(self) -> &'static str {
         match self {
             GpuFormat::Rgba16f => "RGBA16F",
@@ -383,6 +400,7 @@ pub fn clamp_warning<'a>(
     })
 }
 
+/// A value in [0, 1] as an 8-bit UNORM, rounded to nearest (clamped outside the range).
 #[inline]
 pub fn unorm8(v: f32) -> u8 {
     (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
@@ -391,9 +409,11 @@ pub fn unorm8(v: f32) -> u8 {
 /// What a reader found besides the pixels.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Meta {
+    /// The format read, by content.
     pub file_format: FileFormat,
     /// Stored pixel format, e.g. "RGB8", "RGBA16F".
     pub pixel_format: String,
+    /// How stored values were mapped to linear light.
     pub color_space: ColorSpace,
     /// Holds values above 1 (float formats).
     pub hdr: bool,
@@ -404,13 +424,16 @@ pub struct Meta {
 /// A decoded file: one image, or a cube map with its levels (from KTX2 or DDS).
 #[derive(Clone, Debug)]
 pub enum Decoded {
+    /// A single image (any raster format, HDR, EXR).
     Image(Image),
+    /// Six faces with their mip levels.
     Cube(CubeMap),
 }
 
 /// How to read.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ReadOptions {
+    /// Sizes refused before any pixel memory is allocated.
     pub limits: Limits,
     /// Treat 8- and 16-bit values as data: no sRGB decode.
     pub linear: bool,
@@ -455,13 +478,13 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
 
 /// Reads a whole file, refusing anything that is not a regular file first: a FIFO would block
 /// forever and a device (`/dev/zero`) read without end.
-pub fn read_file(path: &Path) -> Result<Vec<u8>> {
+pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
     regular_file(path)?;
     std::fs::read(path).map_err(|e| Error::io(path, e))
 }
 
 /// Fails unless `path` names a regular file (links followed), without opening it.
-pub fn regular_file(path: &Path) -> Result<()> {
+pub(crate) fn regular_file(path: &Path) -> Result<()> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if meta.is_file() {
         Ok(())
@@ -475,8 +498,6 @@ pub fn regular_file(path: &Path) -> Result<()> {
     }
 }
 
-/// Reads any supported file as stored, by content, with the size limit checked from the
-/// header before pixels are allocated.
 /// The bytes of a file, or of standard input for the path `-` (up to the memory budget),
 /// with the name errors should give.
 fn read_input<'a>(path: &'a Path, limits: &Limits) -> Result<(Vec<u8>, &'a Path)> {
@@ -500,6 +521,8 @@ fn read_input<'a>(path: &'a Path, limits: &Limits) -> Result<(Vec<u8>, &'a Path)
     Ok((bytes, name))
 }
 
+/// Reads any supported file as stored, by content, with the size limit checked from the
+/// header before pixels are allocated.
 pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     let (bytes, path) = read_input(path, &opts.limits)?;
     if bytes.is_empty() {
@@ -579,6 +602,7 @@ pub fn encode_cube(path: &Path, cube: &CubeMap, format: GpuFormat) -> Result<Vec
     }
 }
 
+/// The error for an output name whose extension no writer knows.
 pub fn unknown_ext(path: &Path) -> Error {
     Error::unsupported(
         path,

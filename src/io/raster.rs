@@ -1,5 +1,7 @@
 //! PNG, JPEG, TGA and Radiance HDR through the `image` crate, converted to and from linear f32.
 
+#![warn(missing_docs)]
+
 use super::guard::{caught, one_line};
 use super::{unorm8, Decoded, FileFormat, Meta, ReadOptions, WriteOptions};
 use crate::error::{Error, Result};

@@ -6,6 +6,8 @@
 //! parallel, to the crate's values bit for bit; rows encode in parallel to the same run-length
 //! scanlines any Radiance reader takes.
 
+#![warn(missing_docs)]
+
 use super::{FileFormat, Meta, ReadOptions};
 use crate::error::{Error, Result};
 use crate::image::{ColorSpace, Image};

@@ -1,6 +1,8 @@
 //! Angular maps (Debevec's light-probe format): centre -Z, rim +Z, the radius proportional to
 //! the angle from -Z, image right +X, up +Y.
 
+#![warn(missing_docs)]
+
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 

@@ -1,13 +1,15 @@
 //! Crosses and strips: the six faces placed as cells of one image, stored as they are except
 //! the vertical cross's -Z, which is turned 180 degrees.
 
+#![warn(missing_docs)]
+
 use super::Kind;
 use crate::cube::Faces;
 use crate::image::Image;
 
 /// Where one face sits: its cell (column, row) and whether it is turned 180 degrees.
 #[derive(Clone, Copy, Debug)]
-pub struct Cell {
+pub(crate) struct Cell {
     pub col: usize,
     pub row: usize,
     pub rotated: bool,
@@ -22,7 +24,7 @@ const fn c(col: usize, row: usize) -> Cell {
 }
 
 /// Grid size (columns, rows) and the cell of each face in px nx py ny pz nz order.
-pub fn cells(kind: Kind) -> Option<((usize, usize), [Cell; 6])> {
+pub(crate) fn cells(kind: Kind) -> Option<((usize, usize), [Cell; 6])> {
     Some(match kind {
         Kind::Hcross => (
             (4, 3),

@@ -1,5 +1,7 @@
 //! Equirectangular (lat-long) panoramas, 2:1: centre +Z, +X a quarter turn to the right, top row up.
 
+#![warn(missing_docs)]
+
 use glam::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 
@@ -55,7 +57,7 @@ pub fn uv_to_dir(u: f32, v: f32) -> Vec3 {
 /// Angles beyond a right angle fold back (sin(pi - a) = sin a, cos(pi - a) = -cos a), then
 /// Taylor series to the 11th and 12th power (truncation error under 6e-8 at pi/2).
 #[inline(always)]
-pub fn sin_cos(a: f32) -> (f32, f32) {
+pub(crate) fn sin_cos(a: f32) -> (f32, f32) {
     use std::f32::consts::FRAC_PI_2;
     let fold = a.abs() > FRAC_PI_2;
     let x = if fold { PI.copysign(a) - a } else { a };

@@ -1,6 +1,8 @@
 //! Layouts: each is a mapping between directions and image coordinates, written once and used
 //! both to read an input and to write an output.
 
+#![warn(missing_docs)]
+
 pub mod angular;
 pub mod cross;
 pub mod equirect;
@@ -38,6 +40,7 @@ pub enum Kind {
 }
 
 impl Kind {
+    /// The name on the command line (`--to`) and in `info`.
     pub fn name(self) -> &'static str {
         match self {
             Kind::Equirect => "equirect",
@@ -69,7 +72,7 @@ impl Kind {
     }
 
     /// Whether a `w` x `h` image can hold this layout exactly.
-    pub fn fits(self, w: usize, h: usize) -> bool {
+    pub(crate) fn fits(self, w: usize, h: usize) -> bool {
         match self {
             Kind::Equirect => w == 2 * h,
             Kind::Sphere | Kind::Angular => w == h,
@@ -132,8 +135,11 @@ pub fn detect(w: usize, h: usize) -> Result<Kind, String> {
 /// The single-image layouts addressed by direction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Projection {
+    /// Equirectangular panorama, 2:1.
     Equirect,
+    /// Mirror ball (sphere map), square.
     Sphere,
+    /// Angular map (light probe), square.
     Angular,
 }
 
@@ -219,7 +225,7 @@ impl<'a> ImageEnv<'a> {
 
     /// `below` for a panorama whose peaks are not known yet: finds them in the same pass that
     /// makes level 1 (when `levels` asks for it), and returns them with the environment.
-    pub fn split_panorama(
+    pub(crate) fn split_panorama(
         base: &'a Image,
         levels: Option<usize>,
     ) -> (ImageEnv<'a>, Option<crate::flux::Peaks>) {

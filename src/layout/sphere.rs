@@ -2,6 +2,8 @@
 //! +X, up +Y. The OpenGL sphere-map formula with the eye looking along +Z: the centre shows -Z,
 //! the rim +Z.
 
+#![warn(missing_docs)]
+
 use glam::{Vec2, Vec3};
 
 /// (s, t) of a unit direction, t pointing up (row 0 is t = 1).
