@@ -135,7 +135,7 @@ fn readme_examples_run_in_order_on_a_fresh_copy() {
         setup[1].starts_with("cargo run --release -- convert fixtures/"),
         "{setup:?}"
     );
-    assert_eq!(setup[2], "cargo test");
+    assert_eq!(setup[2], "cargo test --release");
 
     let examples = examples(&readme).unwrap_or_else(|e| panic!("{e}"));
     assert!(examples.len() >= 20, "{} examples", examples.len());
