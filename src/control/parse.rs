@@ -32,7 +32,7 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Recipe> {
     let syntax = Syntax::from_path(path)
         .ok_or_else(|| Error::file(path, "a recipe must be a .toml or .json file"))?;
     let len = std::fs::metadata(path)
-        .map_err(|e| Error::file(path, io::io_msg(&e)))?
+        .map_err(|e| Error::io(path, e))?
         .len();
     if len > MAX_RECIPE_BYTES {
         return Err(Error::file(
@@ -63,23 +63,21 @@ pub fn parse(
         match syntax {
             Syntax::Toml => toml::from_str(text).map_err(|e| {
                 let line = e.span().map(|s| line_of(text, s.start));
-                Error::file(origin, with_line(line, e.message().trim()))
+                Error::recipe(origin, line, e.message().trim())
             })?,
             Syntax::Json if !text.trim_start().starts_with('{') => {
                 let at = text.len() - text.trim_start().len();
-                return Err(Error::file(
+                return Err(Error::recipe(
                     origin,
-                    with_line(
-                        Some(line_of(text, at)),
-                        "a JSON recipe is one object: { \"size\": ..., \"reflectivity\": ... }",
-                    ),
+                    Some(line_of(text, at)),
+                    "a JSON recipe is one object: { \"size\": ..., \"reflectivity\": ... }",
                 ));
             }
             Syntax::Json => serde_json::from_str(text).map_err(|e| {
                 let msg = e.to_string();
                 let suffix = format!(" at line {} column {}", e.line(), e.column());
                 let msg = msg.strip_suffix(&suffix).unwrap_or(&msg);
-                Error::file(origin, with_line((e.line() > 0).then_some(e.line()), msg))
+                Error::recipe(origin, (e.line() > 0).then_some(e.line()), msg)
             })?,
         }
     };
@@ -97,8 +95,9 @@ pub fn parse(
             .map(|i| i + 1);
     }
     if recipe.blur.is_some() && recipe.max_lod_bias.is_none() {
-        return Err(Error::file(
+        return Err(Error::recipe(
             origin,
+            None,
             "blur is set but max_lod_bias is not: add `max_lod_bias = <mip levels>` at the top \
              (the LOD bias that blur = 1 stands for)",
         ));
@@ -114,13 +113,6 @@ fn line_of(text: &str, offset: usize) -> usize {
         .filter(|&&b| b == b'\n')
         .count()
         + 1
-}
-
-fn with_line(line: Option<usize>, msg: &str) -> String {
-    match line {
-        Some(n) => format!("line {n}: {msg}"),
-        None => msg.to_string(),
-    }
 }
 
 #[cfg(test)]

@@ -279,10 +279,7 @@ pub fn parse_toml(text: &str, path: &Path) -> Result<Material> {
             .span()
             .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
         let msg = e.message().replace('\n', " ");
-        match line {
-            Some(l) => Error::file(path, format!("line {l}: {}", msg.trim())),
-            None => Error::file(path, msg.trim().to_string()),
-        }
+        Error::recipe(path, line, msg.trim())
     })?;
     let bad = |msg: String| Error::file(path, msg);
     let d = Material::default();

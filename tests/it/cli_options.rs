@@ -353,6 +353,18 @@ fn library_errors_have_kinds() {
     let e = read(&junk, &ReadOptions::default()).unwrap_err();
     assert!(matches!(e, Error::Unsupported { .. }), "{e:?}");
     assert!(e.to_string().starts_with(&format!("{}: ", junk.display())));
+    let recipe = t.path().join("bad.toml");
+    std::fs::write(
+        &recipe,
+        "size = \"8x8\"\n[reflectivity]\nconstant = [1, 2]\n",
+    )
+    .unwrap();
+    match cubeforge::control::load(&recipe, &Limits::default()) {
+        Err(e @ Error::Recipe { line: Some(3), .. }) => {
+            assert!(e.to_string().contains("bad.toml: line 3: "), "{e}")
+        }
+        other => panic!("{:?}", other.map(|_| ())),
+    }
 }
 
 #[test]
