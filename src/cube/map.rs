@@ -18,27 +18,11 @@ pub struct CubeMap {
 impl CubeMap {
     /// Checks that six faces are square and of one size.
     pub fn from_faces(faces: Faces) -> std::result::Result<CubeMap, String> {
-        let n = faces[0].width;
-        for (i, f) in faces.iter().enumerate() {
-            if f.width != f.height {
-                return Err(format!(
-                    "face {} is {}x{}, not square",
-                    FACE_NAMES[i], f.width, f.height
-                ));
-            }
-            if f.width != n {
-                return Err(format!(
-                    "face {} is {}x{} but face px is {}x{}: all faces must be the same size",
-                    FACE_NAMES[i], f.width, f.height, n, n
-                ));
-            }
-        }
-        if n == 0 {
-            return Err("faces are empty".into());
-        }
-        Ok(CubeMap {
-            levels: vec![faces],
-        })
+        misfit(&faces, |i| format!("face {}", FACE_NAMES[i]))
+            .map(|(i, why)| Err(format!("face {} {why}", FACE_NAMES[i])))
+            .unwrap_or(Ok(CubeMap {
+                levels: vec![faces],
+            }))
     }
 
     /// Edge of level 0's faces.
@@ -116,30 +100,37 @@ pub(super) fn box_reduce_face(src: &Image, n: usize, weights: &[f32], ceiling: V
 
 /// Reads a cube map from six same-size images, naming the file of a face that does not fit.
 pub fn faces_from_images(images: Vec<Image>, names: &[std::path::PathBuf]) -> Result<CubeMap> {
-    let n = images[0].width;
-    for (i, img) in images.iter().enumerate() {
-        if img.width != img.height {
-            return Err(Error::file(
-                &names[i],
-                format!("face is {}x{}, not square", img.width, img.height),
-            ));
-        }
-        if img.width != n {
-            return Err(Error::file(
-                &names[i],
-                format!(
-                    "face is {}x{} but {} is {}x{}: all six faces must be the same size",
-                    img.width,
-                    img.height,
-                    names[0].display(),
-                    n,
-                    n
-                ),
-            ));
-        }
+    if let Some((i, why)) = misfit(&images, |i| names[i].display().to_string()) {
+        return Err(Error::file(&names[i], format!("face {why}")));
     }
     let faces: Faces = images
         .try_into()
         .map_err(|_| Error::usage("a cube map needs exactly six faces"))?;
-    CubeMap::from_faces(faces).map_err(|e| Error::file(&names[0], e))
+    Ok(CubeMap {
+        levels: vec![faces],
+    })
+}
+
+/// The first face that is empty, not square, or not the size of the first, with why; `name`
+/// says how the first face is called (a face name, a file).
+fn misfit(faces: &[Image], name: impl Fn(usize) -> String) -> Option<(usize, String)> {
+    let n = faces.first().map_or(0, |f| f.width);
+    faces.iter().enumerate().find_map(|(i, f)| {
+        let (w, h) = (f.width, f.height);
+        if w != h {
+            Some((i, format!("is {w}x{h}, not square")))
+        } else if w != n {
+            Some((
+                i,
+                format!(
+                    "is {w}x{h} but {} is {n}x{n}: all six faces must be the same size",
+                    name(0)
+                ),
+            ))
+        } else if n == 0 {
+            Some((i, "is empty".to_string()))
+        } else {
+            None
+        }
+    })
 }
