@@ -50,6 +50,7 @@ impl Loaded {
                 color_space: crate::image::ColorSpace::Linear,
                 hdr: true,
                 replaced_values: 0,
+                stored_levels: 1,
             },
             files: Vec::new(),
         }

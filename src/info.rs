@@ -242,7 +242,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 height: h,
                 // Unknown where the layout is: a square image's face is its width or half of it.
                 face_size: kind.map(|k| k.face_size(w, h)),
-                mip_levels: 1,
+                mip_levels: meta.stored_levels,
                 pixel_format: meta.pixel_format,
                 color_space: meta.color_space,
                 stats: layout_stats(kind, &img),

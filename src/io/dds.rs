@@ -208,7 +208,11 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
     if !cube {
         limits.check(path, width as u64, height as u64)?;
         let size = (width as usize, height as usize);
-        return decode_2d(bytes, path, size, format, order, data_start);
+        // As for cube maps, the count as stored; 0 means a single level.
+        let levels = (le_u32(bytes, 28).unwrap_or(0) as usize).max(1);
+        let (decoded, mut meta) = decode_2d(bytes, path, size, format, order, data_start)?;
+        meta.stored_levels = levels;
+        return Ok((decoded, meta));
     }
     limits.check_cube(path, width as u64, height as u64)?;
     if width != height {
@@ -270,7 +274,9 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         })
         .collect::<Result<Vec<_>>>()?;
 
-    Ok((Decoded::Cube(CubeMap { levels }), meta(format)))
+    let mut meta = meta(format);
+    meta.stored_levels = levels.len();
+    Ok((Decoded::Cube(CubeMap { levels }), meta))
 }
 
 /// Level 0 of a 2D texture (its size checked against the limits), as an image: its mips, when
@@ -344,5 +350,6 @@ fn meta(format: GpuFormat) -> Meta {
         },
         hdr: matches!(format, GpuFormat::Rgba16f | GpuFormat::Rgba32f),
         replaced_values: 0,
+        stored_levels: 1,
     }
 }

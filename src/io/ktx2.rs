@@ -550,6 +550,7 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         },
         hdr: is_float(format),
         replaced_values: 0,
+        stored_levels: level_count,
     };
     Ok((decoded, meta))
 }

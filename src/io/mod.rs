@@ -419,6 +419,9 @@ pub struct Meta {
     pub hdr: bool,
     /// NaN, infinite or negative values replaced by 0 on read (values above 1e28 by 1e28).
     pub replaced_values: usize,
+    /// Mip levels the file holds (1 for plain images): a 2D KTX2 or DDS is read at level 0
+    /// only, and this says how many it has.
+    pub stored_levels: usize,
 }
 
 /// A decoded file: one image, or a cube map with its levels (from KTX2 or DDS).

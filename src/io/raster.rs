@@ -117,6 +117,7 @@ pub fn decode(
         },
         hdr: float,
         replaced_values: 0,
+        stored_levels: 1,
     };
     Ok((
         Decoded::Image(Image {

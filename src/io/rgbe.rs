@@ -70,6 +70,7 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(I
         color_space: ColorSpace::Linear,
         hdr: true,
         replaced_values: 0,
+        stored_levels: 1,
     };
     Some(Ok((img, meta)))
 }

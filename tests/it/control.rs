@@ -1259,6 +1259,9 @@ fn a_ktx2_control_map_reads_back_in_info_and_preview() {
         assert!(o.status.success(), "info {format}: {}", stderr(&o));
         let out = String::from_utf8_lossy(&o.stdout);
         assert!(out.contains("KTX2") && out.contains("24 x 10"), "{out}");
+        // Its mip chain is counted, though only level 0 is read.
+        assert_eq!(meta.stored_levels, 5, "{format}");
+        assert!(out.contains("mip levels:   5"), "{out}");
 
         let ball = dir.path().join(format!("ball-{format}.png"));
         let o = cubeforge(

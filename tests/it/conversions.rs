@@ -19,6 +19,7 @@ fn meta() -> Meta {
         color_space: cubeforge::image::ColorSpace::Linear,
         hdr: true,
         replaced_values: 0,
+        stored_levels: 1,
     }
 }
 

@@ -73,6 +73,7 @@ fn panorama(img: Image) -> Loaded {
             color_space: ColorSpace::Linear,
             hdr: true,
             replaced_values: 0,
+            stored_levels: 1,
         },
         files: vec![],
     }

@@ -89,6 +89,7 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         color_space: ColorSpace::Linear,
         hdr: true,
         replaced_values: 0,
+        stored_levels: 1,
     };
     Ok((Decoded::Image(image), meta))
 }
