@@ -1,5 +1,7 @@
 //! Baking: every channel's source evaluated at the output size and packed into one image.
 
+#![warn(missing_docs)]
+
 use super::recipe::{Recipe, Size, Slot};
 use crate::error::Result;
 use crate::image::Image;
@@ -24,12 +26,15 @@ pub struct Baked {
 /// What one channel holds and where it came from.
 #[derive(Clone, Debug, Serialize)]
 pub struct ChannelUse {
+    /// The parameter (or constant `zero`/`one`) the channel carries.
     pub holds: Slot,
     /// A one-line description of the source ("checker 8x8 cells; inverted").
     pub source: String,
 }
 
 impl Recipe {
+    /// Evaluates every packed source at `size` (or the recipe's own size) and packs the planes
+    /// into one linear RGBA image; the size is checked against `limits` before allocation.
     pub fn bake(&self, size: Option<Size>, limits: &Limits) -> Result<Baked> {
         let size = self.output_size(size)?;
         let (w, h) = (size.width, size.height);

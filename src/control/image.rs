@@ -1,6 +1,8 @@
 //! Image sources: one channel of an image file, read while the recipe is parsed (so a missing
 //! or unreadable file is an error naming the recipe's line) and resized to the output.
 
+#![warn(missing_docs)]
+
 use super::resize::resize;
 use crate::image::{luminance, srgb_to_linear, Image};
 use crate::io::{self, Decoded, Limits, ReadOptions};
@@ -18,7 +20,9 @@ use std::sync::Arc;
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ImageChannel {
+    /// The image, read while the recipe was parsed (the recipe gives its path).
     pub path: ImageFile,
+    /// Which channel becomes the values, luminance by default.
     #[serde(default)]
     pub channel: Channel,
     /// Decode sRGB (painted colour) before taking the channel; 8- and 16-bit files only.
@@ -30,12 +34,16 @@ pub struct ImageChannel {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Channel {
+    /// The red channel (`r` or `red` in a recipe).
     #[serde(alias = "red")]
     R,
+    /// The green channel (`g` or `green` in a recipe).
     #[serde(alias = "green")]
     G,
+    /// The blue channel (`b` or `blue` in a recipe).
     #[serde(alias = "blue")]
     B,
+    /// The alpha channel (`a` or `alpha` in a recipe).
     #[serde(alias = "alpha")]
     A,
     /// Rec. 709 luminance of R, G and B.
@@ -62,6 +70,7 @@ pub struct ImageFile {
     pub name: String,
     /// Where it was read from.
     pub path: PathBuf,
+    /// The decoded texels, shared by every source that names the same file.
     pub image: Arc<Image>,
     /// Float data (EXR, HDR, float KTX2/DDS): never sRGB-decoded.
     pub float: bool,

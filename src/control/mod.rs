@@ -73,6 +73,8 @@
 //! Every value is checked as it is read: a missing image, an unknown key, channel or parameter,
 //! a fraction outside [0, 1] are errors naming the recipe's line.
 
+#![warn(missing_docs)]
+
 // One file per step of the way from recipe to map: the recipe's types, its parsing, the
 // sources (numbers checked as read, patterns, image channels and their resizing), baking and
 // the sidecar. Everything public is re-exported here, so callers name `control::X`.

@@ -2,6 +2,8 @@
 //! the parser still stands on the value, so its error points at the value's line (serde_json
 //! places an error where it is raised; toml at the value being read).
 
+#![warn(missing_docs)]
+
 use serde::de::{self, Deserializer, Visitor};
 use serde::Deserialize;
 use std::fmt;

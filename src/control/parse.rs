@@ -1,5 +1,7 @@
 //! Loading and parsing recipes (TOML or JSON), with every error placed on its line.
 
+#![warn(missing_docs)]
+
 use super::image::ContextGuard;
 use super::recipe::Recipe;
 use crate::error::{Error, Result};
@@ -12,7 +14,9 @@ const MAX_RECIPE_BYTES: u64 = 4 << 20;
 /// The recipe languages.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Syntax {
+    /// TOML, the usual way to write a recipe by hand.
     Toml,
+    /// JSON with the same structure, for recipes written by other tools.
     Json,
 }
 

@@ -1,6 +1,8 @@
 //! Procedural sources: gradients, checkers, stripes and value noise, each a function of the
 //! texel centre's (u, v), evaluated row by row in parallel.
 
+#![warn(missing_docs)]
+
 use super::numbers::{
     angle, cells, count, eight, eight_cells, half, middle, octaves, one_octave, origin, point,
     radius, right, unit,
@@ -12,8 +14,10 @@ use serde::Deserialize;
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LinearGradient {
+    /// Where the value is 0, `[u, v]` as fractions of the image; default the top-left corner.
     #[serde(default = "origin", deserialize_with = "point")]
     pub from: [f32; 2],
+    /// Where the value reaches 1, `[u, v]`; default the top-right corner (left to right).
     #[serde(default = "right", deserialize_with = "point")]
     pub to: [f32; 2],
 }
@@ -22,8 +26,10 @@ pub struct LinearGradient {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RadialGradient {
+    /// Where the value is 0, `[u, v]`; default the middle of the image.
     #[serde(default = "middle", deserialize_with = "point")]
     pub center: [f32; 2],
+    /// Distance at which the value reaches 1, a fraction of the image (up to 2); default 0.5.
     #[serde(default = "half", deserialize_with = "radius")]
     pub radius: f32,
 }
@@ -32,6 +38,7 @@ pub struct RadialGradient {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Checker {
+    /// Cells across and down; default 8 x 8.
     #[serde(default = "eight_cells", deserialize_with = "cells")]
     pub cells: [u32; 2],
 }
@@ -40,8 +47,10 @@ pub struct Checker {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Stripes {
+    /// Periods across the image (along the stripes' direction); default 8.
     #[serde(default = "eight", deserialize_with = "count")]
     pub count: u32,
+    /// The fraction of each period that is 1, in [0, 1]; default 0.5.
     #[serde(default = "half", deserialize_with = "unit")]
     pub width: f32,
     /// Degrees: 0 changes left to right, 90 top to bottom.
@@ -56,12 +65,16 @@ pub struct Stripes {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Noise {
+    /// Lattice cells across and down at the first octave (the noise tiles); default 8 x 8.
     #[serde(default = "eight_cells", deserialize_with = "cells")]
     pub cells: [u32; 2],
+    /// Picks the pattern: the same seed gives the same values on every run and machine.
     #[serde(default)]
     pub seed: u64,
+    /// Layers summed, each with twice the cells of the one before; default 1.
     #[serde(default = "one_octave", deserialize_with = "octaves")]
     pub octaves: u32,
+    /// Weight of each octave relative to the one before, in [0, 1]; default 0.5.
     #[serde(default = "half", deserialize_with = "unit")]
     pub persistence: f32,
 }

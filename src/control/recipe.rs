@@ -1,6 +1,8 @@
 //! The recipe itself: its size, the parameters' sources and the channel packing, as parsed.
 //! Kept apart from parsing and baking so the types read like the file format they mirror.
 
+#![warn(missing_docs)]
+
 use super::image::ImageFile;
 use super::numbers::lod_bias;
 use super::source::Source;
@@ -15,18 +17,25 @@ use std::str::FromStr;
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Recipe {
+    /// The map's size; None takes the first image's (`--size` overrides both).
     #[serde(default)]
     pub size: Option<Size>,
+    /// The LOD bias that `blur = 1` stands for; needed when blur is set.
     #[serde(default, deserialize_with = "lod_bias")]
     pub max_lod_bias: Option<f32>,
+    /// The reflectivity parameter's source (0 matte, 1 chrome).
     #[serde(default)]
     pub reflectivity: Option<Source>,
+    /// The transmittance parameter's source (0 opaque, 1 clear).
     #[serde(default)]
     pub transmittance: Option<Source>,
+    /// The blur parameter's source (a fraction of `max_lod_bias`).
     #[serde(default)]
     pub blur: Option<Source>,
+    /// The fresnel parameter's source (1 where the Fresnel term applies).
     #[serde(default)]
     pub fresnel: Option<Source>,
+    /// Which parameter each channel holds (the `[pack]` table).
     #[serde(default)]
     pub pack: Pack,
     /// The line `size` is given on, for errors about it.
@@ -37,7 +46,9 @@ pub struct Recipe {
 /// Width and height in texels; written `"512x256"`, or one number for a square.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct Size {
+    /// Texels across, 1 to 65536.
     pub width: usize,
+    /// Texels down, 1 to 65536.
     pub height: usize,
 }
 
@@ -105,9 +116,13 @@ impl<'de> Deserialize<'de> for Size {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Slot {
+    /// `lerp(decal, reflected, reflectivity)`: 0 matte, 1 chrome; R by default.
     Reflectivity,
+    /// `lerp(decal, refracted, transmittance)`: 0 opaque, 1 clear; G by default.
     Transmittance,
+    /// LOD bias of the environment lookup as a fraction of `max_lod_bias`; B by default.
     Blur,
+    /// Fresnel mask: 1 where the Fresnel term applies; A by default.
     Fresnel,
     /// Always 0.
     Zero,
@@ -116,6 +131,7 @@ pub enum Slot {
 }
 
 impl Slot {
+    /// The name a recipe and the sidecar use (`reflectivity`, ..., `zero`, `one`).
     pub fn name(self) -> &'static str {
         match self {
             Slot::Reflectivity => "reflectivity",
@@ -127,7 +143,7 @@ impl Slot {
         }
     }
     /// The four parameters in their default channels R, G, B, A.
-    pub const PARAMETERS: [Slot; 4] = [
+    pub(crate) const PARAMETERS: [Slot; 4] = [
         Slot::Reflectivity,
         Slot::Transmittance,
         Slot::Blur,
@@ -140,15 +156,19 @@ impl Slot {
 #[derive(Clone, Copy, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Pack {
+    /// What R holds; None: reflectivity.
     pub r: Option<Slot>,
+    /// What G holds; None: transmittance.
     pub g: Option<Slot>,
+    /// What B holds; None: blur.
     pub b: Option<Slot>,
+    /// What A holds; None: fresnel.
     pub a: Option<Slot>,
 }
 
 impl Pack {
     /// What R, G, B and A hold.
-    pub fn slots(&self) -> [Slot; 4] {
+    pub(crate) fn slots(&self) -> [Slot; 4] {
         let given = [self.r, self.g, self.b, self.a];
         std::array::from_fn(|i| given[i].unwrap_or(Slot::PARAMETERS[i]))
     }
@@ -156,7 +176,7 @@ impl Pack {
 
 impl Recipe {
     /// The source of a parameter (None: not in the recipe, the constant 0).
-    pub fn source(&self, slot: Slot) -> Option<&Source> {
+    pub(crate) fn source(&self, slot: Slot) -> Option<&Source> {
         match slot {
             Slot::Reflectivity => self.reflectivity.as_ref(),
             Slot::Transmittance => self.transmittance.as_ref(),
@@ -167,7 +187,7 @@ impl Recipe {
     }
 
     /// The first image the recipe names (parameters in R G B A order, depth first).
-    pub fn first_image(&self) -> Option<&ImageFile> {
+    pub(crate) fn first_image(&self) -> Option<&ImageFile> {
         Slot::PARAMETERS
             .iter()
             .filter_map(|&s| self.source(s))

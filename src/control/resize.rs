@@ -1,6 +1,8 @@
 //! Resizing a plane of values to the output size: box filter down, bilinear up, one axis at a
 //! time, so an image source of any size fits the map.
 
+#![warn(missing_docs)]
+
 use rayon::prelude::*;
 
 /// Resizes a plane: each axis on its own, with an area (box) filter when it shrinks and

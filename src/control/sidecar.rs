@@ -1,6 +1,8 @@
 //! The sidecar JSON written beside a map: what each channel holds and what blur = 1 means, so
 //! a shader or `cubeforge preview` can read the map without the recipe.
 
+#![warn(missing_docs)]
+
 use super::bake::Baked;
 use super::recipe::Slot;
 use serde::Serialize;
@@ -8,10 +10,13 @@ use serde::Serialize;
 /// The sidecar JSON written next to a map: enough for a shader or the preview to read it.
 #[derive(Clone, Debug, Serialize)]
 pub struct Sidecar {
+    /// `cubeforge` and its version, for tracing a map back to what wrote it.
     pub generator: String,
     /// The map's file name (the sidecar sits beside it).
     pub image: String,
+    /// The map's width in texels.
     pub width: usize,
+    /// The map's height in texels.
     pub height: usize,
     /// Always "linear": values are data, never sRGB-encoded.
     pub encoding: &'static str,
@@ -23,11 +28,16 @@ pub struct Sidecar {
     pub sources: SidecarChannels<String>,
 }
 
+/// One value per channel, written as a JSON object with keys `r`, `g`, `b`, `a`.
 #[derive(Clone, Debug, Serialize)]
 pub struct SidecarChannels<T> {
+    /// Red.
     pub r: T,
+    /// Green.
     pub g: T,
+    /// Blue.
     pub b: T,
+    /// Alpha.
     pub a: T,
 }
 

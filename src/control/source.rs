@@ -2,6 +2,8 @@
 //! the operations on them (remap, invert, multiply, mix), read from a number or a table and
 //! evaluated to a plane of values.
 
+#![warn(missing_docs)]
+
 use super::image::{ImageChannel, ImageFile};
 use super::numbers::{check_unit, gamma, one, pair, some_unit, unit_range};
 use super::pattern::{Checker, LinearGradient, Noise, RadialGradient, Stripes};
@@ -13,22 +15,34 @@ use std::fmt;
 /// Where a parameter's values come from, and what is done to them.
 #[derive(Clone, Debug)]
 pub struct Source {
+    /// Where the values come from.
     pub kind: Kind,
+    /// Levels, applied first.
     pub remap: Option<Remap>,
+    /// `1 - v`, after the remap.
     pub invert: bool,
+    /// Multiplied in after inverting.
     pub multiply: Option<Box<Source>>,
+    /// Blended in last.
     pub mix: Option<Box<Mix>>,
 }
 
 /// The kinds of source.
 #[derive(Clone, Debug)]
 pub enum Kind {
+    /// The same value everywhere, in [0, 1].
     Constant(f32),
+    /// One channel of an image file, resized to the output.
     Image(ImageChannel),
+    /// `linear_gradient`.
     LinearGradient(LinearGradient),
+    /// `radial_gradient`.
     RadialGradient(RadialGradient),
+    /// `checker`.
     Checker(Checker),
+    /// `stripes`.
     Stripes(Stripes),
+    /// `noise`.
     Noise(Noise),
 }
 
@@ -36,8 +50,11 @@ pub enum Kind {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(try_from = "RawRemap")]
 pub struct Remap {
+    /// The levels that become 0 and 1 (`in`); values outside are clamped. Never equal.
     pub input: [f32; 2],
+    /// What 0 and 1 then become (`out`).
     pub output: [f32; 2],
+    /// `t^(1/gamma)` between the two: above 1 brightens, like the middle slider of Levels.
     pub gamma: f32,
 }
 
@@ -70,8 +87,9 @@ impl TryFrom<RawRemap> for Remap {
 }
 
 impl Remap {
+    /// Levels applied to one value.
     #[inline]
-    pub fn apply(&self, v: f32) -> f32 {
+    pub(crate) fn apply(&self, v: f32) -> f32 {
         let [i0, i1] = self.input;
         let [o0, o1] = self.output;
         let mut t = ((v - i0) / (i1 - i0)).clamp(0.0, 1.0);
@@ -86,7 +104,9 @@ impl Remap {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Mix {
+    /// What is blended in.
     pub with: Source,
+    /// How much of it, per texel: 0 keeps the value, 1 replaces it.
     pub amount: Source,
 }
 
@@ -190,7 +210,8 @@ impl<'de> Deserialize<'de> for Source {
 }
 
 impl Source {
-    pub fn constant(v: f32) -> Source {
+    /// A constant with no operations.
+    pub(crate) fn constant(v: f32) -> Source {
         Source {
             kind: Kind::Constant(v),
             remap: None,
@@ -220,7 +241,7 @@ impl Source {
     }
 
     /// The values at `width` x `height`, rows top to bottom, each in [0, 1].
-    pub fn eval(&self, width: usize, height: usize) -> Vec<f32> {
+    pub(crate) fn eval(&self, width: usize, height: usize) -> Vec<f32> {
         let mut v = match &self.kind {
             Kind::Constant(c) => vec![*c; width * height],
             Kind::Image(i) => i.eval(width, height),
@@ -252,7 +273,7 @@ impl Source {
     }
 
     /// One line saying where the values come from and what is done to them.
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         let mut s = match &self.kind {
             Kind::Constant(c) => format!("{c}"),
             Kind::Image(i) => format!(

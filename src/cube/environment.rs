@@ -1,6 +1,8 @@
 //! What every input is sampled through: the `Environment` trait, the interpolation it is asked
 //! for, and batches of directions laid out so per-direction maths vectorises.
 
+#![warn(missing_docs)]
+
 use glam::{Vec3, Vec4};
 
 /// How a sample between texels is reconstructed.
@@ -58,9 +60,13 @@ pub const BATCH: usize = 128;
 /// maths runs four or eight lanes at a time.
 #[derive(Clone)]
 pub struct Dirs {
+    /// The x components; only the first `len` are meaningful.
     pub x: [f32; BATCH],
+    /// The y components.
     pub y: [f32; BATCH],
+    /// The z components.
     pub z: [f32; BATCH],
+    /// How many directions the batch holds, up to [`BATCH`].
     pub len: usize,
 }
 
@@ -76,12 +82,14 @@ impl Default for Dirs {
 }
 
 impl Dirs {
+    /// Direction `i` (below `len`) as a vector.
     #[inline]
     pub fn get(&self, i: usize) -> Vec3 {
         Vec3::new(self.x[i], self.y[i], self.z[i])
     }
 
-    pub fn is_full(&self) -> bool {
+    /// Whether no more directions fit: time to flush the batch.
+    pub(crate) fn is_full(&self) -> bool {
         self.len == BATCH
     }
 

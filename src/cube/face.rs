@@ -1,6 +1,8 @@
 //! Face addressing, written once: the OpenGL face-selection convention between directions and
 //! face coordinates, and the angles texels span, so every layout and filter agrees on them.
 
+#![warn(missing_docs)]
+
 use glam::Vec3;
 
 /// Faces in file and container order: +X -X +Y -Y +Z -Z.
@@ -32,13 +34,13 @@ pub fn dir_face(d: Vec3) -> (usize, f32, f32) {
 }
 
 /// Angle one texel of a face of edge `size` spans on average: a quarter turn over the edge.
-pub fn texel_angle(size: usize) -> f32 {
+pub(crate) fn texel_angle(size: usize) -> f32 {
     std::f32::consts::FRAC_PI_2 / size.max(1) as f32
 }
 
 /// Solid angle of texel (x, y) on a face of edge `n` (exact, from the area of a projected
 /// rectangle), so averages over the sphere weight texels by the part of the sphere they cover.
-pub fn texel_solid_angle(n: usize, x: usize, y: usize) -> f32 {
+pub(crate) fn texel_solid_angle(n: usize, x: usize, y: usize) -> f32 {
     let c = |i: usize| corner(n, i);
     (corner_area(c(x), c(y)) - corner_area(c(x), c(y + 1)) - corner_area(c(x + 1), c(y))
         + corner_area(c(x + 1), c(y + 1))) as f32

@@ -1,6 +1,8 @@
 //! The stored cube map: six square faces per level, built from images or a function, and its
 //! solid-angle-weighted box mips.
 
+#![warn(missing_docs)]
+
 use super::face::{face_dir, solid_angle_table, FACE_NAMES};
 use crate::error::{Error, Result};
 use crate::image::Image;
@@ -12,6 +14,8 @@ pub type Faces = [Image; 6];
 /// A cube map with one or more mip levels (level 0 the largest).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CubeMap {
+    /// The six faces of each level, in [`FACE_NAMES`] order; each level halves the edge of
+    /// the one before.
     pub levels: Vec<Faces>,
 }
 
@@ -66,7 +70,7 @@ impl CubeMap {
     }
 
     /// Applies `f` to every texel of every level.
-    pub fn map_texels(&mut self, f: impl Fn(Vec4) -> Vec4 + Sync) {
+    pub(crate) fn map_texels(&mut self, f: impl Fn(Vec4) -> Vec4 + Sync) {
         use rayon::prelude::*;
         for level in &mut self.levels {
             for face in level.iter_mut() {
@@ -99,7 +103,10 @@ pub(super) fn box_reduce_face(src: &Image, n: usize, weights: &[f32], ceiling: V
 }
 
 /// Reads a cube map from six same-size images, naming the file of a face that does not fit.
-pub fn faces_from_images(images: Vec<Image>, names: &[std::path::PathBuf]) -> Result<CubeMap> {
+pub(crate) fn faces_from_images(
+    images: Vec<Image>,
+    names: &[std::path::PathBuf],
+) -> Result<CubeMap> {
     if let Some((i, why)) = misfit(&images, |i| names[i].display().to_string()) {
         return Err(Error::file(&names[i], format!("face {why}")));
     }

@@ -1,6 +1,8 @@
 //! Cube maps: six square faces in the OpenGL face-selection convention, their mip levels,
 //! direction <-> texel mapping (written once, here) and seamless sampling across face edges.
 
+#![warn(missing_docs)]
+
 // Face addressing (face), the stored map and its mips (map), what every layout is sampled
 // through (environment), and the bordered sampler with its batched lookups (sampler). The
 // public items are re-exported here: callers name `cube::X`.
@@ -10,9 +12,8 @@ mod map;
 mod sampler;
 
 pub use environment::{Dirs, Environment, Interp, BATCH};
-pub use face::{
-    dir_face, face_dir, solid_angle_table, texel_angle, texel_solid_angle, FACE_LONG_NAMES,
-    FACE_NAMES,
-};
-pub use map::{faces_from_images, CubeMap, Faces};
+pub use face::{dir_face, face_dir, solid_angle_table, FACE_LONG_NAMES, FACE_NAMES};
+pub(crate) use face::{texel_angle, texel_solid_angle};
+pub(crate) use map::faces_from_images;
+pub use map::{CubeMap, Faces};
 pub use sampler::CubeSampler;

@@ -1,6 +1,8 @@
 //! Seamless lookups: a cube map whose faces carry a border filled from their neighbours, so
 //! bilinear and bicubic taps never leave a face, with batched lookups for the filters.
 
+#![warn(missing_docs)]
+
 use super::environment::{Dirs, Environment, Interp, BATCH};
 use super::face::{dir_face, dir_face_lanes, face_dir, solid_angle_table, texel_angle};
 use super::map::{box_reduce_face, CubeMap, Faces};
@@ -35,7 +37,11 @@ impl CubeSampler {
 
     /// `with_box_mips` with every texel first clamped to `ceiling` (per channel), so lookups
     /// see the bounded part of an input whose peaks are splatted (see [`crate::flux`]).
-    pub fn with_box_mips_below(faces: &Faces, count: Option<usize>, ceiling: Vec4) -> CubeSampler {
+    pub(crate) fn with_box_mips_below(
+        faces: &Faces,
+        count: Option<usize>,
+        ceiling: Vec4,
+    ) -> CubeSampler {
         let n = faces[0].width;
         let full = CubeMap::full_chain_len(n);
         let count = count.unwrap_or(full).clamp(1, full);
@@ -69,7 +75,7 @@ impl CubeSampler {
 
     /// Trilinear lookup: bilinear in the two levels around fractional `lod`, blended.
     #[inline]
-    pub fn sample_lod(&self, d: Vec3, lod: f32) -> Vec4 {
+    pub(crate) fn sample_lod(&self, d: Vec3, lod: f32) -> Vec4 {
         let max = (self.levels.len() - 1) as f32;
         let lod = lod.clamp(0.0, max);
         let l0 = lod as usize;

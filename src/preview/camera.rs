@@ -6,12 +6,15 @@
 //! inside), so with yaw 180 the "L" on +Z of the demo sky reads as an L. With yaw = pitch = 0
 //! the camera sits at (0, 0, D), looks along -Z, and image right is -X, image up +Y.
 
+#![warn(missing_docs)]
+
 use glam::Vec3;
 
 /// A pinhole camera; screen coordinates are in pixels, x right, y down, pixel (i, j) covering
 /// [i, i + 1) x [j, j + 1) so its centre is (i + 0.5, j + 0.5).
 #[derive(Clone, Copy, Debug)]
 pub struct Camera {
+    /// The pinhole's position, at the orbit distance from the origin.
     pub eye: Vec3,
     /// Unit view direction (towards the origin).
     pub forward: Vec3,
@@ -21,7 +24,9 @@ pub struct Camera {
     pub up: Vec3,
     /// tan(fov / 2), vertical.
     pub tan_half: f32,
+    /// Image width in pixels.
     pub width: usize,
+    /// Image height in pixels.
     pub height: usize,
 }
 
@@ -56,7 +61,7 @@ impl Camera {
     /// Direction of the ray through screen point (sx, sy): forward plus the image-plane
     /// offset at distance 1 (not normalised).
     #[inline]
-    pub fn ray(&self, sx: f32, sy: f32) -> Vec3 {
+    pub(crate) fn ray(&self, sx: f32, sy: f32) -> Vec3 {
         let aspect = self.width as f32 / self.height as f32;
         let x = (2.0 * sx / self.width as f32 - 1.0) * self.tan_half * aspect;
         let y = (1.0 - 2.0 * sy / self.height as f32) * self.tan_half;

@@ -1,6 +1,8 @@
 //! Contact sheets: several renders side by side, each labelled with a tiny built-in 5 x 7
 //! bitmap font (no font files or crates).
 
+#![warn(missing_docs)]
+
 use crate::image::Image;
 use glam::Vec4;
 
@@ -68,13 +70,20 @@ fn glyph(c: char) -> [u8; 7] {
 }
 
 /// Width in pixels of `text` at `scale` (each glyph 5 columns plus 1 of spacing).
-pub fn text_width(text: &str, scale: usize) -> usize {
+pub(crate) fn text_width(text: &str, scale: usize) -> usize {
     (text.chars().count() * 6).saturating_sub(1) * scale
 }
 
 /// Draws `text` with its top-left corner at (x, y), each font pixel a `scale` x `scale`
 /// block, clipped to the image.
-pub fn draw_text(img: &mut Image, text: &str, x: usize, y: usize, scale: usize, color: Vec4) {
+pub(crate) fn draw_text(
+    img: &mut Image,
+    text: &str,
+    x: usize,
+    y: usize,
+    scale: usize,
+    color: Vec4,
+) {
     for (i, c) in text.chars().enumerate() {
         let rows = glyph(c);
         let gx = x + i * 6 * scale;

@@ -1,6 +1,8 @@
 //! Reading what the preview shows: the environment (with its chain when it has one) and the
 //! textures on the sphere, with a control map's sidecar.
 
+#![warn(missing_docs)]
+
 use crate::convert::{self, Source};
 use crate::cube::{CubeSampler, Environment};
 use crate::error::{Error, Result};
@@ -12,6 +14,7 @@ use std::path::{Path, PathBuf};
 
 /// An environment ready for the preview, with what the user should be told about it.
 pub struct LoadedEnv {
+    /// The cube map with every level it brings, ready for seamless lookups.
     pub sampler: CubeSampler,
     /// Every file read.
     pub files: Vec<PathBuf>,
@@ -22,6 +25,8 @@ pub struct LoadedEnv {
 }
 
 impl LoadedEnv {
+    /// How many levels the chain has: 1 means no prefiltered chain, so blur and `--lod-bias`
+    /// have nothing to select.
     pub fn levels(&self) -> usize {
         Environment::levels(&self.sampler)
     }
@@ -80,7 +85,7 @@ pub fn read_texture(path: &Path, linear: bool) -> Result<Image> {
 
 /// The sidecar a control map's `max_lod_bias` is stored in: `MAP.json` (e.g. `mask.png.json`)
 /// or the map's name with `.json` for its extension (`mask.json`), whichever exists.
-pub fn control_sidecar(map: &Path) -> Option<PathBuf> {
+pub(crate) fn control_sidecar(map: &Path) -> Option<PathBuf> {
     let mut appended = map.as_os_str().to_owned();
     appended.push(".json");
     [PathBuf::from(appended), map.with_extension("json")]

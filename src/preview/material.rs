@@ -10,6 +10,8 @@
 //!
 //! with I = P - eye (not normalised where the texts do not normalise it) and N the unit normal.
 
+#![warn(missing_docs)]
+
 use crate::error::{Error, Result};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -28,7 +30,8 @@ pub enum Model {
 }
 
 impl Model {
-    pub fn name(self) -> &'static str {
+    /// The name material files and labels use.
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Model::Reflect => "reflect",
             Model::Refract => "refract",
@@ -42,6 +45,7 @@ impl Model {
 pub struct Material {
     /// Preset name or file stem (labels, messages).
     pub name: String,
+    /// Which program pair shades it.
     pub model: Model,
     /// C7E2f `reflectivity` (reflect; dispersion where a control map's Fresnel mask is 0).
     pub reflectivity: f32,
@@ -50,8 +54,12 @@ pub struct Material {
     /// `etaRatio`: incident over transmitted index of refraction; refract uses x, dispersion
     /// x, y, z for red, green, blue.
     pub eta_ratio: Vec3,
+    /// C7E5v `fresnelBias`: the reflection factor is `bias + scale * (1 + I.N)^power`,
+    /// clamped to [0, 1] (dispersion).
     pub fresnel_bias: f32,
+    /// C7E5v `fresnelScale` (dispersion).
     pub fresnel_scale: f32,
+    /// C7E5v `fresnelPower` (dispersion).
     pub fresnel_power: f32,
     /// The decal colour (linear RGB) where no decal texture is given.
     pub decal_color: Vec3,

@@ -16,6 +16,8 @@
 //! cube face (the OpenGL scale factor rho in texels, lod = log2 rho), plus `--lod-bias` and
 //! the control map's blur, trilinear between levels.
 
+#![warn(missing_docs)]
+
 pub mod camera;
 pub mod grid;
 pub mod material;
@@ -31,7 +33,7 @@ mod raster;
 mod render;
 mod shader;
 
-pub use load::{control_sidecar, load_environment, read_control, read_texture, LoadedEnv};
+pub use load::{load_environment, read_control, read_texture, LoadedEnv};
 pub use options::{Background, Options, Parallax, ParallaxMode, Shading};
 pub use render::{render, render_with_progress};
-pub use shader::{cube_lod, Control, Shader, Surface, Varyings};
+pub use shader::{Control, Shader, Surface, Varyings};

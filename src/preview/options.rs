@@ -1,6 +1,8 @@
 //! What to draw: the camera, the shading, Brennan's parallax and the background, checked
 //! together before anything is rendered.
 
+#![warn(missing_docs)]
+
 use crate::error::{Error, Result};
 use glam::{Vec3, Vec4};
 
@@ -29,8 +31,11 @@ pub enum ParallaxMode {
 /// An environment of radius `radius` centred at `center` instead of at infinity.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Parallax {
+    /// The environment sphere's radius, in radii of the shaded (unit) sphere.
     pub radius: f32,
+    /// The environment sphere's centre, in cube-map space.
     pub center: Vec3,
+    /// Which form of the correction.
     pub mode: ParallaxMode,
 }
 
@@ -38,7 +43,7 @@ impl Parallax {
     /// The lookup vector for a ray from `p` along `v` (the texts' R or T). The zero vector
     /// (total internal reflection) stays zero.
     #[inline]
-    pub fn correct(&self, v: Vec3, p: Vec3) -> Vec3 {
+    pub(crate) fn correct(&self, v: Vec3, p: Vec3) -> Vec3 {
         if v == Vec3::ZERO {
             return v;
         }
@@ -87,14 +92,17 @@ pub struct Options {
     pub yaw: f32,
     /// Orbit towards +Y, degrees.
     pub pitch: f32,
+    /// Where the vertex program runs.
     pub shading: Shading,
     /// Latitude bands of the per-vertex mesh (longitude segments: twice as many).
     pub tessellation: usize,
     /// Added to every lookup's level of detail (needs a chain).
     pub lod_bias: f32,
+    /// Brennan's correction for a nearby environment; None: at infinity.
     pub parallax: Option<Parallax>,
     /// Samples per pixel (1: the pixel centre).
     pub samples: usize,
+    /// What fills the pixels that miss the sphere.
     pub background: Background,
 }
 

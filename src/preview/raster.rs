@@ -2,6 +2,8 @@
 //! triangles binned by row, and per sample the nearest covering triangle, so section 7.2.5's
 //! interpolation artefacts appear as on a GPU.
 
+#![warn(missing_docs)]
+
 use super::camera::Camera;
 use super::shader::{Shader, Varyings};
 use super::sphere;

@@ -1,6 +1,8 @@
 //! The picture: every pixel's samples through the shader, per fragment at the exact hit or
 //! per vertex through the rasterizer, rows in parallel.
 
+#![warn(missing_docs)]
+
 use super::camera::{sample_offsets, Camera};
 use super::material::{self, Material};
 use super::options::{Background, Options, Shading};

@@ -1,6 +1,8 @@
 //! The texts' vertex and fragment programs with their uniforms bound, and the level of detail
 //! a GPU would pick for a lookup: the per-pixel work both pipelines share.
 
+#![warn(missing_docs)]
+
 use super::material::{fresnel, reflect, refract, Material, Model};
 use super::options::Parallax;
 use crate::cube::Environment;
@@ -11,7 +13,9 @@ use glam::{Vec2, Vec3, Vec4};
 /// G transmittance, B blur (a fraction of `max_lod_bias`), A Fresnel mask.
 #[derive(Clone, Copy, Debug)]
 pub struct Control<'a> {
+    /// The map, linear data, read at the sphere's (u, v).
     pub map: &'a Image,
+    /// The LOD bias that blur = 1 stands for (from the map's sidecar).
     pub max_lod_bias: f32,
 }
 
@@ -20,12 +24,14 @@ pub struct Control<'a> {
 pub struct Surface<'a> {
     /// The decal (`decalMap`); without it the material's `decal_color`.
     pub decal: Option<&'a Image>,
+    /// A control map that varies the material's parameters over the sphere.
     pub control: Option<Control<'a>>,
 }
 
 /// What the vertex stage hands the fragment stage (the texts' TEXCOORDs and COLOR).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Varyings {
+    /// The sphere's texture coordinates at the point, for the decal and control map.
     pub uv: Vec2,
     /// Lookup vectors: R (reflect), T (refract), or R, TRed, TGreen, TBlue (dispersion),
     /// after any parallax correction.
@@ -68,6 +74,8 @@ pub struct Shader<'a, E: Environment + ?Sized> {
 }
 
 impl<'a, E: Environment + ?Sized> Shader<'a, E> {
+    /// Binds the uniforms: the environment, the material, its textures, the eye position,
+    /// Brennan's parallax if any and the LOD bias added to every lookup.
     pub fn new(
         env: &'a E,
         mat: &'a Material,
@@ -195,7 +203,7 @@ fn tex2d(img: &Image, uv: Vec2) -> Vec4 {
 /// tc / |ma|), their differences scaled to texels of level 0 (`half_size` = face edge / 2),
 /// rho the longer, lod = log2(rho). A neighbour not in front of the face counts as unbounded.
 #[inline]
-pub fn cube_lod(v: Vec3, vx: Vec3, vy: Vec3, half_size: f32) -> f32 {
+pub(crate) fn cube_lod(v: Vec3, vx: Vec3, vy: Vec3, half_size: f32) -> f32 {
     let a = v.abs();
     let (axis, u, w) = if a.x >= a.y && a.x >= a.z {
         (0, 2, 1)

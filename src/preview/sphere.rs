@@ -6,6 +6,8 @@
 //! u = atan2(x, z) / 2pi wrapped to [0, 1); v runs from the north pole (+Y, v = 0) to the
 //! south pole (v = 1), v = acos(y) / pi. Row 0 of a decal or control map is v = 0.
 
+#![warn(missing_docs)]
+
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -49,15 +51,18 @@ pub fn uv(p: Vec3) -> Vec2 {
 /// A triangle mesh approximating the sphere, vertices on the sphere (so its normal there is
 /// the position), with texture coordinates seamed at u = 0 / 1 like a real mesh.
 #[derive(Clone, Debug)]
-pub struct Mesh {
+pub(crate) struct Mesh {
+    /// Vertex positions, which are also the normals.
     pub positions: Vec<Vec3>,
+    /// Texture coordinates, one per vertex.
     pub uvs: Vec<Vec2>,
+    /// Counter-clockwise seen from outside, as indices into the vertices.
     pub triangles: Vec<[u32; 3]>,
 }
 
 /// `bands` latitude bands and 2 x `bands` longitude segments: each band-segment cell is two
 /// triangles, one at the poles (where the cell's top or bottom edge is a point).
-pub fn tessellate(bands: usize) -> Mesh {
+pub(crate) fn tessellate(bands: usize) -> Mesh {
     let n = bands.max(2);
     let m = 2 * n;
     let cols = m + 1;

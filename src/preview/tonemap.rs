@@ -1,9 +1,12 @@
 //! Display transforms for tone-mapped (8-bit, sRGB) outputs: an exposure in stops, then a
 //! curve taking radiance to [0, 1]. EXR and HDR outputs keep linear radiance and skip this.
 
+#![warn(missing_docs)]
+
 use crate::image::Image;
 use glam::Vec4;
 
+/// The curve that takes exposed linear radiance to [0, 1] for an 8-bit output.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Tonemap {
