@@ -4,7 +4,7 @@
 //! Filtered lookups are exact enough on bounded radiance, but a sun a few texels wide is hit or
 //! missed by a tap, and each hit stands for a different solid angle than the sun has (43% off
 //! at some sizes). So an input is split in two, exactly: a bounded part, each channel at most
-//! [`PEAK_RATIO`] times its mean over the sphere, which the resampler looks up as before, and the
+//! `PEAK_RATIO` times its mean over the sphere, which the resampler looks up as before, and the
 //! excess above that ceiling (the peaks: a sun, a lamp), which is splatted. Each peak texel's
 //! excess radiance times its solid angle is cut into sub-cells, each sub-cell's share is added
 //! to the output texel its direction lands in, and each output texel divides what it received
