@@ -11,7 +11,7 @@ mod prefilter;
 mod preview;
 
 use clap::{Parser, Subcommand};
-use cubeforge::io::{FileFormat, GpuFormat};
+use cubeforge::io::FileFormat;
 use cubeforge::preview::tonemap::Tonemap;
 use std::time::Instant;
 
@@ -107,26 +107,20 @@ impl ToneArgs {
     /// What the target gets: the curve for 8-bit outputs; for others, None and a warning
     /// when the options were given.
     pub fn for_target(&self, target: &cubeforge::output::Target) -> Option<(f32, Tonemap)> {
+        let applies = tone_applies(&target.path, target.is_8bit(), self.exposure, self.tonemap);
         let given = self.exposure != 0.0 || self.tonemap != Tonemap::None;
-        if given && !target.is_8bit() {
-            warn(format_args!(
-                "{}: --exposure and --tonemap apply to 8-bit outputs; this one keeps linear radiance",
-                target.path.display()
-            ));
-        }
-        (given && target.is_8bit()).then_some((self.exposure, self.tonemap))
+        (given && applies).then_some((self.exposure, self.tonemap))
     }
 }
 
-/// Whether an output in `format` is tone-mapped; says so when the options are ignored.
+/// Whether an output is tone-mapped (it is stored in 8 bits); says so when the options were
+/// given for one that is not.
 pub fn tone_applies(
     output: &std::path::Path,
-    format: FileFormat,
-    gpu: GpuFormat,
+    eight_bit: bool,
     exposure: f32,
     tonemap: Tonemap,
 ) -> bool {
-    let eight_bit = cubeforge::io::largest_value(format, gpu).is_none();
     if !eight_bit && (exposure != 0.0 || tonemap != Tonemap::None) {
         warn(format_args!(
             "{}: --exposure and --tonemap apply to 8-bit outputs; this one keeps linear radiance",
@@ -219,8 +213,17 @@ pub fn progress(total: u64, prefix: String) -> Option<indicatif::ProgressBar> {
 /// quietly; any other failure (`> /dev/full`) is an error, never a panic.
 pub fn say(text: impl std::fmt::Display) -> cubeforge::Result<()> {
     use std::io::Write;
+    write_stdout(|out| writeln!(out, "{text}"))
+}
+
+/// Writes to standard output and flushes: a reader that went away ends the process quietly,
+/// any other failure is one error line.
+fn write_stdout(
+    write: impl FnOnce(&mut std::io::StdoutLock<'static>) -> std::io::Result<()>,
+) -> cubeforge::Result<()> {
+    use std::io::Write;
     let mut out = std::io::stdout().lock();
-    match writeln!(out, "{text}").and_then(|()| out.flush()) {
+    match write(&mut out).and_then(|()| out.flush()) {
         Ok(()) => Ok(()),
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
         Err(e) => Err(cubeforge::Error::usage(format!(
@@ -272,25 +275,14 @@ pub fn deliver(files: &[(std::path::PathBuf, Vec<u8>)], to_stdout: bool) -> cube
         return write_files(files);
     }
     use std::io::{IsTerminal, Write};
-    let mut out = std::io::stdout().lock();
-    if out.is_terminal() {
+    if std::io::stdout().is_terminal() {
         return Err(cubeforge::Error::usage(
             "-o -: standard output is a terminal; redirect it to a file or a pipe",
         ));
     }
-    for (_, bytes) in files {
-        match out.write_all(bytes).and_then(|()| out.flush()) {
-            Ok(()) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
-            Err(e) => {
-                return Err(cubeforge::Error::usage(format!(
-                    "cannot write to standard output: {}",
-                    cubeforge::io::io_msg(&e)
-                )))
-            }
-        }
-    }
-    Ok(())
+    files
+        .iter()
+        .try_for_each(|(_, bytes)| write_stdout(|out| out.write_all(bytes)))
 }
 
 /// On SIGINT, SIGTERM or SIGHUP: take back the temporaries written so far, then end as the

@@ -203,7 +203,12 @@ fn check(a: &Args, output: &Path) -> Result<Plan> {
                 "the preview is an image: name it .png .jpg .tga .exr or .hdr",
             ))
         }
-        Some(f) => super::tone_applies(&output, f, Default::default(), a.exposure, a.tonemap),
+        Some(f) => super::tone_applies(
+            &output,
+            io::largest_value(f, Default::default()).is_none(),
+            a.exposure,
+            a.tonemap,
+        ),
         None => return Err(io::unknown_ext(&output)),
     };
     let specs: Vec<String> = if a.grid.is_empty() {
