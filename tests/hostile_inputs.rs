@@ -12,6 +12,10 @@
 //! slowest mutation there, `HOSTILE_VERBOSE=1` prints every refusal, and every source prints its slowest mutation (for finding slow inputs by hand; no
 //! test here depends on time).
 
+#[path = "common/mod.rs"]
+mod common;
+
+use common::XorShift;
 use cubeforge::control::{self, Size, Syntax};
 use cubeforge::cube::CubeMap;
 use cubeforge::image::Image;
@@ -97,26 +101,6 @@ fn scale() -> usize {
 
 fn verbose() -> bool {
     std::env::var_os("HOSTILE_VERBOSE").is_some()
-}
-
-/// A deterministic xorshift64 generator.
-struct XorShift(u64);
-
-impl XorShift {
-    fn next(&mut self) -> u64 {
-        let mut x = self.0;
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        self.0 = x;
-        x
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn pick<'a, T>(&mut self, items: &'a [T]) -> &'a T {
-        &items[self.below(items.len())]
-    }
 }
 
 /// A header field the mutator may set to an extreme value: where, how many bytes (1, 2, 4 or

@@ -2,6 +2,7 @@
 //! (../shared/fixtures/real, skipped when absent) or from a file the exr crate writes, and
 //! must give a one-line error naming the file, never a panic or an abort.
 
+use crate::common::XorShift;
 use cubeforge::image::Image;
 use cubeforge::io::{self, Decoded, ReadOptions};
 use exr::prelude::*;
@@ -242,23 +243,6 @@ fn corrupt_dwa_sizes_of_written_files_are_refused() {
         // The file itself reads.
         read(dir.path(), "dwa.exr", &bytes, "valid DWA").unwrap();
         corrupt_dwa_sizes(&bytes, chunks, dir.path(), &format!("{compression:?}"));
-    }
-}
-
-/// A deterministic xorshift64 generator.
-struct XorShift(u64);
-
-impl XorShift {
-    fn next(&mut self) -> u64 {
-        let mut x = self.0;
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        self.0 = x;
-        x
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
     }
 }
 
