@@ -179,6 +179,31 @@ pub fn load(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Resul
     }
 }
 
+/// Loads the inputs, then keeps only level `level` of a mip chain. A prefiltered chain's
+/// folder (m0, m1, ...) gives its `mN` folder.
+pub fn load_level(
+    inputs: &[PathBuf],
+    from: Option<Kind>,
+    read: &io::ReadOptions,
+    level: usize,
+) -> Result<Loaded> {
+    if let [dir] = inputs {
+        let sub = crate::chain::level_dir(dir, level);
+        if crate::chain::is_chain_dir(dir) {
+            if !sub.is_dir() {
+                return Err(Error::file(
+                    dir,
+                    format!("no level {level}: no m{level} folder"),
+                ));
+            }
+            return load(&[sub], from, read);
+        }
+    }
+    let mut loaded = load(inputs, from, read)?;
+    loaded.keep_level(level)?;
+    Ok(loaded)
+}
+
 /// Finds px/nx/... or posx/negx/... files (any supported extension) in a folder.
 pub(crate) fn find_faces(dir: &Path) -> Result<Vec<PathBuf>> {
     let entries: Vec<PathBuf> = std::fs::read_dir(dir)

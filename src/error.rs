@@ -32,7 +32,9 @@ pub enum Error {
     Limit {
         /// The file, when the limit is about one.
         path: Option<PathBuf>,
-        /// Which limit, and the option that raises it.
+        /// Which field of [`crate::io::Limits`] refused it, so a caller can say how to raise it.
+        kind: LimitKind,
+        /// What is over the limit, and by how much.
         msg: String,
     },
     /// A well-formed file or request that cubeforge does not handle (a pixel format, a
@@ -59,6 +61,16 @@ pub enum Error {
     InvalidOption(String),
 }
 
+/// The field of [`crate::io::Limits`] an [`Error::Limit`] is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum LimitKind {
+    /// `max_pixels` or `max_dimension`: the image is too large.
+    Pixels,
+    /// `max_memory`: the work needs more memory than the budget.
+    Memory,
+}
+
 /// The result of every fallible call in cubeforge.
 pub type Result<T> = std::result::Result<T, Error>;
 
@@ -81,10 +93,12 @@ impl Error {
             source,
         }
     }
-    /// Over a limit; `msg` should name the option that raises it.
-    pub fn limit(path: Option<&Path>, msg: impl Into<String>) -> Self {
+    /// Over the limit of `kind`; `msg` says what and by how much (the caller names its own
+    /// way to raise it: the CLI adds its flag).
+    pub fn limit(path: Option<&Path>, kind: LimitKind, msg: impl Into<String>) -> Self {
         Error::Limit {
             path: path.map(Path::to_path_buf),
+            kind,
             msg: msg.into(),
         }
     }

@@ -38,4 +38,4 @@ pub mod preview;
 pub mod resample;
 pub mod synthetic;
 
-pub use error::{Error, Result};
+pub use error::{Error, LimitKind, Result};

@@ -3,7 +3,7 @@
 use super::{warn, Stages};
 use cubeforge::convert;
 use cubeforge::cube::{CubeMap, Interp};
-use cubeforge::io::{self, FileFormat, GpuFormat, WriteOptions};
+use cubeforge::io::{FileFormat, GpuFormat, WriteOptions};
 use cubeforge::layout::Kind;
 use cubeforge::output::{self, Target};
 use cubeforge::resample::{Orientation, Resampler};
@@ -96,7 +96,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
         (Kind::Faces, Some(f)) => Some(output::face_format(f)?),
         _ => None,
     };
-    let loaded = load_level(&a.inputs, a.input.from, &read, a.level)?;
+    let loaded = convert::load_level(&a.inputs, a.input.from, &read, a.level)?;
     stages.done("decode");
     if loaded.meta.replaced_values > 0 {
         warn(format!(
@@ -168,29 +168,4 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     stages.done("write");
     stages.total();
     Ok(())
-}
-
-/// Loads the inputs, then keeps only level `level` of a mip chain. A prefiltered chain's
-/// folder (m0, m1, ...) gives its `mN` folder.
-pub(super) fn load_level(
-    inputs: &[PathBuf],
-    from: Option<Kind>,
-    read: &io::ReadOptions,
-    level: usize,
-) -> Result<convert::Loaded> {
-    if let [dir] = inputs {
-        let sub = cubeforge::chain::level_dir(dir, level);
-        if cubeforge::chain::is_chain_dir(dir) {
-            if !sub.is_dir() {
-                return Err(Error::file(
-                    dir,
-                    format!("--level {level}: no m{level} folder"),
-                ));
-            }
-            return convert::load(&[sub], from, read);
-        }
-    }
-    let mut loaded = convert::load(inputs, from, read)?;
-    loaded.keep_level(level)?;
-    Ok(loaded)
 }

@@ -388,6 +388,21 @@ fn one_line(e: &clap::Error) -> String {
     parts.join("; ").trim_start_matches("error: ").to_owned()
 }
 
+/// The library names the limit; the command line says which flag raises it.
+fn how_to_raise(e: &cubeforge::Error) -> &'static str {
+    match e {
+        cubeforge::Error::Limit {
+            kind: cubeforge::LimitKind::Pixels,
+            ..
+        } => "; raise it with --max-pixels if the file is genuine",
+        cubeforge::Error::Limit {
+            kind: cubeforge::LimitKind::Memory,
+            ..
+        } => "; raise it with --max-memory",
+        _ => "",
+    }
+}
+
 pub fn run() -> i32 {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
@@ -424,8 +439,8 @@ pub fn run() -> i32 {
         Ok(()) => 0,
         Err(e) => {
             // One line, whatever the message holds (a file's text, a JSON error).
-            let e = e.to_string().replace(['\n', '\r'], " ");
-            tell(format_args!("cubeforge: error: {e}"));
+            let line = e.to_string().replace(['\n', '\r'], " ");
+            tell(format_args!("cubeforge: error: {line}{}", how_to_raise(&e)));
             1
         }
     }

@@ -12,7 +12,7 @@ pub mod raster;
 pub mod rgbe;
 
 use crate::cube::CubeMap;
-use crate::error::{Error, Result};
+use crate::error::{Error, LimitKind, Result};
 use crate::image::{ColorSpace, Image};
 use std::path::Path;
 
@@ -78,8 +78,9 @@ impl Limits {
         {
             return Err(Error::limit(
                 Some(path),
+                LimitKind::Pixels,
                 format!(
-                    "image claims {w}x{h} pixels, over the limit of {} pixels ({} per side); raise it with --max-pixels if the file is genuine",
+                    "image claims {w}x{h} pixels, over the limit of {} pixels ({} per side)",
                     self.max_pixels, self.max_dimension
                 ),
             ));
@@ -99,8 +100,9 @@ impl Limits {
         if needs > self.max_memory {
             return Err(Error::limit(
                 Some(path),
+                LimitKind::Memory,
                 format!(
-                    "{claim}, about {} of memory to decode, over the budget of {} (--max-memory)",
+                    "{claim}, about {} of memory to decode, over the budget of {}",
                     human_bytes(needs),
                     human_bytes(self.max_memory)
                 ),
@@ -112,8 +114,8 @@ impl Limits {
     /// Refuses a plan that needs more than the memory budget, naming what needs it.
     pub fn check_memory(&self, what: impl std::fmt::Display, bytes: u64) -> Result<()> {
         if bytes > self.max_memory {
-            return Err(Error::limit(None, format!(
-                "{what} needs about {} of memory, over the budget of {} (half this machine's memory by default; --max-memory)",
+            return Err(Error::limit(None, LimitKind::Memory, format!(
+                "{what} needs about {} of memory, over the budget of {} (half this machine's memory by default)",
                 human_bytes(bytes),
                 human_bytes(self.max_memory)
             )));
@@ -129,8 +131,9 @@ impl Limits {
         if w.saturating_mul(h).saturating_mul(6) > self.max_pixels {
             return Err(Error::limit(
                 Some(path),
+                LimitKind::Pixels,
                 format!(
-                    "cube map claims six {w}x{h} faces, over the limit of {} pixels; raise it with --max-pixels if the file is genuine",
+                    "cube map claims six {w}x{h} faces, over the limit of {} pixels",
                     self.max_pixels
                 ),
             ));
@@ -516,9 +519,13 @@ fn read_input<'a>(path: &'a Path, limits: &Limits) -> Result<(Vec<u8>, &'a Path)
         .read_to_end(&mut bytes)
         .map_err(|e| Error::io(name, e))?;
     if bytes.len() as u64 > limits.max_memory {
-        return Err(Error::file(
-            name,
-            "more bytes than the memory budget (--max-memory)",
+        return Err(Error::limit(
+            Some(name),
+            LimitKind::Memory,
+            format!(
+                "more than the memory budget of {}",
+                human_bytes(limits.max_memory)
+            ),
         ));
     }
     Ok((bytes, name))

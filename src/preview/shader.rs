@@ -205,13 +205,9 @@ fn tex2d(img: &Image, uv: Vec2) -> Vec4 {
 #[inline]
 pub(crate) fn cube_lod(v: Vec3, vx: Vec3, vy: Vec3, half_size: f32) -> f32 {
     let a = v.abs();
-    let (axis, u, w) = if a.x >= a.y && a.x >= a.z {
-        (0, 2, 1)
-    } else if a.y >= a.z {
-        (1, 0, 2)
-    } else {
-        (2, 0, 1)
-    };
+    // The face the GPU picks is the cube's own (ties included); its two other axes span it.
+    let axis = crate::cube::dir_face(v).0 / 2;
+    let (u, w) = [(2, 1), (0, 2), (0, 1)][axis];
     let ma = v[axis];
     if ma == 0.0 {
         return 0.0;

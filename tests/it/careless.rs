@@ -274,6 +274,7 @@ fn plans_over_the_memory_budget_are_refused_before_they_start() {
     for args in cases {
         let err = one_error_line(&args);
         assert!(err.contains("memory"), "{args:?}: {err}");
+        assert!(err.contains("--max-memory"), "{args:?}: {err}");
     }
     // Within the budget the same option works.
     let ok = run([

@@ -346,8 +346,19 @@ fn library_errors_have_kinds() {
         ..ReadOptions::default()
     };
     let e = read(Path::new(SKY_PNG), &tiny).unwrap_err();
-    assert!(matches!(e, Error::Limit { .. }), "{e:?}");
+    assert!(
+        matches!(
+            e,
+            Error::Limit {
+                kind: cubeforge::LimitKind::Pixels,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
     assert_eq!(e.path(), Some(Path::new(SKY_PNG)));
+    // The library names the limit, not a command-line flag.
+    assert!(!e.to_string().contains("--"), "{e}");
     let junk = t.path().join("junk.bin");
     std::fs::write(&junk, b"not an image").unwrap();
     let e = read(&junk, &ReadOptions::default()).unwrap_err();
