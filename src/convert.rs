@@ -327,7 +327,7 @@ fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Lo
                 Some(p) => Source::Projection(p, img),
                 None => Source::Cube(
                     CubeMap::from_faces(cross::extract(kind, &img))
-                        .map_err(|e| Error::file(path, e))?,
+                        .map_err(|e| Error::file(path, e.to_string()))?,
                 ),
             };
             (source, kind)

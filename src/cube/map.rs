@@ -21,9 +21,9 @@ pub struct CubeMap {
 
 impl CubeMap {
     /// Checks that six faces are square and of one size.
-    pub fn from_faces(faces: Faces) -> std::result::Result<CubeMap, String> {
+    pub fn from_faces(faces: Faces) -> crate::Result<CubeMap> {
         misfit(&faces, |i| format!("face {}", FACE_NAMES[i]))
-            .map(|(i, why)| Err(format!("face {} {why}", FACE_NAMES[i])))
+            .map(|(i, why)| Err(crate::Error::usage(format!("face {} {why}", FACE_NAMES[i]))))
             .unwrap_or(Ok(CubeMap {
                 levels: vec![faces],
             }))

@@ -332,12 +332,16 @@ pub fn parse_toml(text: &str, path: &Path) -> Result<Material> {
             }
         }),
     };
-    validate(&m).map_err(bad)?;
+    check(&m).map_err(bad)?;
     Ok(m)
 }
 
 /// Checks that parameters are usable: finite, blend weights in [0, 1], ratios positive.
-pub fn validate(m: &Material) -> std::result::Result<(), String> {
+pub fn validate(m: &Material) -> Result<()> {
+    check(m).map_err(Error::usage)
+}
+
+fn check(m: &Material) -> std::result::Result<(), String> {
     let unit = |name: &str, v: f32| {
         if v.is_finite() && (0.0..=1.0).contains(&v) {
             Ok(())

@@ -10,7 +10,7 @@ use super::raster::{setup_raster, Frag, NO_TRI};
 use super::shader::{Shader, Surface};
 use super::sphere;
 use crate::cube::Environment;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::image::Image;
 use glam::{Vec2, Vec3, Vec4};
 
@@ -36,7 +36,7 @@ pub fn render_with_progress<E: Environment + ?Sized>(
 ) -> Result<Image> {
     use rayon::prelude::*;
     opts.validate()?;
-    material::validate(material).map_err(Error::usage)?;
+    material::validate(material)?;
     let n = opts.size;
     let cam = Camera::new(opts.distance, opts.fov, opts.yaw, opts.pitch, n, n);
     let shader = Shader::new(
