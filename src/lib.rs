@@ -29,6 +29,7 @@ pub mod cube;
 pub mod error;
 pub mod filter;
 pub mod flux;
+pub mod ibl;
 pub mod image;
 pub mod info;
 pub mod io;

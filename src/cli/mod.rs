@@ -4,6 +4,7 @@ mod completions;
 mod control;
 mod convert;
 mod fixtures;
+mod ibl;
 mod info;
 mod irradiance;
 mod man;
@@ -45,6 +46,8 @@ pub enum Command {
     Prefilter(prefilter::Args),
     /// The diffuse side: a Lambertian irradiance cube map and 9 spherical-harmonic coefficients.
     Irradiance(irradiance::Args),
+    /// One command to the files an engine loads: specular chain, diffuse term, SH, tables.
+    Ibl(ibl::Args),
     /// Bake a control map (reflectivity, transmittance, blur, Fresnel mask) from a recipe.
     Control(control::Args),
     /// Preview a map on a sphere: reflection, refraction, Fresnel and dispersion (Cg Tutorial ch. 7).
@@ -429,6 +432,7 @@ pub fn run() -> i32 {
         Command::Info(a) => info::run(a),
         Command::Prefilter(a) => prefilter::run(a, cli.verbose),
         Command::Irradiance(a) => irradiance::run(a, cli.verbose),
+        Command::Ibl(a) => ibl::run(a, cli.verbose),
         Command::Control(a) => control::run(a, cli.verbose),
         Command::Preview(a) => preview::run(a, cli.verbose),
         Command::Completions(a) => completions::run(a),

@@ -207,8 +207,18 @@ pub fn prefilter(
     opts: &ChainOptions,
     progress: &(dyn Fn(usize) + Sync),
 ) -> (CubeMap, Vec<LevelInfo>) {
+    let plan = plan(opts, base.size());
+    prefilter_planned(base, opts, plan, progress)
+}
+
+/// [`prefilter`] with a plan the caller adjusted (e.g. another roughness per level).
+pub fn prefilter_planned(
+    base: &CubeMap,
+    opts: &ChainOptions,
+    plan: Vec<(LevelInfo, Option<Lobe>)>,
+    progress: &(dyn Fn(usize) + Sync),
+) -> (CubeMap, Vec<LevelInfo>) {
     let n = base.size();
-    let plan = plan(opts, n);
     if opts.filter == FilterKind::Box {
         let chain = CubeMap {
             levels: vec![base.levels[0].clone()],

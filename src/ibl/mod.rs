@@ -1,0 +1,285 @@
+//! Image-based lighting as each engine loads it: one call from any input to the files of a
+//! target (specular chain, diffuse term, SH, lookup tables), in the engine's orientation,
+//! roughness-per-level mapping, container and pixel format, with the snippet that loads them.
+//!
+//! Everything is computed once in cube-map space ([`Lighting`]); an engine only chooses sizes,
+//! how roughness spreads over the levels, the turn or mirror its shaders expect, and how the
+//! result is packed ([`engines`]).
+
+#![warn(missing_docs)]
+
+pub mod engines;
+
+use crate::convert::{self, Loaded};
+use crate::cube::CubeMap;
+use crate::error::{Error, Result};
+use crate::filter::lobe::Lobe;
+use crate::filter::{self, ChainOptions, FilterKind, IrradianceMethod, LevelInfo};
+use crate::io::GpuFormat;
+use crate::resample::{Orientation, Resampler};
+use std::path::{Path, PathBuf};
+
+/// The engines (and engine families) `ibl` writes for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Engine {
+    /// Bevy's `EnvironmentMapLight`: specular and diffuse KTX2 cube maps.
+    Bevy,
+    /// The Khronos glTF Sample Viewer (glTF-IBL-Sampler's files): GGX, Lambertian and
+    /// Charlie KTX2 cube maps and the BRDF lookup tables.
+    Gltf,
+    /// Babylon.js: one `.env` file.
+    Babylon,
+    /// Filament (what cmgen deploys): KTX1 specular and irradiance cube maps, SH, a skybox.
+    Filament,
+    /// Godot 4: an equirect panorama for a `PanoramaSkyMaterial` (Godot filters it itself).
+    Godot,
+    /// Unity: an equirect EXR imported as a cube map (Unity filters it itself).
+    Unity,
+    /// Unreal: an equirect HDR imported as a TextureCube (Unreal filters it itself).
+    Unreal,
+    /// No engine in particular: KTX2 specular and diffuse, SH as JSON, a DFG table.
+    Generic,
+}
+
+impl Engine {
+    /// The name on the command line and in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Engine::Bevy => "bevy",
+            Engine::Gltf => "gltf",
+            Engine::Babylon => "babylon",
+            Engine::Filament => "filament",
+            Engine::Godot => "godot",
+            Engine::Unity => "unity",
+            Engine::Unreal => "unreal",
+            Engine::Generic => "generic",
+        }
+    }
+}
+
+/// How perceptual roughness spreads over a specular chain's levels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RoughnessMapping {
+    /// Level m of L holds roughness m / (L - 1) (Bevy, the glTF Sample Viewer, cubeforge).
+    Linear,
+    /// Filament: lod = m / (L - 1) and roughness = 1 - sqrt(1 - lod), so the small levels,
+    /// which cost least, hold the rough end.
+    Filament,
+}
+
+impl RoughnessMapping {
+    /// Perceptual roughness of level `m` of a chain of `count` levels.
+    pub fn roughness(self, m: usize, count: usize) -> f32 {
+        let lod = if count > 1 {
+            m as f32 / (count - 1) as f32
+        } else {
+            0.0
+        };
+        match self {
+            RoughnessMapping::Linear => lod,
+            RoughnessMapping::Filament => 1.0 - (1.0 - lod).max(0.0).sqrt(),
+        }
+    }
+}
+
+/// What a caller may change; None takes the engine's default.
+#[derive(Clone, Debug, Default)]
+pub struct IblOptions {
+    /// File names start with this (`NAME_specular.ktx2`); default "env".
+    pub name: Option<String>,
+    /// Face edge of the specular chain's level 0.
+    pub specular_size: Option<usize>,
+    /// The specular chain stops at this face edge.
+    pub min_size: Option<usize>,
+    /// Face edge of the diffuse (irradiance) cube map.
+    pub diffuse_size: Option<usize>,
+    /// Importance samples per texel of the first convolved level.
+    pub samples: Option<u32>,
+    /// Pixel format of the KTX2/DDS containers.
+    pub gpu_format: Option<GpuFormat>,
+    /// Zstandard level for KTX2 supercompression (None: none).
+    pub zstd: Option<i32>,
+    /// glTF: also the Charlie (sheen) chain.
+    pub sheen: bool,
+    /// Turn the environment about +Y first (degrees; 90 brings +Z to +X), e.g. to put the sun
+    /// where the scene wants it.
+    pub yaw: f32,
+}
+
+/// The files for one engine, and how to load them.
+#[derive(Debug)]
+pub struct Delivery {
+    /// Each file's path and bytes.
+    pub files: Vec<(PathBuf, Vec<u8>)>,
+    /// Code (or import steps) that loads the files in the engine.
+    pub snippet: String,
+    /// The specular chain's levels, as written.
+    pub levels: Vec<LevelInfo>,
+    /// Texels beyond a format's range, written as its largest value (None: none).
+    pub clamped: Option<String>,
+}
+
+/// Everything an engine's files are made of, in cube-map space after the engine's turn.
+pub struct Lighting {
+    /// The GGX chain, level 0 the mirror image.
+    pub specular: CubeMap,
+    /// What each level holds.
+    pub levels: Vec<LevelInfo>,
+    /// The Lambertian irradiance cube, over pi (a white environment gives 1).
+    pub diffuse: CubeMap,
+    /// Order-2 SH of the radiance, [`crate::filter::sh::BASIS`] order.
+    pub sh: [[f64; 3]; 9],
+}
+
+/// Face edges and mappings an engine uses by default.
+#[derive(Clone, Copy, Debug)]
+pub struct Defaults {
+    /// Specular level 0.
+    pub specular_size: usize,
+    /// Smallest specular level.
+    pub min_size: usize,
+    /// Irradiance cube.
+    pub diffuse_size: usize,
+    /// Roughness per level.
+    pub mapping: RoughnessMapping,
+    /// The engine's view of cube-map space: applied to the environment before filtering.
+    pub orientation: Orientation,
+}
+
+/// Levels in a chain from `size` down to `min_size` (at least 1).
+pub fn chain_len(size: usize, min_size: usize) -> usize {
+    let mut n = 1;
+    let mut s = size;
+    while s / 2 >= min_size.max(1) && s > 1 {
+        s /= 2;
+        n += 1;
+    }
+    n
+}
+
+/// Builds the specular chain, irradiance and SH for `engine` from `loaded`, then packs them as
+/// the engine loads them into files under `out`. `progress` hears each finished stage's name.
+pub fn deliver(
+    loaded: &Loaded,
+    engine: Engine,
+    out: &Path,
+    opts: &IblOptions,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Delivery> {
+    let d = engines::defaults(engine);
+    let specular_size = opts.specular_size.unwrap_or(d.specular_size);
+    let min_size = opts.min_size.unwrap_or(d.min_size);
+    let diffuse_size = opts.diffuse_size.unwrap_or(d.diffuse_size);
+    for (what, v) in [
+        ("specular size", specular_size),
+        ("diffuse size", diffuse_size),
+    ] {
+        if v == 0 || v > 8192 {
+            return Err(Error::usage(format!("{what} {v}: use 1 to 8192")));
+        }
+    }
+    if min_size == 0 || min_size > specular_size {
+        return Err(Error::usage(format!(
+            "min size {min_size}: use 1 to the specular size ({specular_size})"
+        )));
+    }
+    let name = opts.name.clone().unwrap_or_else(|| "env".into());
+    if name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.') {
+        return Err(Error::usage(format!(
+            "name {name:?}: a plain file-name stem (no folders, not hidden)"
+        )));
+    }
+    let lighting = compute(
+        loaded,
+        &d,
+        opts,
+        specular_size,
+        min_size,
+        diffuse_size,
+        progress,
+    );
+    let ctx = engines::Context {
+        out,
+        name: &name,
+        opts,
+        inputs: &loaded.files,
+        loaded,
+    };
+    let mut delivery = engines::pack(engine, &lighting, &ctx)?;
+    crate::output::refuse_inputs(
+        &delivery
+            .files
+            .iter()
+            .map(|f| f.0.clone())
+            .collect::<Vec<_>>(),
+        &loaded.files,
+    )?;
+    delivery.levels = lighting.levels;
+    Ok(delivery)
+}
+
+/// The chain, irradiance and SH of `loaded`, turned as the engine expects.
+fn compute(
+    loaded: &Loaded,
+    d: &Defaults,
+    opts: &IblOptions,
+    specular_size: usize,
+    min_size: usize,
+    diffuse_size: usize,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Lighting {
+    let orientation = combine(opts.yaw, d.orientation);
+    let resampler = Resampler {
+        orientation,
+        ..Resampler::default()
+    };
+    let base = convert::to_cube(loaded, specular_size, &resampler);
+    progress("resample");
+    let count = chain_len(specular_size, min_size);
+    let chain_opts = ChainOptions {
+        filter: FilterKind::Ggx,
+        levels: Some(count),
+        samples: opts.samples.unwrap_or(filter::DEFAULT_SAMPLES),
+        ..ChainOptions::default()
+    };
+    let mut plan = filter::plan(&chain_opts, specular_size);
+    for (info, lobe) in &mut plan {
+        let r = d.mapping.roughness(info.level, count);
+        info.roughness = Some(r);
+        info.alpha = Some(r * r);
+        if lobe.is_some() {
+            *lobe = Some(Lobe::Ggx { alpha: r * r });
+        }
+    }
+    let (specular, levels) = filter::prefilter_planned(&base, &chain_opts, plan, &|_| {});
+    progress("specular");
+    // The irradiance integral needs no more than 256 faces of the turned source.
+    let small = if specular_size > 256 {
+        convert::to_cube(loaded, 256, &resampler)
+    } else {
+        base
+    };
+    let (diffuse, sh) = filter::irradiance(&small, diffuse_size, IrradianceMethod::Brute);
+    progress("diffuse");
+    Lighting {
+        specular,
+        levels,
+        diffuse,
+        sh,
+    }
+}
+
+/// The caller's turn about +Y first, then the engine's view (a turn about +Y and perhaps a
+/// mirror of X): the lookup matrices multiply as R(-a) D R(-b) = D R(a - b) with D the mirror.
+fn combine(yaw: f32, engine: Orientation) -> Orientation {
+    Orientation {
+        yaw: if engine.mirror {
+            engine.yaw - yaw
+        } else {
+            engine.yaw + yaw
+        },
+        ..engine
+    }
+}
