@@ -22,6 +22,8 @@ pub struct Context<'a> {
     pub inputs: &'a [PathBuf],
     /// The input, for targets that ship the environment itself (skyboxes, panoramas).
     pub loaded: &'a Loaded,
+    /// The caller's turn, then the engine's view of cube-map space.
+    pub orientation: Orientation,
 }
 
 impl Context<'_> {
@@ -30,7 +32,8 @@ impl Context<'_> {
     }
 }
 
-/// Sizes, roughness mapping and orientation of each engine.
+/// Sizes, roughness mapping and orientation of each engine (the sources of each choice are
+/// in the README's `ibl` table).
 pub fn defaults(engine: Engine) -> Defaults {
     let linear = |specular_size, min_size, diffuse_size| Defaults {
         specular_size,
@@ -40,22 +43,96 @@ pub fn defaults(engine: Engine) -> Defaults {
         orientation: Orientation::default(),
     };
     match engine {
-        Engine::Bevy => linear(512, 1, 32),
-        Engine::Gltf => linear(256, 1, 64),
-        Engine::Babylon => linear(256, 1, 32),
+        // Bevy looks its cube maps up at (x, y, -z) of the world direction: the cube as is.
+        Engine::Bevy => linear(512, 8, 32),
+        // glTF-IBL-Sampler's cubes hold the panorama at u = 0.5 + atan2(z, x) / 2pi: X and Z
+        // swapped, which is a mirror of X after a quarter turn; the Sample Viewer turns it back
+        // with its default 90-degree environment rotation.
+        Engine::Gltf => Defaults {
+            orientation: Orientation {
+                yaw: 90.0,
+                mirror: true,
+                ..Orientation::default()
+            },
+            ..linear(256, 16, 64)
+        },
+        // Babylon (left-handed) looks the cube up with the world direction: as is.
+        Engine::Babylon => Defaults {
+            mapping: RoughnessMapping::Babylon,
+            ..linear(256, 1, 32)
+        },
+        // cmgen mirrors X by default, and Filament looks the cube up with the world direction.
         Engine::Filament => Defaults {
             mapping: RoughnessMapping::Filament,
+            orientation: Orientation {
+                mirror: true,
+                ..Orientation::default()
+            },
             ..linear(256, 16, 32)
         },
+        // These filter the panorama themselves; sizes do not apply.
         Engine::Godot | Engine::Unity | Engine::Unreal => linear(512, 1, 32),
-        Engine::Generic => linear(256, 1, 32),
+        Engine::Generic => linear(256, 8, 32),
     }
+}
+
+/// Engines that import a panorama and prefilter it themselves.
+pub fn filters_itself(engine: Engine) -> bool {
+    matches!(engine, Engine::Godot | Engine::Unity | Engine::Unreal)
+}
+
+/// The panorama an engine that filters for itself imports, with the import settings to pick.
+pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<Delivery> {
+    use crate::layout::Kind;
+    let (ext, snippet) = match engine {
+        Engine::Godot => (
+            "exr",
+            "Godot 4: WorldEnvironment > Environment > Sky > PanoramaSkyMaterial, panorama = {f}\n\
+             (Sky: Radiance Size 256 or more, Process Mode Automatic or High Quality Incremental).\n\
+             The panorama's centre faces world +Z (behind the default camera, which looks along -Z).",
+        ),
+        Engine::Unity => (
+            "exr",
+            "Unity: import {f} with Texture Shape = Cube, Mapping = Latitude-Longitude Layout\n\
+             (Cylindrical), Convolution Type = Specular (Glossy Reflection); use it as the skybox\n\
+             (Skybox/Cubemap material) or a Reflection Probe's custom cubemap.",
+        ),
+        _ => (
+            "hdr",
+            "Unreal: import {f}: a long-lat .hdr becomes a TextureCube; set it as the Sky Light's\n\
+             Cubemap (Source Type: SLS Specified Cubemap) and in an HDRI Backdrop. The panorama's\n\
+             centre faces world -Y.",
+        ),
+    };
+    let face = size
+        .unwrap_or_else(|| ctx.loaded.face_size())
+        .clamp(1, 8192);
+    let resampler = crate::resample::Resampler {
+        orientation: ctx.orientation,
+        ..crate::resample::Resampler::default()
+    };
+    let img = crate::convert::to_image(ctx.loaded, Kind::Equirect, face, &resampler);
+    let path = ctx.path(&format!(".{ext}"));
+    let bytes = io::encode_image(&path, &img, &io::WriteOptions::default())?;
+    let clamped = io::clamp_warning(
+        &path,
+        FileFormat::from_ext_str(ext).unwrap_or(FileFormat::Exr),
+        GpuFormat::Rgba16f,
+        [&img],
+    );
+    Ok(Delivery {
+        snippet: snippet.replace("{f}", &file_name(&path)),
+        files: vec![(path, bytes)],
+        levels: Vec::new(),
+        clamped,
+    })
 }
 
 /// Packs the computed lighting as `engine` loads it.
 pub fn pack(engine: Engine, l: &Lighting, ctx: &Context) -> Result<Delivery> {
     match engine {
         Engine::Bevy => bevy(l, ctx),
+        Engine::Gltf => gltf(l, ctx),
         Engine::Generic => generic(l, ctx),
         _ => Err(crate::Error::usage(format!(
             "--target {} is not available yet",
@@ -114,6 +191,31 @@ commands.spawn((
 ));"#,
         d = file_name(&diff),
         s = file_name(&spec),
+    );
+    Ok(Delivery {
+        clamped: clamped(&spec, format, &[&l.specular, &l.diffuse]),
+        files,
+        snippet,
+        levels: Vec::new(),
+    })
+}
+
+fn gltf(l: &Lighting, ctx: &Context) -> Result<Delivery> {
+    let format = ctx.opts.gpu_format.unwrap_or(GpuFormat::Rgba16f);
+    let spec = ctx.path("_ggx.ktx2");
+    let diff = ctx.path("_lambertian.ktx2");
+    let files = vec![
+        (spec.clone(), ktx2(&l.specular, Some(&describe(l)), format)),
+        (diff.clone(), ktx2(&l.diffuse, None, format)),
+    ];
+    let snippet = format!(
+        "glTF (Khronos glTF Sample Viewer, glTF-IBL-Sampler's files and orientation):\n\
+         u_GGXEnvSampler = {s} ({n} levels, lod = roughness * (u_MipCount - 1)),\n\
+         u_LambertianEnvSampler = {d}; keep u_EnvRotation at its default 90 degrees about +Y\n\
+         (the panorama's centre then faces world +Z, the front of glTF assets).",
+        s = file_name(&spec),
+        d = file_name(&diff),
+        n = l.specular.levels.len(),
     );
     Ok(Delivery {
         clamped: clamped(&spec, format, &[&l.specular, &l.diffuse]),

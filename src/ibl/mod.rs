@@ -67,11 +67,14 @@ pub enum RoughnessMapping {
     /// Filament: lod = m / (L - 1) and roughness = 1 - sqrt(1 - lod), so the small levels,
     /// which cost least, hold the rough end.
     Filament,
+    /// Babylon.js: level m of a chain of level-0 width w holds GGX alpha = 2^(m / 0.8) / w
+    /// (its `lodGenerationScale` 0.8), up to 1; roughness = sqrt(alpha).
+    Babylon,
 }
 
 impl RoughnessMapping {
-    /// Perceptual roughness of level `m` of a chain of `count` levels.
-    pub fn roughness(self, m: usize, count: usize) -> f32 {
+    /// Perceptual roughness of level `m` of a chain of `count` levels from faces of `size`.
+    pub fn roughness(self, m: usize, count: usize, size: usize) -> f32 {
         let lod = if count > 1 {
             m as f32 / (count - 1) as f32
         } else {
@@ -80,9 +83,17 @@ impl RoughnessMapping {
         match self {
             RoughnessMapping::Linear => lod,
             RoughnessMapping::Filament => 1.0 - (1.0 - lod).max(0.0).sqrt(),
+            RoughnessMapping::Babylon if m == 0 => 0.0,
+            RoughnessMapping::Babylon => {
+                let alpha = (2f32.powf(m as f32 / BABYLON_LOD_SCALE) / size as f32).min(1.0);
+                alpha.sqrt()
+            }
         }
     }
 }
+
+/// Babylon's `lodGenerationScale`: its shaders pick lod = log2(width * alpha) * 0.8.
+pub const BABYLON_LOD_SCALE: f32 = 0.8;
 
 /// What a caller may change; None takes the engine's default.
 #[derive(Clone, Debug, Default)]
@@ -191,23 +202,30 @@ pub fn deliver(
             "name {name:?}: a plain file-name stem (no folders, not hidden)"
         )));
     }
-    let lighting = compute(
-        loaded,
-        &d,
-        opts,
-        specular_size,
-        min_size,
-        diffuse_size,
-        progress,
-    );
     let ctx = engines::Context {
         out,
         name: &name,
         opts,
         inputs: &loaded.files,
         loaded,
+        orientation: combine(opts.yaw, d.orientation),
     };
-    let mut delivery = engines::pack(engine, &lighting, &ctx)?;
+    let delivery = if engines::filters_itself(engine) {
+        engines::panorama(engine, &ctx, opts.specular_size)?
+    } else {
+        let lighting = compute(
+            loaded,
+            &d,
+            &ctx,
+            specular_size,
+            min_size,
+            diffuse_size,
+            progress,
+        );
+        let mut delivery = engines::pack(engine, &lighting, &ctx)?;
+        delivery.levels = lighting.levels;
+        delivery
+    };
     crate::output::refuse_inputs(
         &delivery
             .files
@@ -216,7 +234,6 @@ pub fn deliver(
             .collect::<Vec<_>>(),
         &loaded.files,
     )?;
-    delivery.levels = lighting.levels;
     Ok(delivery)
 }
 
@@ -224,15 +241,15 @@ pub fn deliver(
 fn compute(
     loaded: &Loaded,
     d: &Defaults,
-    opts: &IblOptions,
+    ctx: &engines::Context,
     specular_size: usize,
     min_size: usize,
     diffuse_size: usize,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Lighting {
-    let orientation = combine(opts.yaw, d.orientation);
+    let opts = ctx.opts;
     let resampler = Resampler {
-        orientation,
+        orientation: ctx.orientation,
         ..Resampler::default()
     };
     let base = convert::to_cube(loaded, specular_size, &resampler);
@@ -246,7 +263,7 @@ fn compute(
     };
     let mut plan = filter::plan(&chain_opts, specular_size);
     for (info, lobe) in &mut plan {
-        let r = d.mapping.roughness(info.level, count);
+        let r = d.mapping.roughness(info.level, count, specular_size);
         info.roughness = Some(r);
         info.alpha = Some(r * r);
         if lobe.is_some() {

@@ -16,6 +16,7 @@ mod finite;
 mod flux;
 mod formats;
 mod hostile_exr;
+mod ibl;
 mod info;
 mod man_pages;
 mod prefilter;

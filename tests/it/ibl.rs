@@ -1,0 +1,376 @@
+//! `cubeforge ibl --target`: each engine's files, their levels and roughness mapping, light
+//! kept, and orientation checked with a chiral marker through each engine's own lookup.
+
+use crate::common::{self, run, stderr};
+use cubeforge::chain::LevelsFile;
+use cubeforge::cube::{face_dir, CubeMap};
+use cubeforge::ibl::RoughnessMapping;
+use cubeforge::image::Image;
+use cubeforge::io::{self, Decoded, ReadOptions};
+use glam::{Vec3, Vec4};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A dim panorama with three marks: red straight ahead (+Z, the panorama's centre), green 35
+/// degrees to its right (towards +X) and blue 35 degrees above it. A mirrored copy puts green
+/// on the left; a turned one moves red.
+fn marker_panorama(dir: &Path) -> PathBuf {
+    let (w, h) = (256, 128);
+    let marks = [
+        (Vec3::Z, Vec4::new(40.0, 0.0, 0.0, 1.0)),
+        (
+            Vec3::new(35f32.to_radians().sin(), 0.0, 35f32.to_radians().cos()),
+            Vec4::new(0.0, 40.0, 0.0, 1.0),
+        ),
+        (
+            Vec3::new(0.0, 35f32.to_radians().sin(), 35f32.to_radians().cos()),
+            Vec4::new(0.0, 0.0, 40.0, 1.0),
+        ),
+    ];
+    let img = Image::from_fn(w, h, |x, y| {
+        let u = (x as f32 + 0.5) / w as f32;
+        let v = (y as f32 + 0.5) / h as f32;
+        let lon = (u - 0.5) * std::f32::consts::TAU;
+        let lat = (0.5 - v) * std::f32::consts::PI;
+        let d = Vec3::new(lat.cos() * lon.sin(), lat.sin(), lat.cos() * lon.cos());
+        let mut c = Vec4::new(0.1, 0.1, 0.1, 1.0);
+        for (m, col) in marks {
+            if d.dot(m) > 8f32.to_radians().cos() {
+                c += col;
+            }
+        }
+        c.w = 1.0;
+        c
+    });
+    let path = dir.join("marks.exr");
+    common::write_image(&path, &img);
+    path
+}
+
+fn read_cube(path: &Path) -> CubeMap {
+    let opts = ReadOptions {
+        as_stored: true,
+        ..ReadOptions::default()
+    };
+    match io::read(path, &opts) {
+        Ok((Decoded::Cube(c), _)) => c,
+        Ok(_) => panic!("{} holds no cube map", path.display()),
+        Err(e) => panic!("{e}"),
+    }
+}
+
+fn levels_of(path: &Path) -> LevelsFile {
+    let bytes = std::fs::read(path).unwrap();
+    let meta = io::ktx2::metadata(&bytes);
+    let json = meta
+        .iter()
+        .find(|(k, _)| k == io::ktx2::LEVELS_KEY)
+        .map(|(_, v)| v.clone())
+        .expect("levels metadata");
+    serde_json::from_slice(&json).unwrap()
+}
+
+/// Where each mark lands in the engine's world: the mean world direction of the texels of
+/// level 0 where its colour dominates, with `world_of(d)` the world direction whose lookup
+/// reads cube direction d.
+fn marks_in_world(cube: &CubeMap, world_of: impl Fn(Vec3) -> Vec3) -> [Vec3; 3] {
+    let n = cube.size();
+    let mut sums = [Vec3::ZERO; 3];
+    for (f, face) in cube.levels[0].iter().enumerate() {
+        for y in 0..n {
+            for x in 0..n {
+                let p = face.pixels[y * n + x];
+                let d = face_dir(f, (x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32)
+                    .normalize();
+                for (c, sum) in sums.iter_mut().enumerate() {
+                    let others = (0..3).filter(|&o| o != c).map(|o| p[o]).fold(0.0, f32::max);
+                    if p[c] > 5.0 && p[c] > 4.0 * others {
+                        *sum += world_of(d);
+                    }
+                }
+            }
+        }
+    }
+    sums.map(|s| {
+        assert!(s.length() > 0.0, "a mark is missing");
+        s.normalize()
+    })
+}
+
+/// Asserts the marks read un-mirrored for a viewer in a right- or left-handed Y-up world,
+/// with the centre mark at `ahead`.
+fn assert_unmirrored(engine: &str, marks: [Vec3; 3], right_handed: bool, ahead: Vec3) {
+    let [red, green, blue] = marks;
+    assert!(
+        red.dot(ahead) > 0.99,
+        "{engine}: centre at {red}, expected {ahead}"
+    );
+    let right = if right_handed {
+        red.cross(Vec3::Y)
+    } else {
+        Vec3::Y.cross(red)
+    };
+    assert!(
+        green.dot(right) > 0.45,
+        "{engine}: the right-hand mark is at {green}, the viewer's right is {right}: mirrored"
+    );
+    assert!(
+        blue.dot(Vec3::Y) > 0.45,
+        "{engine}: the upper mark is at {blue}"
+    );
+}
+
+fn ibl(input: &Path, out: &Path, target: &str, extra: &[&str]) {
+    let mut args = vec![
+        "ibl",
+        input.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--target",
+        target,
+        "-q",
+    ];
+    args.extend_from_slice(extra);
+    let o = run(&args);
+    assert!(o.status.success(), "{target}: {}", stderr(&o));
+}
+
+const SMALL: [&str; 8] = [
+    "--size",
+    "32",
+    "--min-size",
+    "4",
+    "--diffuse-size",
+    "8",
+    "--samples",
+    "16",
+];
+
+#[test]
+fn each_engine_sees_the_panorama_unmirrored() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = marker_panorama(dir.path());
+    // (target, specular file, the engine's lookup as cube direction -> world direction,
+    // right-handed world, where the panorama's centre faces)
+    type WorldOf = fn(Vec3) -> Vec3;
+    let cases: [(&str, &str, WorldOf, bool, Vec3); 2] = [
+        // Bevy samples (x, y, -z) of the world direction (environment_map.wesl).
+        (
+            "bevy",
+            "env_specular.ktx2",
+            |d| Vec3::new(d.x, d.y, -d.z),
+            true,
+            -Vec3::Z,
+        ),
+        // The Sample Viewer samples u_EnvRotation * w, a 90-degree turn about +Y by default:
+        // cube = (w.z, w.y, -w.x), so w = (-d.z, d.y, d.x).
+        (
+            "gltf",
+            "env_ggx.ktx2",
+            |d| Vec3::new(-d.z, d.y, d.x),
+            true,
+            Vec3::Z,
+        ),
+    ];
+    for (target, file, world_of, rh, ahead) in cases {
+        let out = dir.path().join(target);
+        ibl(&input, &out, target, &SMALL);
+        let cube = read_cube(&out.join(file));
+        assert_unmirrored(target, marks_in_world(&cube, world_of), rh, ahead);
+    }
+    // The check catches a mirror: Bevy's files looked up without its z flip read mirrored.
+    let cube = read_cube(&dir.path().join("bevy/env_specular.ktx2"));
+    let marks = marks_in_world(&cube, |d| d);
+    let caught = std::panic::catch_unwind(|| assert_unmirrored("control", marks, true, Vec3::Z));
+    assert!(caught.is_err(), "a mirrored lookup passed");
+}
+
+#[test]
+fn chains_hold_the_engines_roughness_per_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = marker_panorama(dir.path());
+    for (target, file, count) in [
+        ("bevy", "env_specular.ktx2", 4),
+        ("gltf", "env_ggx.ktx2", 4),
+        ("generic", "env_specular.ktx2", 4),
+    ] {
+        let out = dir.path().join(target);
+        ibl(&input, &out, target, &SMALL);
+        let levels = levels_of(&out.join(file));
+        assert_eq!(levels.level_count, count, "{target}");
+        let cube = read_cube(&out.join(file));
+        assert_eq!(cube.levels.len(), count, "{target}");
+        assert_eq!(cube.size(), 32, "{target}");
+        for l in &levels.levels {
+            let r = l.level as f32 / (count - 1) as f32;
+            assert!((l.roughness.unwrap() - r).abs() < 1e-6, "{target}: {l:?}");
+            assert!((l.alpha.unwrap() - r * r).abs() < 1e-6, "{target}: {l:?}");
+        }
+    }
+    // Default sizes: Bevy's chain from 512 stops at 8 px (7 levels), the diffuse cube is 32.
+    let out = dir.path().join("bevy_default");
+    ibl(&input, &out, "bevy", &["--samples", "4"]);
+    let spec = read_cube(&out.join("env_specular.ktx2"));
+    assert_eq!(
+        spec.levels.iter().map(|l| l[0].width).collect::<Vec<_>>(),
+        [512, 256, 128, 64, 32, 16, 8]
+    );
+    assert_eq!(read_cube(&out.join("env_diffuse.ktx2")).size(), 32);
+}
+
+#[test]
+fn roughness_mappings_follow_the_engines_shaders() {
+    // Filament's shader picks lod = (levels - 1) * r (2 - r); its chain holds the inverse.
+    for count in [5, 6] {
+        for m in 0..count {
+            let r = RoughnessMapping::Filament.roughness(m, count, 256);
+            let lod = (count - 1) as f32 * r * (2.0 - r);
+            assert!((lod - m as f32).abs() < 1e-4, "{m}/{count}: {r}");
+        }
+    }
+    // Babylon's shader picks lod = log2(width * alpha) * 0.8 with alpha = r^2 (+ 0.0005).
+    for m in 1..6 {
+        let r = RoughnessMapping::Babylon.roughness(m, 9, 256);
+        let lod = (256.0 * r * r).log2() * 0.8;
+        assert!((lod - m as f32).abs() < 1e-3, "{m}: {r}");
+    }
+    assert_eq!(RoughnessMapping::Babylon.roughness(0, 9, 256), 0.0);
+    assert_eq!(RoughnessMapping::Babylon.roughness(8, 9, 256), 1.0);
+    assert_eq!(RoughnessMapping::Linear.roughness(3, 4, 256), 1.0);
+}
+
+#[test]
+fn light_is_kept_in_the_specular_and_diffuse_maps() {
+    let Some(real) = common::real_dir() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let input = real.join("hdr/venice.hdr");
+    let out = dir.path().join("generic");
+    ibl(
+        &input,
+        &out,
+        "generic",
+        &["--size", "64", "--samples", "32"],
+    );
+    let flux = |cube: &CubeMap, level: usize| -> [f64; 3] {
+        let faces = &cube.levels[level];
+        [0, 1, 2].map(|c| common::sphere_mean(faces, c))
+    };
+    let source = {
+        let o = run(["info", input.to_str().unwrap(), "--json"]);
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let f = &v["flux"];
+        [0, 1, 2].map(|c| f[c].as_f64().unwrap())
+    };
+    let spec = read_cube(&out.join("env_specular.ktx2"));
+    let diff = read_cube(&out.join("env_diffuse.ktx2"));
+    for (what, got) in [
+        ("specular level 0", flux(&spec, 0)),
+        ("specular level 3", flux(&spec, 3)),
+        ("diffuse", flux(&diff, 0)),
+    ] {
+        for c in 0..3 {
+            let rel = (got[c] / source[c] - 1.0).abs();
+            assert!(
+                rel < 0.005,
+                "{what} channel {c}: {} vs {}",
+                got[c],
+                source[c]
+            );
+        }
+    }
+    // The SH file's constant term is the same mean radiance.
+    let sh: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("env_sh.json")).unwrap()).unwrap();
+    let c0 = sh["radiance"][0][0].as_f64().unwrap() * 0.282_094_791_773_878_1;
+    assert!(
+        (c0 / source[0] - 1.0).abs() < 0.005,
+        "{c0} vs {}",
+        source[0]
+    );
+}
+
+#[test]
+fn panorama_targets_write_what_the_engine_imports() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = marker_panorama(dir.path());
+    for (target, file) in [
+        ("godot", "env.exr"),
+        ("unity", "env.exr"),
+        ("unreal", "env.hdr"),
+    ] {
+        let out = dir.path().join(target);
+        ibl(&input, &out, target, &[]);
+        let img = common::read_image(&out.join(file));
+        assert_eq!((img.width, img.height), (256, 128), "{target}");
+        // Written as is: the centre mark stays in the middle of the panorama.
+        let c = img.pixels[64 * 256 + 128];
+        assert!(c.x > 5.0 && c.y < 1.0, "{target}: {c}");
+    }
+}
+
+#[test]
+fn ktx2_files_pass_independent_readers() {
+    let Some(tools) = common::ktx_parse() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let input = marker_panorama(dir.path());
+    let out = dir.path().join("bevy");
+    ibl(&input, &out, "bevy", &SMALL);
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/tools/ktx_check.mjs");
+    for (file, levels) in [("env_specular.ktx2", 4), ("env_diffuse.ktx2", 1)] {
+        let o = Command::new("node")
+            .arg(&script)
+            .arg(&tools)
+            .arg(out.join(file))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["faceCount"], 6, "{v}");
+        assert_eq!(v["pixelDepth"], 0, "{v}");
+        assert_eq!(v["layerCount"], 0, "{v}");
+        assert_eq!(v["levelCount"], levels, "{v}");
+        assert_eq!(v["rewriteIdentical"], true, "{v}");
+    }
+}
+
+#[test]
+fn bad_ibl_requests_are_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = marker_panorama(dir.path());
+    let inp = input.to_str().unwrap();
+    let out = dir.path().join("o");
+    let o = out.to_str().unwrap();
+    for (args, needle) in [
+        (
+            vec![
+                "ibl",
+                inp,
+                "-o",
+                o,
+                "--target",
+                "bevy",
+                "--min-size",
+                "64",
+                "--size",
+                "32",
+            ],
+            "min size",
+        ),
+        (
+            vec!["ibl", inp, "-o", o, "--target", "bevy", "--name", "../x"],
+            "name",
+        ),
+        (vec!["ibl", inp, "-o", o, "--target", "nope"], "nope"),
+    ] {
+        let r = run(&args);
+        assert!(!r.status.success());
+        let e = stderr(&r);
+        assert_eq!(e.lines().count(), 1, "{e}");
+        assert!(e.contains(needle), "{e}");
+    }
+    assert!(!out.exists());
+}
