@@ -297,18 +297,11 @@ fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Lo
     let files = vec![path.to_path_buf()];
     let hdr = meta.hdr;
     let (source, kind) = match decoded {
-        Decoded::Cube(cube) => {
-            let kind = if meta.file_format == FileFormat::Dds {
-                Kind::Dds
-            } else {
-                Kind::Ktx2
-            };
-            (Source::Cube(cube), kind)
-        }
+        Decoded::Cube(cube) => (Source::Cube(cube), Kind::container(meta.file_format)),
         Decoded::Image(img) => {
             let (w, h) = (img.width, img.height);
             let kind = match from {
-                Some(k @ (Kind::Faces | Kind::Ktx2 | Kind::Dds)) => {
+                Some(k) if k == Kind::Faces || k.is_container() => {
                     return Err(Error::file(
                         path,
                         format!("--from {} does not describe a single image", k.name()),
@@ -354,7 +347,7 @@ pub enum Output {
 /// others.
 pub fn convert(loaded: &Loaded, to: Kind, size: usize, resampler: &Resampler) -> Output {
     match to {
-        Kind::Faces | Kind::Ktx2 | Kind::Dds => Output::Cube(to_cube(loaded, size, resampler)),
+        k if k == Kind::Faces || k.is_container() => Output::Cube(to_cube(loaded, size, resampler)),
         _ => Output::Image(to_image(loaded, to, size, resampler)),
     }
 }

@@ -176,11 +176,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
     let file = path.display().to_string();
     Ok(match decoded {
         Decoded::Cube(cube) => {
-            let kind = if meta.file_format == io::FileFormat::Dds {
-                Kind::Dds
-            } else {
-                Kind::Ktx2
-            };
+            let kind = Kind::container(meta.file_format);
             if let Some(k) = from.filter(|&k| k != kind) {
                 return Err(Error::file(
                     path,
@@ -211,11 +207,11 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
         Decoded::Image(img) => {
             let (w, h) = (img.width, img.height);
             let (kind, note) = match from {
-                Some(k @ (Kind::Faces | Kind::Ktx2 | Kind::Dds)) => {
+                Some(k) if k == Kind::Faces || k.is_container() => {
                     return Err(Error::file(
                         path,
                         format!(
-                            "--from {} does not describe a single image (give a folder of faces, or a .ktx2 or .dds file)",
+                            "--from {} does not describe a single image (give a folder of faces, or a .ktx2, .dds, .ktx or .env file)",
                             k.name()
                         ),
                     ))

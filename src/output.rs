@@ -88,9 +88,9 @@ impl Target {
             )
         };
         match (&out, self.kind) {
-            (Output::Cube(_), Kind::Faces | Kind::Ktx2 | Kind::Dds) => {}
+            (Output::Cube(_), k) if k == Kind::Faces || k.is_container() => {}
             (Output::Cube(_), _) => return Err(wrong("cube map")),
-            (Output::Image(_), Kind::Faces | Kind::Ktx2 | Kind::Dds) => {
+            (Output::Image(_), k) if k == Kind::Faces || k.is_container() => {
                 return Err(wrong("single image"))
             }
             (Output::Image(_), _) => {}
@@ -122,7 +122,13 @@ impl Target {
             )?,
             Output::Cube(cube) => {
                 refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
-                let cube: CubeMap = cube.with_box_mips(self.levels);
+                // Babylon needs the whole chain down to 1x1.
+                let levels = if self.kind == Kind::Env {
+                    None
+                } else {
+                    self.levels
+                };
+                let cube: CubeMap = cube.with_box_mips(levels);
                 let bytes = io::encode_cube(&self.path, &cube, self.write.gpu_format)?;
                 vec![(self.path.clone(), bytes)]
             }
@@ -140,10 +146,10 @@ impl Target {
 pub(crate) fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
     let by_name = FileFormat::from_extension(output);
     match (to, by_name) {
-        (Some(Kind::Ktx2), Some(FileFormat::Ktx2)) | (Some(Kind::Dds), Some(FileFormat::Dds)) => {
-            Ok(to.unwrap_or(Kind::Ktx2))
+        (Some(k), Some(f)) if k.is_container() && f.is_container() && Kind::container(f) == k => {
+            Ok(k)
         }
-        (Some(k @ (Kind::Ktx2 | Kind::Dds)), _) => Err(Error::file(
+        (Some(k), _) if k.is_container() => Err(Error::file(
             output,
             format!("--to {} needs an output named .{}", k.name(), k.name()),
         )),
@@ -158,7 +164,7 @@ pub(crate) fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
                 "{} holds cube maps, not a {} image: use --to {}",
                 f.name(),
                 k.name(),
-                if f == FileFormat::Dds { "dds" } else { "ktx2" }
+                Kind::container(f).name()
             ),
         )),
         (Some(k), Some(_)) => Ok(k),
@@ -169,8 +175,7 @@ pub(crate) fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
                 k.name()
             ),
         )),
-        (None, Some(FileFormat::Ktx2)) => Ok(Kind::Ktx2),
-        (None, Some(FileFormat::Dds)) => Ok(Kind::Dds),
+        (None, Some(f)) if f.is_container() => Ok(Kind::container(f)),
         (None, Some(_)) => Ok(Kind::Hcross),
         (None, None) if output.extension().is_some() && !output.is_dir() => {
             Err(io::unknown_ext(output))

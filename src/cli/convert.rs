@@ -74,7 +74,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     // The output's layout and type, and the options it ignores, before the decode.
     let mut target = Target::new(&a.output, a.to, false)?;
     let to = target.kind;
-    let container = matches!(to, Kind::Ktx2 | Kind::Dds);
+    let container = to.is_container();
     if !container {
         if a.levels.is_some() {
             warn("--levels applies to KTX2 and DDS outputs: ignored");

@@ -75,7 +75,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     stages.done("filter");
 
     let out = match target.kind {
-        Kind::Faces | Kind::Ktx2 | Kind::Dds => Output::Cube(irr),
+        k if k == Kind::Faces || k.is_container() => Output::Cube(irr),
         to => Output::Image(convert::to_image(
             &Loaded::from_cube(irr),
             to,

@@ -4,9 +4,11 @@
 #![warn(missing_docs)]
 
 pub mod atomic;
+pub mod babylon_env;
 pub mod dds;
 pub mod exr;
 mod guard;
+pub mod ktx1;
 pub mod ktx2;
 pub mod raster;
 pub mod rgbe;
@@ -166,6 +168,10 @@ pub enum FileFormat {
     Ktx2,
     /// DDS cube-map container.
     Dds,
+    /// KTX 1 cube-map container (Filament's `cmgen` output).
+    Ktx1,
+    /// Babylon.js `.env` prefiltered environment (RGBD PNG faces).
+    Env,
 }
 
 impl FileFormat {
@@ -186,6 +192,8 @@ impl FileFormat {
                 "exr" => FileFormat::Exr,
                 "ktx2" => FileFormat::Ktx2,
                 "dds" => FileFormat::Dds,
+                "ktx" => FileFormat::Ktx1,
+                "env" => FileFormat::Env,
                 _ => return None,
             },
         )
@@ -205,6 +213,10 @@ impl FileFormat {
             FileFormat::Ktx2
         } else if starts(b"DDS ") {
             FileFormat::Dds
+        } else if starts(&ktx1::IDENTIFIER) {
+            FileFormat::Ktx1
+        } else if starts(&babylon_env::MAGIC) {
+            FileFormat::Env
         } else {
             return None;
         })
@@ -220,19 +232,39 @@ impl FileFormat {
             FileFormat::Exr => "OpenEXR",
             FileFormat::Ktx2 => "KTX2",
             FileFormat::Dds => "DDS",
+            FileFormat::Ktx1 => "KTX",
+            FileFormat::Env => "Babylon.js env",
         }
     }
 
-    /// KTX2 and DDS: cube maps with mip levels, not single images.
+    /// KTX2, DDS, KTX and Babylon env: cube maps with mip levels, not single images.
     pub fn is_container(self) -> bool {
-        matches!(self, FileFormat::Ktx2 | FileFormat::Dds)
+        matches!(
+            self,
+            FileFormat::Ktx2 | FileFormat::Dds | FileFormat::Ktx1 | FileFormat::Env
+        )
+    }
+
+    /// The `--to` name of a container format ("ktx2", "dds", "ktx", "env").
+    pub(crate) fn container_kind_name(self) -> &'static str {
+        match self {
+            FileFormat::Dds => "dds",
+            FileFormat::Ktx1 => "ktx",
+            FileFormat::Env => "env",
+            _ => "ktx2",
+        }
     }
 
     /// Formats that hold values above 1 (written linear, unclamped).
     pub fn is_float(self) -> bool {
         matches!(
             self,
-            FileFormat::Hdr | FileFormat::Exr | FileFormat::Ktx2 | FileFormat::Dds
+            FileFormat::Hdr
+                | FileFormat::Exr
+                | FileFormat::Ktx2
+                | FileFormat::Dds
+                | FileFormat::Ktx1
+                | FileFormat::Env
         )
     }
 }
@@ -354,7 +386,8 @@ pub fn largest_value(format: FileFormat, gpu: GpuFormat) -> Option<f32> {
     match format {
         FileFormat::Exr => Some(HALF_MAX),
         FileFormat::Hdr => Some(f32::MAX),
-        FileFormat::Ktx2 | FileFormat::Dds => match gpu {
+        FileFormat::Env => Some(babylon_env::RGBD_MAX),
+        FileFormat::Ktx2 | FileFormat::Dds | FileFormat::Ktx1 => match gpu {
             GpuFormat::Rgba16f => Some(HALF_MAX),
             GpuFormat::Rgba32f => Some(f32::MAX),
             GpuFormat::Rgba8Srgb | GpuFormat::Rgba8 => None,
@@ -393,9 +426,17 @@ pub fn clamp_warning<'a>(
         format!(
             "{}: {n} values beyond {} (the largest {}) written as that value",
             path.display(),
-            if max == HALF_MAX { "65504" } else { "3.4e38" },
+            if max == HALF_MAX {
+                "65504"
+            } else if max == babylon_env::RGBD_MAX {
+                "255"
+            } else {
+                "3.4e38"
+            },
             if max == HALF_MAX {
                 "half float"
+            } else if max == babylon_env::RGBD_MAX {
+                "RGBD value"
             } else {
                 "float"
             }
@@ -560,13 +601,15 @@ pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
         }
         (None, None) => return Err(Error::unsupported(
             path,
-            "not a recognised image file (cubeforge reads PNG, JPEG, TGA, HDR, EXR, KTX2 and DDS)",
+            "not a recognised image file (cubeforge reads PNG, JPEG, TGA, HDR, EXR, KTX2, DDS, KTX and Babylon env)",
         )),
     };
     match format {
         FileFormat::Exr => exr::decode(&bytes, path, &opts.limits),
         FileFormat::Ktx2 => ktx2::decode(&bytes, path, &opts.limits),
         FileFormat::Dds => dds::decode(&bytes, path, &opts.limits),
+        FileFormat::Ktx1 => ktx1::decode(&bytes, path, &opts.limits),
+        FileFormat::Env => babylon_env::decode(&bytes, path, &opts.limits),
         FileFormat::Hdr => match rgbe::decode(&bytes, path, opts) {
             Some(result) => result.map(|(img, meta)| (Decoded::Image(img), meta)),
             None => raster::decode(&bytes, FileFormat::Hdr, path, opts),
@@ -592,22 +635,35 @@ pub fn encode_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<Vec
     match format {
         FileFormat::Exr => exr::encode(img).map_err(|e| Error::file(path, e)),
         FileFormat::Hdr => Ok(rgbe::encode(img)),
-        FileFormat::Ktx2 | FileFormat::Dds => Err(Error::file(
+        f if f.is_container() => Err(Error::file(
             path,
-            "KTX2 and DDS hold cube maps: write them with --to ktx2 or --to dds",
+            format!(
+                "{} holds cube maps: write a cube map (--to {})",
+                f.name(),
+                FileFormat::container_kind_name(f)
+            ),
         )),
         f => raster::encode(img, f, opts).map_err(|e| Error::file(path, e)),
     }
 }
 
-/// Encodes a cube map (every level) as KTX2 or DDS, by the name's extension.
+/// Encodes a cube map (every level) as KTX2, DDS or KTX in `format`, or as a Babylon env
+/// (RGBD, with the irradiance polynomial of its level 0), by the name's extension.
 pub fn encode_cube(path: &Path, cube: &CubeMap, format: GpuFormat) -> Result<Vec<u8>> {
     match FileFormat::from_extension(path) {
         Some(FileFormat::Ktx2) => Ok(ktx2::encode(cube, format)),
         Some(FileFormat::Dds) => dds::encode(cube, format).map_err(|e| Error::file(path, e)),
+        Some(FileFormat::Ktx1) => ktx1::encode(cube, ktx1::Ktx1Format::from_gpu(format), &[])
+            .map_err(|e| Error::file(path, e)),
+        Some(FileFormat::Env) => {
+            let sh = crate::filter::sh::project(cube);
+            let poly = babylon_env::SphericalPolynomial::from_radiance_sh(&sh);
+            babylon_env::encode(cube, Some(&poly), babylon_env::DEFAULT_LOD_GENERATION_SCALE)
+                .map_err(|e| Error::file(path, e))
+        }
         _ => Err(Error::file(
             path,
-            "a cube-map container must be named .ktx2 or .dds",
+            "a cube-map container must be named .ktx2, .dds, .ktx or .env",
         )),
     }
 }
@@ -616,7 +672,7 @@ pub fn encode_cube(path: &Path, cube: &CubeMap, format: GpuFormat) -> Result<Vec
 pub fn unknown_ext(path: &Path) -> Error {
     Error::unsupported(
         path,
-        "unknown output extension: use .png .jpg .tga .hdr .exr .ktx2 or .dds",
+        "unknown output extension: use .png .jpg .tga .hdr .exr .ktx2 .dds .ktx or .env",
     )
 }
 

@@ -37,6 +37,10 @@ pub enum Kind {
     Ktx2,
     /// DDS cube-map container.
     Dds,
+    /// KTX 1 cube-map container (Filament).
+    Ktx,
+    /// Babylon.js .env prefiltered environment.
+    Env,
 }
 
 impl Kind {
@@ -53,6 +57,24 @@ impl Kind {
             Kind::Angular => "angular",
             Kind::Ktx2 => "ktx2",
             Kind::Dds => "dds",
+            Kind::Ktx => "ktx",
+            Kind::Env => "env",
+        }
+    }
+
+    /// Cube-map containers: KTX2, DDS, KTX, Babylon env.
+    pub fn is_container(self) -> bool {
+        matches!(self, Kind::Ktx2 | Kind::Dds | Kind::Ktx | Kind::Env)
+    }
+
+    /// The container layout of a container file format (KTX2 for any other).
+    pub fn container(format: crate::io::FileFormat) -> Kind {
+        use crate::io::FileFormat;
+        match format {
+            FileFormat::Dds => Kind::Dds,
+            FileFormat::Ktx1 => Kind::Ktx,
+            FileFormat::Env => Kind::Env,
+            _ => Kind::Ktx2,
         }
     }
 

@@ -258,6 +258,54 @@ pub fn ktx_parse() -> Option<PathBuf> {
     tools.filter(|_| found)
 }
 
+/// The folder holding `node_modules/<package>` ($CUBEFORGE_TOOLS, then target/tools), when node
+/// runs too.
+fn node_package(package: &str, install: &str) -> Option<PathBuf> {
+    let mut dirs: Vec<PathBuf> = std::env::var_os("CUBEFORGE_TOOLS")
+        .map(PathBuf::from)
+        .into_iter()
+        .collect();
+    dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("target/tools"));
+    let tools = dirs.into_iter().find(|d| {
+        d.join("node_modules")
+            .join(package)
+            .join("package.json")
+            .is_file()
+    });
+    let node = runs("node", &["--version"], false);
+    let found = reader_found(
+        &format!("{package} (with node)"),
+        install,
+        tools.is_some() && node,
+    );
+    tools.filter(|_| found)
+}
+
+/// The folder holding `node_modules/@babylonjs/core`, for `tests/tools/env_check.mjs`.
+pub fn babylon_core() -> Option<PathBuf> {
+    node_package(
+        "@babylonjs/core",
+        "npm install @babylonjs/core@9 in target/tools or $CUBEFORGE_TOOLS; node from your system",
+    )
+}
+
+/// The folder holding `node_modules/playcanvas`, for `tests/tools/ktx1_check.mjs`.
+pub fn playcanvas() -> Option<PathBuf> {
+    node_package(
+        "playcanvas",
+        "npm install playcanvas@2 in target/tools or $CUBEFORGE_TOOLS; node from your system",
+    )
+}
+
+/// Python's Pillow (any build: PNG is always there).
+pub fn pillow_png() -> bool {
+    reader_found(
+        "Pillow",
+        "python3 -m pip install pillow",
+        runs("python3", &["-c", "import PIL.PngImagePlugin"], false),
+    )
+}
+
 /// A deterministic xorshift64 generator for the seeded mutation tests.
 pub struct XorShift(pub u64);
 

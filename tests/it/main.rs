@@ -12,6 +12,7 @@ mod cli_options;
 mod containers;
 mod control;
 mod conversions;
+mod engine_containers;
 mod finite;
 mod flux;
 mod formats;

@@ -1,0 +1,749 @@
+//! KTX 1.1 cube maps, the container Filament's `cmgen` deploys image-based lighting in: a
+//! prefiltered mip chain and, in the key/value data, the irradiance spherical harmonics
+//! (key `sh`, see [`filament_sh`]). Written and read by hand after the Khronos KTX 1.1
+//! specification.
+//!
+//! File layout as written: the 64-byte header (little-endian, endianness 0x04030201), the
+//! key/value pairs (`KTXwriter` first, then the caller's, each padded to 4 bytes), then for each
+//! level, largest first: `imageSize` (the bytes of ONE face, as the specification asks of a
+//! non-array cube map) and the six faces +X -X +Y -Y +Z -Z, rows top to bottom, each row padded
+//! to 4 bytes (GL_UNPACK_ALIGNMENT 4). Padded rows make every face a multiple of 4 bytes, so
+//! cubePadding and mipPadding are always empty. The same cube map always gives the same bytes.
+//!
+//! The reader takes little- and big-endian files, cube maps (six faces) and 2D textures (level
+//! 0 read as an image), in the formats of [`Ktx1Format`]. Every header field, key/value entry and
+//! level size is checked against the file's length with checked arithmetic, and the declared
+//! size against [`Limits`], before any texel is allocated.
+
+#![warn(missing_docs)]
+
+use super::{Decoded, FileFormat, GpuFormat, Limits, Meta, HALF_MAX};
+use crate::cube::CubeMap;
+use crate::error::{Error, Result};
+use crate::image::{ColorSpace, Image};
+use glam::Vec4;
+use std::path::Path;
+
+/// The 12 bytes every KTX 1 file starts with ("«KTX 11»\r\n\x1A\n").
+pub const IDENTIFIER: [u8; 12] = [
+    0xAB, 0x4B, 0x54, 0x58, 0x20, 0x31, 0x31, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A,
+];
+
+/// The endianness field as the writer's byte order stores it.
+const ENDIANNESS: u32 = 0x0403_0201;
+/// Identifier plus thirteen UInt32 fields.
+const HEADER_LEN: usize = 64;
+
+// OpenGL enumerants of the formats read and written.
+const GL_UNSIGNED_BYTE: u32 = 0x1401;
+const GL_FLOAT: u32 = 0x1406;
+const GL_HALF_FLOAT: u32 = 0x140B;
+const GL_RGB: u32 = 0x1907;
+const GL_RGBA: u32 = 0x1908;
+const GL_RGBA8: u32 = 0x8058;
+const GL_SRGB8_ALPHA8: u32 = 0x8C43;
+const GL_RGBA32F: u32 = 0x8814;
+const GL_RGBA16F: u32 = 0x881A;
+const GL_RGB16F: u32 = 0x881B;
+
+/// Key of the writer's name, as libktx writes it.
+pub const WRITER_KEY: &str = "KTXwriter";
+/// Key of Filament's irradiance spherical harmonics (text, see [`filament_sh`]).
+pub const SH_KEY: &str = "sh";
+
+/// Texel formats of KTX 1 files, by their OpenGL enumerants. Those that are [`GpuFormat`]s
+/// share its encoding; RGB16F is three half floats.
+///
+/// R11F_G11F_B10F, the format `cmgen` deploys, is added here once `GpuFormat` has it: a variant
+/// `Rg11b10` with glType 0x8C3A (GL_R11F_G11F_B10F: the value `cmgen` writes and the only one
+/// Filament's `Ktx1Reader::toPixelDataType` maps to UINT_10F_11F_11F_REV; the specification's
+/// GL_UNSIGNED_INT_10F_11F_11F_REV, 0x8C3B, must be read too), glTypeSize 4 (cmgen writes 1:
+/// accept both), glFormat GL_RGB, glInternalFormat 0x8C3A, glBaseInternalFormat GL_RGB, 4 bytes
+/// a texel, texels through `GpuFormat::Rg11b10`. See the `R11F_G11F_B10F` marks below.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ktx1Format {
+    /// GL_RGBA16F, GL_HALF_FLOAT.
+    Rgba16f,
+    /// GL_RGB16F, GL_HALF_FLOAT: three half floats, rows padded to 4 bytes.
+    Rgb16f,
+    /// GL_RGBA32F, GL_FLOAT.
+    Rgba32f,
+    /// GL_RGBA8, GL_UNSIGNED_BYTE (linear data).
+    Rgba8,
+    /// GL_SRGB8_ALPHA8, GL_UNSIGNED_BYTE (sRGB colour).
+    Rgba8Srgb,
+    // R11F_G11F_B10F: `Rg11b10` goes here.
+}
+
+/// The header fields that name a format: glType, glTypeSize, glFormat, glInternalFormat,
+/// glBaseInternalFormat.
+struct GlFields {
+    gl_type: u32,
+    type_size: u32,
+    format: u32,
+    internal: u32,
+    base_internal: u32,
+}
+
+impl Ktx1Format {
+    /// The format that stores texels as `format` does.
+    pub fn from_gpu(format: GpuFormat) -> Ktx1Format {
+        match format {
+            GpuFormat::Rgba16f => Ktx1Format::Rgba16f,
+            GpuFormat::Rgba32f => Ktx1Format::Rgba32f,
+            GpuFormat::Rgba8 => Ktx1Format::Rgba8,
+            GpuFormat::Rgba8Srgb => Ktx1Format::Rgba8Srgb,
+            // R11F_G11F_B10F: GpuFormat::Rg11b10 => Ktx1Format::Rg11b10,
+        }
+    }
+
+    /// The [`GpuFormat`] with the same texel encoding (None for RGB16F).
+    pub fn gpu(self) -> Option<GpuFormat> {
+        match self {
+            Ktx1Format::Rgba16f => Some(GpuFormat::Rgba16f),
+            Ktx1Format::Rgba32f => Some(GpuFormat::Rgba32f),
+            Ktx1Format::Rgba8 => Some(GpuFormat::Rgba8),
+            Ktx1Format::Rgba8Srgb => Some(GpuFormat::Rgba8Srgb),
+            Ktx1Format::Rgb16f => None,
+        }
+    }
+
+    /// The format's name for messages ("RGBA16F").
+    pub fn name(self) -> &'static str {
+        match self {
+            Ktx1Format::Rgb16f => "RGB16F",
+            f => f.gpu().map_or("?", GpuFormat::name),
+        }
+    }
+
+    /// Bytes of one texel.
+    pub fn bytes_per_texel(self) -> usize {
+        match self {
+            Ktx1Format::Rgb16f => 6,
+            f => f.gpu().map_or(0, GpuFormat::bytes_per_texel),
+        }
+    }
+
+    /// Whether texels are floats (HDR).
+    pub fn is_float(self) -> bool {
+        matches!(
+            self,
+            Ktx1Format::Rgba16f | Ktx1Format::Rgb16f | Ktx1Format::Rgba32f
+        )
+    }
+
+    fn gl(self) -> GlFields {
+        let (gl_type, type_size, format, internal) = match self {
+            Ktx1Format::Rgba16f => (GL_HALF_FLOAT, 2, GL_RGBA, GL_RGBA16F),
+            Ktx1Format::Rgb16f => (GL_HALF_FLOAT, 2, GL_RGB, GL_RGB16F),
+            Ktx1Format::Rgba32f => (GL_FLOAT, 4, GL_RGBA, GL_RGBA32F),
+            Ktx1Format::Rgba8 => (GL_UNSIGNED_BYTE, 1, GL_RGBA, GL_RGBA8),
+            Ktx1Format::Rgba8Srgb => (GL_UNSIGNED_BYTE, 1, GL_RGBA, GL_SRGB8_ALPHA8),
+        };
+        GlFields {
+            gl_type,
+            type_size,
+            format,
+            internal,
+            base_internal: format,
+        }
+    }
+
+    /// The format a header's glInternalFormat names, checked against its glType (None: not
+    /// one of these).
+    fn from_gl(internal: u32, gl_type: u32) -> Option<Ktx1Format> {
+        let f = match internal {
+            GL_RGBA16F => Ktx1Format::Rgba16f,
+            GL_RGB16F => Ktx1Format::Rgb16f,
+            GL_RGBA32F => Ktx1Format::Rgba32f,
+            GL_RGBA8 => Ktx1Format::Rgba8,
+            GL_SRGB8_ALPHA8 => Ktx1Format::Rgba8Srgb,
+            // R11F_G11F_B10F: 0x8C3A with glType 0x8C3A or 0x8C3B.
+            _ => return None,
+        };
+        (f.gl().gl_type == gl_type).then_some(f)
+    }
+
+    /// Bytes of one row of `w` texels, padded to 4.
+    fn row_bytes(self, w: usize) -> usize {
+        (w * self.bytes_per_texel()).div_ceil(4) * 4
+    }
+
+    /// Appends one face's texels, row by row, each row padded to 4 bytes.
+    fn encode_face(self, face: &Image, out: &mut Vec<u8>) {
+        let row = self.row_bytes(face.width);
+        for y in 0..face.height {
+            let start = out.len();
+            let texels = &face.pixels[y * face.width..(y + 1) * face.width];
+            match self.gpu() {
+                Some(g) => g.encode_into(texels, out),
+                None => {
+                    for p in texels {
+                        for v in [p.x, p.y, p.z] {
+                            let h = half::f16::from_f32(super::finite(v, HALF_MAX));
+                            out.extend_from_slice(&h.to_le_bytes());
+                        }
+                    }
+                }
+            }
+            out.resize(start + row, 0);
+        }
+    }
+
+    /// Decodes one face of `w` x `h` texels from little-endian `bytes` (padded rows).
+    fn decode_face(self, bytes: &[u8], w: usize, h: usize) -> Image {
+        let row = self.row_bytes(w);
+        let mut pixels = Vec::with_capacity(w * h);
+        for y in 0..h {
+            let r = &bytes[y * row..y * row + w * self.bytes_per_texel()];
+            match self.gpu() {
+                Some(g) => pixels.extend(g.decode(r, w)),
+                None => pixels.extend(r.chunks_exact(6).map(|t| {
+                    let c = |i: usize| half::f16::from_le_bytes([t[2 * i], t[2 * i + 1]]).to_f32();
+                    Vec4::new(c(0), c(1), c(2), 1.0)
+                })),
+            }
+        }
+        Image {
+            width: w,
+            height: h,
+            pixels,
+        }
+    }
+}
+
+/// One key/value pair. Values are bytes; text values are written NUL-terminated, as the
+/// specification recommends (see [`KeyValue::text`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct KeyValue {
+    /// The key (UTF-8, no NUL).
+    pub key: String,
+    /// The value as stored.
+    pub value: Vec<u8>,
+}
+
+impl KeyValue {
+    /// A text value, stored with a terminating NUL.
+    pub fn text(key: &str, value: &str) -> KeyValue {
+        let mut v = value.as_bytes().to_vec();
+        v.push(0);
+        KeyValue {
+            key: key.to_string(),
+            value: v,
+        }
+    }
+
+    /// The value as text, without a terminating NUL; None when it is not UTF-8.
+    pub fn as_text(&self) -> Option<&str> {
+        let v = self.value.strip_suffix(&[0]).unwrap_or(&self.value);
+        std::str::from_utf8(v).ok()
+    }
+}
+
+/// Filament's `sh` coefficients from order-2 radiance coefficients in cubeforge's basis
+/// ([`crate::filter::sh::BASIS`], per channel): what `cmgen --sh-shader` (and `--deploy`)
+/// computes, the irradiance divided by pi with each basis constant folded in, so that
+/// `E(n) / pi = sh[0] + sh[1] y + sh[2] z + sh[3] x + sh[4] xy + sh[5] yz + sh[6] (3z^2 - 1) +
+/// sh[7] xz + sh[8] (x^2 - y^2)`, the polynomial Filament's shader evaluates. Filament's
+/// Condon-Shortley signs on the basis and on its constants cancel, so none appear here.
+pub fn filament_sh(radiance: &[[f64; 3]; 9]) -> [[f64; 3]; 9] {
+    use crate::filter::sh::{irradiance, BASIS};
+    let e = irradiance(radiance);
+    std::array::from_fn(|i| e[i].map(|v| v * BASIS[i].3 / std::f64::consts::PI))
+}
+
+/// The `sh` key/value pair: nine lines of "r g b", as `cmgen` writes it (each value the
+/// shortest that reads back as the same f32, in exponent form when very small or large; NaN and
+/// infinities written as 0).
+pub fn sh_key_value(sh: &[[f64; 3]; 9]) -> KeyValue {
+    let mut text = String::new();
+    for c in sh {
+        let f = |v: f64| {
+            let v = if v.is_finite() { v as f32 } else { 0.0 };
+            if v == 0.0 || (1e-4..1e6).contains(&v.abs()) {
+                format!("{v}")
+            } else {
+                format!("{v:e}")
+            }
+        };
+        text.push_str(&format!("{} {} {}\n", f(c[0]), f(c[1]), f(c[2])));
+    }
+    KeyValue::text(SH_KEY, &text)
+}
+
+/// Parses an `sh` value (27 numbers separated by white space, as Filament's
+/// `Ktx1Bundle::getSphericalHarmonics` reads it); None when it does not hold 27 numbers.
+pub fn parse_sh(value: &[u8]) -> Option<[[f64; 3]; 9]> {
+    let text = std::str::from_utf8(value.strip_suffix(&[0]).unwrap_or(value)).ok()?;
+    let numbers: Vec<f64> = text
+        .split_whitespace()
+        .map(|t| t.parse::<f64>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<_>>()?;
+    (numbers.len() == 27)
+        .then(|| std::array::from_fn(|i| std::array::from_fn(|c| numbers[3 * i + c])))
+}
+
+/// Encodes every level of `cube` as a KTX 1 cube map in `format`, with a `KTXwriter` entry
+/// (unless `key_values` has one) and then `key_values` in their order. Fails only for sizes a
+/// KTX 1 header cannot state (a face of more than 4 GiB).
+pub fn encode(
+    cube: &CubeMap,
+    format: Ktx1Format,
+    key_values: &[KeyValue],
+) -> std::result::Result<Vec<u8>, String> {
+    let n = cube.size();
+    let too_large = || format!("faces of {n}x{n} pixels are too large for KTX 1");
+    let edge = u32::try_from(n).map_err(|_| too_large())?;
+    let face_len = |size: usize| format.row_bytes(size) * size;
+    u32::try_from(face_len(n)).map_err(|_| too_large())?;
+    let levels = u32::try_from(cube.levels.len()).map_err(|_| "too many mip levels for KTX 1")?;
+
+    let mut kv: Vec<KeyValue> = Vec::new();
+    if !key_values.iter().any(|e| e.key == WRITER_KEY) {
+        let writer = format!("cubeforge {}", env!("CARGO_PKG_VERSION"));
+        kv.push(KeyValue::text(WRITER_KEY, &writer));
+    }
+    kv.extend_from_slice(key_values);
+    let mut kvd = Vec::new();
+    for e in &kv {
+        let len = e.key.len() + 1 + e.value.len();
+        let len32 = u32::try_from(len).map_err(|_| format!("key/value {} is too long", e.key))?;
+        kvd.extend_from_slice(&len32.to_le_bytes());
+        kvd.extend_from_slice(e.key.as_bytes());
+        kvd.push(0);
+        kvd.extend_from_slice(&e.value);
+        kvd.resize(kvd.len().div_ceil(4) * 4, 0); // valuePadding
+    }
+    let kvd_len = u32::try_from(kvd.len()).map_err(|_| "key/value data too long for KTX 1")?;
+
+    let total = HEADER_LEN
+        + kvd.len()
+        + cube
+            .levels
+            .iter()
+            .map(|faces| 4 + 6 * face_len(faces[0].width))
+            .sum::<usize>();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(&IDENTIFIER);
+    let gl = format.gl();
+    for v in [
+        ENDIANNESS,
+        gl.gl_type,
+        gl.type_size,
+        gl.format,
+        gl.internal,
+        gl.base_internal,
+        edge, // pixelWidth
+        edge, // pixelHeight
+        0,    // pixelDepth
+        0,    // numberOfArrayElements: not an array
+        6,    // numberOfFaces
+        levels,
+        kvd_len,
+    ] {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out.extend_from_slice(&kvd);
+    for faces in &cube.levels {
+        // A non-array cube map's imageSize is the bytes of one face.
+        out.extend_from_slice(&(face_len(faces[0].width) as u32).to_le_bytes());
+        for face in faces {
+            format.encode_face(face, &mut out);
+        }
+    }
+    debug_assert_eq!(out.len(), total);
+    Ok(out)
+}
+
+/// A KTX 1 file as read: its texels, format and key/value pairs.
+#[derive(Clone, Debug)]
+pub struct Ktx1 {
+    /// Every level of a cube map, or level 0 of a 2D texture as a one-face image.
+    pub texture: Decoded,
+    /// The texel format.
+    pub format: Ktx1Format,
+    /// The levels the file holds.
+    pub levels: usize,
+    /// Every key/value pair, in file order, values as stored.
+    pub key_values: Vec<KeyValue>,
+}
+
+impl Ktx1 {
+    /// The value of `key`, if present.
+    pub fn value(&self, key: &str) -> Option<&[u8]> {
+        self.key_values
+            .iter()
+            .find(|e| e.key == key)
+            .map(|e| &e.value[..])
+    }
+
+    /// Filament's spherical harmonics (key `sh`), when present and well formed.
+    pub fn sh(&self) -> Option<[[f64; 3]; 9]> {
+        parse_sh(self.value(SH_KEY)?)
+    }
+}
+
+/// Reads a KTX 1 cube map (every level) or 2D texture (level 0) with its key/value pairs.
+pub fn read(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Ktx1> {
+    let err = |msg: String| Error::file(path, msg);
+    let file_len = bytes.len();
+    if !bytes.starts_with(&IDENTIFIER) && !IDENTIFIER.starts_with(bytes) {
+        return Err(err("not a KTX 1 file (its identifier is missing)".into()));
+    }
+    if file_len < HEADER_LEN {
+        return Err(err(format!(
+            "truncated KTX file: {file_len} bytes, shorter than the {HEADER_LEN}-byte header"
+        )));
+    }
+    let big = match u32::from_le_bytes(bytes[12..16].try_into().unwrap_or_default()) {
+        ENDIANNESS => false,
+        0x0102_0304 => true,
+        e => {
+            return Err(err(format!(
+                "invalid header: endianness is {e:#010x}, neither 0x04030201 nor 0x01020304"
+            )))
+        }
+    };
+    let word = |at: usize| -> u32 {
+        let b: [u8; 4] = bytes[at..at + 4].try_into().unwrap_or_default();
+        if big {
+            u32::from_be_bytes(b)
+        } else {
+            u32::from_le_bytes(b)
+        }
+    };
+    let field = |i: usize| word(16 + 4 * i);
+    let (gl_type, type_size, gl_format, internal) = (field(0), field(1), field(2), field(3));
+    let (width, height, depth) = (field(5), field(6), field(7));
+    let (array, faces, level_field, kvd_len) = (field(8), field(9), field(10), field(11));
+
+    if gl_type == 0 {
+        return Err(Error::unsupported(
+            path,
+            format!("compressed KTX (glInternalFormat {internal:#06x}) is not supported: cubeforge reads RGBA16F, RGB16F, RGBA32F and RGBA8 KTX files"),
+        ));
+    }
+    let format = Ktx1Format::from_gl(internal, gl_type).ok_or_else(|| {
+        Error::unsupported(
+            path,
+            format!("unsupported KTX format (glInternalFormat {internal:#06x}, glType {gl_type:#06x}): cubeforge reads RGBA16F, RGB16F, RGBA32F and RGBA8"),
+        )
+    })?;
+    let gl = format.gl();
+    if type_size != gl.type_size || gl_format != gl.format {
+        return Err(err(format!(
+            "invalid header: {} needs glTypeSize {} and glFormat {:#06x}, but the file says {type_size} and {gl_format:#06x}",
+            format.name(),
+            gl.type_size,
+            gl.format
+        )));
+    }
+    if array != 0 {
+        return Err(err(format!(
+            "texture arrays are not supported (numberOfArrayElements {array})"
+        )));
+    }
+    if depth != 0 {
+        return Err(err(format!(
+            "a 3D texture (pixelDepth {depth}) is not supported: cubeforge reads 2D textures and cube maps"
+        )));
+    }
+    let cube = match faces {
+        6 => true,
+        1 => false,
+        _ => {
+            return Err(err(format!(
+                "invalid header: numberOfFaces is {faces}, but a 2D texture has 1 and a cube map 6"
+            )))
+        }
+    };
+    if height == 0 {
+        return Err(err(
+            "a 1D texture (pixelHeight 0) is not supported: cubeforge reads 2D textures and cube maps".into(),
+        ));
+    }
+    if cube {
+        limits.check_cube(path, width as u64, height as u64)?;
+        if width != height {
+            return Err(err(format!(
+                "invalid cube map: faces must be square, but they are {width}x{height}"
+            )));
+        }
+    } else {
+        limits.check(path, width as u64, height as u64)?;
+    }
+    let (width, height) = (width as usize, height as usize);
+    let max_levels = CubeMap::full_chain_len(width.max(height));
+    // 0 asks the loader to make the mips: the file then holds level 0 only.
+    let level_count = (level_field as usize).max(1);
+    if level_count > max_levels {
+        return Err(err(format!(
+            "invalid header: numberOfMipmapLevels is {level_field}, but a {width}x{height} texture has at most {max_levels} levels"
+        )));
+    }
+
+    // Key/value pairs, each checked against the block they sit in.
+    let kvd_end = HEADER_LEN
+        .checked_add(kvd_len as usize)
+        .filter(|&e| e <= file_len)
+        .ok_or_else(|| {
+            err(format!(
+                "truncated KTX file: its key/value data ({kvd_len} bytes) does not fit in the file ({file_len} bytes)"
+            ))
+        })?;
+    let mut key_values = Vec::new();
+    let mut at = HEADER_LEN;
+    while at < kvd_end {
+        if kvd_end - at < 4 {
+            return Err(err(
+                "invalid key/value data: an entry's size is cut off".into()
+            ));
+        }
+        let len = word(at) as usize;
+        let body = at + 4;
+        if len > kvd_end - body {
+            return Err(err(format!(
+                "invalid key/value data: an entry of {len} bytes at byte {at} runs past the key/value data"
+            )));
+        }
+        let kv = &bytes[body..body + len];
+        let nul = kv.iter().position(|&b| b == 0).ok_or_else(|| {
+            err(format!(
+                "invalid key/value data: the key at byte {body} has no terminating NUL"
+            ))
+        })?;
+        key_values.push(KeyValue {
+            key: String::from_utf8_lossy(&kv[..nul]).into_owned(),
+            value: kv[nul + 1..].to_vec(),
+        });
+        at = (body + len).div_ceil(4) * 4;
+    }
+
+    // Every level's place, checked before anything is allocated.
+    let mut spans = Vec::with_capacity(level_count);
+    let mut at = kvd_end;
+    for l in 0..level_count {
+        let (w, h) = ((width >> l).max(1), (height >> l).max(1));
+        let face_len = format.row_bytes(w) * h;
+        if file_len.saturating_sub(at) < 4 {
+            return Err(err(format!(
+                "truncated KTX file: level {l}'s imageSize is missing (the file has {file_len} bytes)"
+            )));
+        }
+        let image_size = word(at) as usize;
+        // A cube's imageSize is one face; a 2D texture's its one image: the same bytes.
+        let expected = face_len;
+        if image_size != expected {
+            let holds = if cube { "one face of" } else { "an image of" };
+            return Err(err(format!(
+                "invalid level {l}: imageSize is {image_size}, but {holds} {w}x{h} {} texels takes {expected}",
+                format.name()
+            )));
+        }
+        let start = at + 4;
+        let stride = face_len.div_ceil(4) * 4; // cubePadding
+        let level_end = start + faces as usize * stride;
+        if level_end > file_len {
+            return Err(err(format!(
+                "truncated KTX file: level {l} needs bytes {start} to {level_end}, but the file has {file_len}"
+            )));
+        }
+        spans.push((start, w, h, stride));
+        at = level_end.div_ceil(4) * 4; // mipPadding
+    }
+
+    let swap = big && format.gl().type_size > 1;
+    let face = |&(start, w, h, stride): &(usize, usize, usize, usize), f: usize| {
+        let b = &bytes[start + f * stride..start + f * stride + format.row_bytes(w) * h];
+        if swap {
+            let ts = format.gl().type_size as usize;
+            let mut le = b.to_vec();
+            le.chunks_exact_mut(ts).for_each(|c| c.reverse());
+            format.decode_face(&le, w, h)
+        } else {
+            format.decode_face(b, w, h)
+        }
+    };
+    let texture = if cube {
+        Decoded::Cube(CubeMap {
+            levels: spans
+                .iter()
+                .map(|s| std::array::from_fn(|f| face(s, f)))
+                .collect(),
+        })
+    } else {
+        Decoded::Image(face(&spans[0], 0))
+    };
+    Ok(Ktx1 {
+        texture,
+        format,
+        levels: level_count,
+        key_values,
+    })
+}
+
+/// Reads a KTX 1 file for [`super::read`]: a cube map with its levels, or a 2D texture's level 0.
+pub(crate) fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
+    let k = read(bytes, path, limits)?;
+    let meta = Meta {
+        file_format: FileFormat::Ktx1,
+        pixel_format: k.format.name().into(),
+        color_space: if k.format == Ktx1Format::Rgba8Srgb {
+            ColorSpace::Srgb
+        } else {
+            ColorSpace::Linear
+        },
+        hdr: k.format.is_float(),
+        replaced_values: 0,
+        stored_levels: k.levels,
+    };
+    Ok((k.texture, meta))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cube(n: usize, levels: usize) -> CubeMap {
+        CubeMap::from_fn(n, |d| Vec4::new(d.x.abs() * 3.0, d.y * 0.5 + 0.5, d.z, 1.0))
+            .with_box_mips(Some(levels))
+    }
+
+    #[test]
+    fn header_and_image_sizes_follow_the_spec() {
+        let c = cube(8, 4);
+        let kv = [KeyValue::text("hello", "world")];
+        let b = encode(&c, Ktx1Format::Rgba16f, &kv).unwrap();
+        let w = |i: usize| u32::from_le_bytes(b[12 + 4 * i..16 + 4 * i].try_into().unwrap());
+        assert_eq!(&b[..12], &IDENTIFIER);
+        assert_eq!(w(0), 0x0403_0201);
+        assert_eq!(
+            (w(1), w(2), w(3), w(4), w(5)),
+            (0x140B, 2, 0x1908, 0x881A, 0x1908)
+        );
+        assert_eq!((w(6), w(7), w(8), w(9), w(10), w(11)), (8, 8, 0, 0, 6, 4));
+        let kvd = w(12) as usize;
+        assert_eq!(kvd % 4, 0);
+        // First level's imageSize: one 8x8 RGBA16F face.
+        let at = 64 + kvd;
+        assert_eq!(
+            u32::from_le_bytes(b[at..at + 4].try_into().unwrap()),
+            8 * 8 * 8
+        );
+        let expect_len = 64
+            + kvd
+            + (0..4)
+                .map(|l| 4 + 6 * (8usize >> l).pow(2) * 8)
+                .sum::<usize>();
+        assert_eq!(b.len(), expect_len);
+    }
+
+    #[test]
+    fn round_trip_keeps_texels_and_key_values() {
+        let c = cube(4, 3);
+        let kv = [
+            KeyValue::text("a", "1"),
+            KeyValue {
+                key: "bin".into(),
+                value: vec![1, 2, 3],
+            },
+        ];
+        for f in [
+            Ktx1Format::Rgba32f,
+            Ktx1Format::Rgba16f,
+            Ktx1Format::Rgb16f,
+            Ktx1Format::Rgba8,
+        ] {
+            let b = encode(&c, f, &kv).unwrap();
+            let k = read(&b, Path::new("t.ktx"), &Limits::default()).unwrap();
+            assert_eq!(k.format, f);
+            assert_eq!(k.key_values[0].key, WRITER_KEY);
+            assert_eq!(&k.key_values[1..], &kv);
+            let Decoded::Cube(d) = k.texture else {
+                panic!("a cube")
+            };
+            assert_eq!(d.levels.len(), 3);
+            for (la, lb) in c.levels.iter().zip(&d.levels) {
+                for (fa, fb) in la.iter().zip(lb) {
+                    for (p, q) in fa.pixels.iter().zip(&fb.pixels) {
+                        // 8-bit UNORM holds [0, 1] to half a step; halves hold 11 bits.
+                        let (p, tol) = if f == Ktx1Format::Rgba8 {
+                            (p.clamp(Vec4::ZERO, Vec4::ONE), 0.51 / 255.0)
+                        } else {
+                            (*p, 1e-3 * p.abs().max_element().max(1.0))
+                        };
+                        let d = (p.truncate() - q.truncate()).abs().max_element();
+                        assert!(d <= tol, "{f:?} {p} {q}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rgb16f_rows_are_padded_to_four_bytes() {
+        // A 1x1 face of 6 bytes takes 8; a 3x3 one 3 rows of 20.
+        let c = cube(3, 2);
+        let b = encode(&c, Ktx1Format::Rgb16f, &[]).unwrap();
+        let k = read(&b, Path::new("t.ktx"), &Limits::default()).unwrap();
+        assert_eq!(k.levels, 2);
+        let kvd = u32::from_le_bytes(b[60..64].try_into().unwrap()) as usize;
+        assert_eq!(
+            u32::from_le_bytes(b[64 + kvd..68 + kvd].try_into().unwrap()),
+            60
+        );
+        assert_eq!(b.len(), 64 + kvd + 4 + 6 * 60 + 4 + 6 * 8);
+    }
+
+    #[test]
+    fn big_endian_files_are_read() {
+        let c = cube(2, 2);
+        let le = encode(&c, Ktx1Format::Rgba16f, &[KeyValue::text("k", "v")]).unwrap();
+        // Swap every UInt32 of the header, key/value sizes and imageSizes, and every half.
+        let mut be = le.clone();
+        let swap4 = |b: &mut Vec<u8>, at: usize| b[at..at + 4].reverse();
+        for i in 0..13 {
+            swap4(&mut be, 12 + 4 * i);
+        }
+        let kvd = u32::from_le_bytes(le[60..64].try_into().unwrap()) as usize;
+        let mut at = 64;
+        while at < 64 + kvd {
+            let n = u32::from_le_bytes(le[at..at + 4].try_into().unwrap()) as usize;
+            swap4(&mut be, at);
+            at = (at + 4 + n).div_ceil(4) * 4;
+        }
+        for l in 0..2 {
+            let n = 2usize >> l;
+            swap4(&mut be, at);
+            for h in 0..6 * n * n * 4 {
+                be[at + 4 + 2 * h..at + 6 + 2 * h].reverse();
+            }
+            at += 4 + 6 * n * n * 8;
+        }
+        let a = read(&le, Path::new("le.ktx"), &Limits::default()).unwrap();
+        let b = read(&be, Path::new("be.ktx"), &Limits::default()).unwrap();
+        let (Decoded::Cube(a), Decoded::Cube(b)) = (a.texture, b.texture) else {
+            panic!("cubes")
+        };
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn sh_text_round_trips() {
+        let mut r = [[0.0f64; 3]; 9];
+        for (i, c) in r.iter_mut().enumerate() {
+            *c = [i as f64 * 0.1, -(i as f64) * 0.2, 1.0 / (i + 1) as f64];
+        }
+        let sh = filament_sh(&r);
+        let kv = sh_key_value(&sh);
+        assert_eq!(kv.key, "sh");
+        assert_eq!(kv.as_text().unwrap().lines().count(), 9);
+        let back = parse_sh(&kv.value).unwrap();
+        for i in 0..9 {
+            for c in 0..3 {
+                assert!((back[i][c] - sh[i][c]).abs() <= 1e-6 * sh[i][c].abs().max(1e-3));
+            }
+        }
+        assert!(parse_sh(b"1 2 3").is_none());
+    }
+}
