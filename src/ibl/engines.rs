@@ -6,6 +6,7 @@ use crate::convert::Loaded;
 use crate::cube::CubeMap;
 use crate::error::Result;
 use crate::filter::{sh, ChainOptions};
+use crate::image::Image;
 use crate::io::{self, FileFormat, GpuFormat};
 use crate::resample::Orientation;
 use std::path::{Path, PathBuf};
@@ -133,6 +134,8 @@ pub fn pack(engine: Engine, l: &Lighting, ctx: &Context) -> Result<Delivery> {
     match engine {
         Engine::Bevy => bevy(l, ctx),
         Engine::Gltf => gltf(l, ctx),
+        Engine::Filament => filament(l, ctx),
+        Engine::Babylon => babylon(l, ctx),
         Engine::Generic => generic(l, ctx),
         _ => Err(crate::Error::usage(format!(
             "--target {} is not available yet",
@@ -220,6 +223,108 @@ fn gltf(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     Ok(Delivery {
         clamped: clamped(&spec, format, &[&l.specular, &l.diffuse]),
         files,
+        snippet,
+        levels: Vec::new(),
+    })
+}
+
+fn filament(l: &Lighting, ctx: &Context) -> Result<Delivery> {
+    use io::ktx1::{self, KeyValue, Ktx1Format};
+    let gpu = ctx.opts.gpu_format.unwrap_or(GpuFormat::Rgba16f);
+    let format = Ktx1Format::from_gpu(gpu);
+    let sh = ktx1::filament_sh(&l.sh);
+    let levels_json = describe(l).to_json();
+    let ibl = ctx.path("_ibl.ktx");
+    let irr = ctx.path("_irradiance.ktx");
+    let sky = ctx.path("_skybox.ktx");
+    let sh_txt = ctx.out.join("sh.txt");
+    let enc = |cube: &CubeMap, kv: &[KeyValue], path: &Path| {
+        ktx1::encode(cube, format, kv).map_err(|e| crate::Error::file(path, e))
+    };
+    let ibl_bytes = enc(
+        &l.specular,
+        &[
+            ktx1::sh_key_value(&sh),
+            KeyValue {
+                key: io::ktx2::LEVELS_KEY.into(),
+                value: levels_json,
+            },
+        ],
+        &ibl,
+    )?;
+    let irr_bytes = enc(&l.diffuse, &[], &irr)?;
+    // The skybox is the environment itself at the input's resolution, turned as the chain is.
+    let sky_size = ctx
+        .loaded
+        .face_size()
+        .clamp(l.specular.size().min(2048), 2048);
+    let resampler = crate::resample::Resampler {
+        orientation: ctx.orientation,
+        ..crate::resample::Resampler::default()
+    };
+    let skybox = crate::convert::to_cube(ctx.loaded, sky_size, &resampler);
+    let sky_bytes = enc(&skybox, &[], &sky)?;
+    let names = [
+        "L00", "L1-1", "L10", "L11", "L2-2", "L2-1", "L20", "L21", "L22",
+    ];
+    let mut text = String::new();
+    for (c, name) in sh.iter().zip(names) {
+        text.push_str(&format!(
+            "({:>12.9}, {:>12.9}, {:>12.9}); // {name}, irradiance, pre-scaled base\n",
+            c[0], c[1], c[2]
+        ));
+    }
+    let snippet = format!(
+        r#"// Filament (as cmgen --deploy): roughness r sits at lod = (levels - 1) * r * (2 - r).
+auto ibl = ktxreader::Ktx1Reader::createTexture(engine, new image::Ktx1Bundle(iblData, iblSize), false);   // {i}
+math::float3 sh[9];
+iblBundle->getSphericalHarmonics(sh);   // the "sh" key (also in sh.txt)
+auto light = IndirectLight::Builder().reflections(ibl).irradiance(3, sh).intensity(30000.0f).build(*engine);
+auto sky = Skybox::Builder().environment(ktxreader::Ktx1Reader::createTexture(engine, skyBundle, false)).build(*engine);   // {k}"#,
+        i = file_name(&ibl),
+        k = file_name(&sky),
+    );
+    let all: Vec<&Image> = [&l.specular, &l.diffuse, &skybox]
+        .into_iter()
+        .flat_map(|c| c.levels.iter().flatten())
+        .collect();
+    Ok(Delivery {
+        clamped: io::clamp_warning(&ibl, FileFormat::Ktx1, gpu, all),
+        files: vec![
+            (ibl, ibl_bytes),
+            (irr, irr_bytes),
+            (sky, sky_bytes),
+            (sh_txt, text.into_bytes()),
+        ],
+        snippet,
+        levels: Vec::new(),
+    })
+}
+
+fn babylon(l: &Lighting, ctx: &Context) -> Result<Delivery> {
+    use io::babylon_env::{self, SphericalPolynomial};
+    let path = ctx.path(".env");
+    let poly = SphericalPolynomial::from_radiance_sh(&l.sh);
+    let bytes = babylon_env::encode(
+        &l.specular,
+        Some(&poly),
+        babylon_env::DEFAULT_LOD_GENERATION_SCALE,
+    )
+    .map_err(crate::Error::usage)?;
+    let snippet = format!(
+        r#"// Babylon.js: level m holds GGX alpha = 2^(m / 0.8) / width, what lodGenerationScale 0.8 reads.
+scene.environmentTexture = BABYLON.CubeTexture.CreateFromPrefilteredData("{f}", scene);
+scene.createDefaultSkybox(scene.environmentTexture, true);"#,
+        f = file_name(&path),
+    );
+    Ok(Delivery {
+        clamped: io::clamp_warning(
+            &path,
+            FileFormat::Env,
+            GpuFormat::Rgba16f,
+            l.specular.levels.iter().flatten(),
+        ),
+        files: vec![(path, bytes)],
         snippet,
         levels: Vec::new(),
     })

@@ -85,15 +85,14 @@ impl RoughnessMapping {
             RoughnessMapping::Filament => 1.0 - (1.0 - lod).max(0.0).sqrt(),
             RoughnessMapping::Babylon if m == 0 => 0.0,
             RoughnessMapping::Babylon => {
-                let alpha = (2f32.powf(m as f32 / BABYLON_LOD_SCALE) / size as f32).min(1.0);
+                // Babylon's shaders pick lod = log2(width * alpha) * lodGenerationScale.
+                let scale = crate::io::babylon_env::DEFAULT_LOD_GENERATION_SCALE as f32;
+                let alpha = (2f32.powf(m as f32 / scale) / size as f32).min(1.0);
                 alpha.sqrt()
             }
         }
     }
 }
-
-/// Babylon's `lodGenerationScale`: its shaders pick lod = log2(width * alpha) * 0.8.
-pub const BABYLON_LOD_SCALE: f32 = 0.8;
 
 /// What a caller may change; None takes the engine's default.
 #[derive(Clone, Debug, Default)]

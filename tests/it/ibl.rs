@@ -146,6 +146,17 @@ const SMALL: [&str; 8] = [
     "16",
 ];
 
+const BABYLON: [&str; 8] = [
+    "--size",
+    "32",
+    "--min-size",
+    "1",
+    "--diffuse-size",
+    "8",
+    "--samples",
+    "16",
+];
+
 #[test]
 fn each_engine_sees_the_panorama_unmirrored() {
     let dir = tempfile::tempdir().unwrap();
@@ -153,7 +164,12 @@ fn each_engine_sees_the_panorama_unmirrored() {
     // (target, specular file, the engine's lookup as cube direction -> world direction,
     // right-handed world, where the panorama's centre faces)
     type WorldOf = fn(Vec3) -> Vec3;
-    let cases: [(&str, &str, WorldOf, bool, Vec3); 2] = [
+    let cases: [(&str, &str, WorldOf, bool, Vec3); 4] = [
+        // Filament looks its cube maps up with the world direction (right-handed); cmgen
+        // mirrors X first, so the view is the panorama's, centre at +Z.
+        ("filament", "env_ibl.ktx", |d| d, true, Vec3::Z),
+        // Babylon's default scene is left-handed and looks the cube up with the world direction.
+        ("babylon", "env.env", |d| d, false, Vec3::Z),
         // Bevy samples (x, y, -z) of the world direction (environment_map.wesl).
         (
             "bevy",
@@ -174,7 +190,13 @@ fn each_engine_sees_the_panorama_unmirrored() {
     ];
     for (target, file, world_of, rh, ahead) in cases {
         let out = dir.path().join(target);
-        ibl(&input, &out, target, &SMALL);
+        // Babylon's .env holds every level down to 1 x 1.
+        let args: &[&str] = if target == "babylon" {
+            &BABYLON
+        } else {
+            &SMALL
+        };
+        ibl(&input, &out, target, args);
         let cube = read_cube(&out.join(file));
         assert_unmirrored(target, marks_in_world(&cube, world_of), rh, ahead);
     }
@@ -292,6 +314,73 @@ fn light_is_kept_in_the_specular_and_diffuse_maps() {
 }
 
 #[test]
+fn filament_gets_cmgen_files_and_its_sh_convention() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = marker_panorama(dir.path());
+    let out = dir.path().join("filament");
+    ibl(
+        &input,
+        &out,
+        "filament",
+        &["--size", "64", "--samples", "16"],
+    );
+    let bytes = std::fs::read(out.join("env_ibl.ktx")).unwrap();
+    let k = io::ktx1::read(&bytes, Path::new("env_ibl.ktx"), &io::Limits::default()).unwrap();
+    // 64 down to 16 px: 3 levels, roughness 1 - sqrt(1 - lod) with lod = m / 2.
+    assert_eq!(k.levels, 3);
+    let levels: LevelsFile =
+        serde_json::from_slice(k.value(io::ktx2::LEVELS_KEY).expect("levels key")).unwrap();
+    for l in &levels.levels {
+        let lod = l.level as f32 / 2.0;
+        let r = 1.0 - (1.0 - lod).sqrt();
+        assert!((l.roughness.unwrap() - r).abs() < 1e-6, "{l:?}");
+    }
+    // The "sh" key, evaluated as Filament's shader does, is the irradiance map's value (both
+    // over pi) in every direction, within the SH's own smoothing.
+    let sh = k.sh().expect("sh key");
+    let diffuse = read_cube(&out.join("env_irradiance.ktx"));
+    let n = diffuse.size();
+    let mut worst = 0.0f64;
+    let mut peak = 0.0f64;
+    for (f, face) in diffuse.levels[0].iter().enumerate() {
+        for y in 0..n {
+            for x in 0..n {
+                let d = face_dir(f, (x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32)
+                    .normalize();
+                let (x_, y_, z_) = (d.x as f64, d.y as f64, d.z as f64);
+                let poly = [
+                    1.0,
+                    y_,
+                    z_,
+                    x_,
+                    y_ * x_,
+                    y_ * z_,
+                    3.0 * z_ * z_ - 1.0,
+                    z_ * x_,
+                    x_ * x_ - y_ * y_,
+                ];
+                for c in 0..3 {
+                    let e: f64 = sh.iter().zip(poly).map(|(k, p)| k[c] * p).sum();
+                    let want = face.pixels[y * n + x][c] as f64;
+                    worst = worst.max((e - want).abs());
+                    peak = peak.max(want);
+                }
+            }
+        }
+    }
+    assert!(
+        worst < 0.1 * peak,
+        "SH vs irradiance map: {worst} (peak {peak})"
+    );
+    let txt = std::fs::read_to_string(out.join("sh.txt")).unwrap();
+    assert_eq!(txt.lines().count(), 9, "{txt}");
+    assert!(txt.starts_with('(') && txt.contains("// L00"), "{txt}");
+    // The skybox: one level, the environment at the input's resolution (64 px faces).
+    let sky = read_cube(&out.join("env_skybox.ktx"));
+    assert_eq!((sky.levels.len(), sky.size()), (1, 64));
+}
+
+#[test]
 fn panorama_targets_write_what_the_engine_imports() {
     let dir = tempfile::tempdir().unwrap();
     let input = marker_panorama(dir.path());
@@ -373,4 +462,29 @@ fn bad_ibl_requests_are_one_line_errors() {
         assert!(e.contains(needle), "{e}");
     }
     assert!(!out.exists());
+}
+
+#[test]
+fn babylon_reads_the_ibl_env() {
+    let Some(tools) = common::babylon_core() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let input = marker_panorama(dir.path());
+    let out = dir.path().join("babylon");
+    ibl(&input, &out, "babylon", &BABYLON);
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/tools/env_check.mjs");
+    let o = Command::new("node")
+        .arg(&script)
+        .arg(&tools)
+        .arg(out.join("env.env"))
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["width"], 32, "{j}");
+    assert_eq!(j["levels"], 6, "{j}");
+    assert_eq!(j["lodGenerationScale"], 0.8, "{j}");
+    assert!(j["irradiance"]["x"].is_array(), "{j}");
 }
