@@ -325,3 +325,16 @@ impl XorShift {
         &items[self.below(items.len())]
     }
 }
+
+/// Bevy's own KTX2 loader, built by `.ci/run` from `tests/tools/bevy_ktx2` into
+/// `target/tools/bevy_ktx2` (its path, when built).
+pub fn bevy_ktx2() -> Option<PathBuf> {
+    let bin = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("target/tools/bevy_ktx2/release/bevy_ktx2_check");
+    let found = reader_found(
+        "Bevy's KTX2 loader (bevy_image)",
+        "cargo build --release --locked --manifest-path tests/tools/bevy_ktx2/Cargo.toml --target-dir target/tools/bevy_ktx2",
+        bin.is_file(),
+    );
+    found.then_some(bin)
+}

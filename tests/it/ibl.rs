@@ -488,3 +488,23 @@ fn babylon_reads_the_ibl_env() {
     assert_eq!(j["lodGenerationScale"], 0.8, "{j}");
     assert!(j["irradiance"]["x"].is_array(), "{j}");
 }
+
+#[test]
+fn bevys_own_loader_takes_the_bevy_files_as_cube_maps() {
+    let Some(bevy) = common::bevy_ktx2() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let input = marker_panorama(dir.path());
+    let out = dir.path().join("bevy");
+    ibl(&input, &out, "bevy", &SMALL);
+    for (file, mips) in [("env_specular.ktx2", 4), ("env_diffuse.ktx2", 1)] {
+        let o = Command::new(&bevy).arg(out.join(file)).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["view"], "Cube", "{v}");
+        assert_eq!(v["layers"], 6, "{v}");
+        assert_eq!(v["mips"], mips, "{v}");
+        assert_eq!(v["format"], "Rgba16Float", "{v}");
+    }
+}
