@@ -429,10 +429,10 @@ const BAND_BLOCK_ROWS: usize = 4;
 
 /// The image padded to whole 4x4 blocks (last column and row repeated), as `T` texels made by
 /// `texel`, row by row.
-fn padded<T: Copy + Send>(img: &Image, texel: impl Fn(Vec4) -> T + Sync) -> (Vec<T>, usize, usize)
-where
-    T: Default,
-{
+fn padded<T: Copy + Send + Default>(
+    img: &Image,
+    texel: impl Fn(Vec4) -> T + Sync,
+) -> (Vec<T>, usize, usize) {
     let (pw, ph) = (img.width.div_ceil(4) * 4, img.height.div_ceil(4) * 4);
     let mut out = vec![T::default(); pw * ph];
     out.par_chunks_mut(pw).enumerate().for_each(|(y, row)| {

@@ -15,6 +15,7 @@ mod conversions;
 mod finite;
 mod flux;
 mod formats;
+mod gpu_formats;
 mod hostile_exr;
 mod info;
 mod man_pages;
