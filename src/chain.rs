@@ -208,7 +208,8 @@ pub(crate) fn encode_dir(
 
 /// The files a chain becomes at `path`: a KTX2 with its description in the metadata, a DDS
 /// and its sidecar, or (a name with no container extension) a chain folder of
-/// `face_format` faces. Refuses to overwrite any of `inputs`.
+/// `face_format` faces, in `gpu_format` (KTX2 supercompressed as `write.zstd` asks). Refuses
+/// to overwrite any of `inputs`.
 #[allow(clippy::too_many_arguments)]
 pub fn encode(
     path: &Path,
@@ -224,15 +225,22 @@ pub fn encode(
         Some(FileFormat::Ktx2) => {
             refuse(&[path.to_path_buf()])?;
             let json = description.to_json();
-            let bytes =
-                io::ktx2::encode_with_metadata(chain, gpu_format, &[(io::ktx2::LEVELS_KEY, &json)]);
+            let opts = WriteOptions {
+                gpu_format,
+                ..*write
+            };
+            let bytes = io::encode_cube_with(path, chain, &opts, &[(io::ktx2::LEVELS_KEY, &json)])?;
             Ok(vec![(path.to_path_buf(), bytes)])
         }
         Some(FileFormat::Dds) => {
             // DDS has no room for metadata: a sidecar that `info` reads.
             let side = dds_sidecar(path);
             refuse(&[path.to_path_buf(), side.clone()])?;
-            let bytes = io::encode_cube(path, chain, gpu_format)?;
+            let opts = WriteOptions {
+                gpu_format,
+                ..*write
+            };
+            let bytes = io::encode_cube_with(path, chain, &opts, &[])?;
             Ok(vec![
                 (path.to_path_buf(), bytes),
                 (side, description.to_json()),

@@ -36,6 +36,9 @@ pub struct Encoded {
     pub files: Vec<(PathBuf, Vec<u8>)>,
     /// Texels beyond the format's largest value, written as that value (None: none).
     pub clamped: Option<String>,
+    /// A lossy container format's (BC6H, BC7) quality: level 0 as read back against the map
+    /// before encoding, in dB ([`io::gpu::psnr`]).
+    pub psnr: Option<f64>,
 }
 
 impl Encoded {
@@ -112,6 +115,7 @@ impl Target {
             };
             io::clamp_warning(&self.path, f, self.write.gpu_format, images)
         });
+        let mut psnr = None;
         let files = match out {
             Output::Cube(cube) if self.kind == Kind::Faces => encode_faces(
                 &self.path,
@@ -129,7 +133,11 @@ impl Target {
                     self.levels
                 };
                 let cube: CubeMap = cube.with_box_mips(levels);
-                let bytes = io::encode_cube(&self.path, &cube, self.write.gpu_format)?;
+                let bytes = io::encode_cube_with(&self.path, &cube, &self.write, &[])?;
+                if self.write.gpu_format.is_lossy() {
+                    let faces: Vec<&Image> = cube.levels[0].iter().collect();
+                    psnr = io::container_psnr(&bytes, self.write.gpu_format, &faces);
+                }
                 vec![(self.path.clone(), bytes)]
             }
             Output::Image(img) => {
@@ -138,7 +146,11 @@ impl Target {
                 vec![(self.path.clone(), bytes)]
             }
         };
-        Ok(Encoded { files, clamped })
+        Ok(Encoded {
+            files,
+            clamped,
+            psnr,
+        })
     }
 }
 

@@ -21,9 +21,13 @@ pub struct Args {
     /// Write 16-bit PNG instead of 8-bit.
     #[arg(long)]
     pub png16: bool,
-    /// Texel format of KTX2 output (never sRGB: control maps hold data).
+    /// Texel format of KTX2 output (never sRGB: control maps hold data; all four channels).
     #[arg(long, value_enum, default_value_t = KtxFormat::Rgba8)]
     pub gpu_format: KtxFormat,
+    /// Supercompress KTX2 output with Zstandard at LEVEL (1 to 22; 19 when no level is given,
+    /// as in --zstd=19).
+    #[arg(long, value_name = "LEVEL", num_args = 0..=1, require_equals = true, default_missing_value = "19", value_parser = clap::value_parser!(i32).range(1..=22))]
+    pub zstd: Option<i32>,
     /// Mip levels in KTX2 output (default: the full chain down to 1x1).
     #[arg(long)]
     pub levels: Option<usize>,
@@ -61,11 +65,14 @@ Example recipe:
   checker = { cells = [8, 8] }
   invert = true";
 
-/// KTX2 texel formats for data.
+/// KTX2 texel formats for data: RGBA, linear (the RGB-only HDR formats would drop the
+/// Fresnel mask in alpha).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum KtxFormat {
     /// RGBA 8-bit UNORM.
     Rgba8,
+    /// BC7 UNORM blocks: RGBA in 1 byte a texel (lossy; -v reports its PSNR).
+    Bc7,
     /// RGBA half float.
     Rgba16f,
     /// RGBA 32-bit float.
@@ -76,6 +83,7 @@ impl KtxFormat {
     fn gpu(self) -> GpuFormat {
         match self {
             KtxFormat::Rgba8 => GpuFormat::Rgba8,
+            KtxFormat::Bc7 => GpuFormat::Bc7,
             KtxFormat::Rgba16f => GpuFormat::Rgba16f,
             KtxFormat::Rgba32f => GpuFormat::Rgba32f,
         }
@@ -100,6 +108,9 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     }
     if a.levels.is_some() && format != FileFormat::Ktx2 {
         return Err(Error::usage("--levels applies to KTX2 output only"));
+    }
+    if a.zstd.is_some() && format != FileFormat::Ktx2 {
+        return Err(io::zstd_needs_ktx2(&a.output));
     }
     let sidecar_path = sidecar_path(&a.output);
 
@@ -146,8 +157,16 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         FileFormat::Ktx2 => {
             let levels = baked.image.mip_chain(a.levels.unwrap_or(full_chain));
             let gpu = a.gpu_format.gpu();
-            let what = format!("KTX2 {} with {} mip levels", gpu.name(), levels.len());
-            (ktx2::encode_2d(&levels, gpu), what)
+            let mut what = format!("KTX2 {} with {} mip levels", gpu.name(), levels.len());
+            if let Some(z) = a.zstd {
+                what.push_str(&format!(", Zstandard level {z}"));
+            }
+            let bytes = ktx2::encode_2d_with(&levels, gpu, a.zstd)
+                .map_err(|e| Error::file(&a.output, e))?;
+            if gpu.is_lossy() {
+                stages.quality(gpu, io::container_psnr(&bytes, gpu, &[&levels[0]]));
+            }
+            (bytes, what)
         }
         FileFormat::Exr => (
             io::encode_image(&a.output, &baked.image, &WriteOptions::default())?,

@@ -3,7 +3,7 @@
 use super::{warn, Stages};
 use cubeforge::convert;
 use cubeforge::cube::{CubeMap, Interp};
-use cubeforge::io::{FileFormat, GpuFormat, WriteOptions};
+use cubeforge::io::{self, FileFormat, GpuFormat, WriteOptions};
 use cubeforge::layout::Kind;
 use cubeforge::output::{self, Target};
 use cubeforge::resample::{Orientation, Resampler};
@@ -49,9 +49,14 @@ pub struct Args {
     /// Write 16-bit PNG instead of 8-bit.
     #[arg(long)]
     pub png16: bool,
-    /// Texel format of KTX2 and DDS output (default rgba16f).
+    /// Texel format of KTX2 and DDS output (default rgba16f; bc6h and bc7 are block
+    /// compressed, rgb9e5 and rg11b10 packed HDR in 4 bytes).
     #[arg(long, value_enum)]
     pub gpu_format: Option<GpuFormat>,
+    /// Supercompress KTX2 output with Zstandard at LEVEL (1 to 22; 19 when no level is given,
+    /// as in --zstd=19). Readers inflate it on load (three.js, Bevy, KTX-Software); DDS has none.
+    #[arg(long, value_name = "LEVEL", num_args = 0..=1, require_equals = true, default_missing_value = "19", value_parser = clap::value_parser!(i32).range(1..=22))]
+    pub zstd: Option<i32>,
     /// Mip levels in KTX2 and DDS output (default: the full chain down to 1x1).
     #[arg(long)]
     pub levels: Option<usize>,
@@ -82,6 +87,11 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
         if a.gpu_format.is_some() {
             warn("--gpu-format applies to KTX2 and DDS outputs: ignored");
         }
+        if a.zstd.is_some() {
+            warn("--zstd applies to KTX2 outputs: ignored");
+        }
+    } else if to == Kind::Dds && a.zstd.is_some() {
+        return Err(io::zstd_needs_ktx2(&a.output));
     }
     if a.levels == Some(0) {
         return Err(Error::usage("--levels 0: a map has at least 1 level"));
@@ -143,6 +153,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
         linear: a.input.linear,
         png16: a.png16,
         gpu_format: a.gpu_format.unwrap_or_default(),
+        zstd: a.zstd.filter(|_| container),
     };
     target.levels = a.levels;
     target.tone = a.tone.for_target(&target);
@@ -164,6 +175,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
         warn(w);
     }
     stages.done("encode");
+    stages.quality(target.write.gpu_format, encoded.psnr);
     super::deliver(&encoded.files, to_stdout)?;
     stages.done("write");
     stages.total();

@@ -36,6 +36,10 @@ pub struct Args {
     /// Texel format of KTX2 and DDS output.
     #[arg(long, value_enum, default_value_t = GpuFormat::Rgba16f)]
     pub gpu_format: GpuFormat,
+    /// Supercompress KTX2 output with Zstandard at LEVEL (1 to 22; 19 when no level is given,
+    /// as in --zstd=19). Readers inflate it on load (three.js, Bevy, KTX-Software); DDS has none.
+    #[arg(long, value_name = "LEVEL", num_args = 0..=1, require_equals = true, default_missing_value = "19", value_parser = clap::value_parser!(i32).range(1..=22))]
+    pub zstd: Option<i32>,
     #[command(flatten)]
     pub tone: super::ToneArgs,
     #[command(flatten)]
@@ -49,8 +53,15 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     target.write = WriteOptions {
         linear: a.input.linear,
         gpu_format: a.gpu_format,
+        zstd: a.zstd,
         ..WriteOptions::default()
     };
+    match target.kind {
+        Kind::Ktx2 => {}
+        Kind::Dds if a.zstd.is_some() => return Err(cubeforge::io::zstd_needs_ktx2(&a.output)),
+        _ if a.zstd.is_some() => super::warn("--zstd applies to KTX2 outputs: ignored"),
+        _ => {}
+    }
     target.levels = Some(1);
     target.tone = a.tone.for_target(&target);
     if a.size == 0 || a.size > 4096 {
@@ -87,6 +98,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     if let Some(w) = &encoded.clamped {
         super::warn(w);
     }
+    stages.quality(a.gpu_format, encoded.psnr);
     let mut files = encoded.files;
     if let Some(p) = &a.sh {
         let json = serde_json::to_vec_pretty(&sh::ShFile::new(&coeffs))

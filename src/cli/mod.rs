@@ -160,6 +160,26 @@ impl Stages {
         }
         self.last = now;
     }
+    /// A line of detail shown with -v only (after the stages so far).
+    pub fn note(&self, text: impl std::fmt::Display) {
+        if self.verbose {
+            tell(format_args!("cubeforge: {text}"));
+        }
+    }
+    /// With -v, a lossy container format's quality (level 0 read back against the map).
+    pub fn quality(&self, format: cubeforge::io::GpuFormat, psnr: Option<f64>) {
+        if let Some(db) = psnr {
+            let how = if format.is_float() {
+                "RGB after v/(1+v)"
+            } else {
+                "RGBA as stored"
+            };
+            self.note(format_args!(
+                "{} quality: PSNR {db:.2} dB at level 0 ({how}, peak 1)",
+                format.name()
+            ));
+        }
+    }
     pub fn total(&self) {
         if self.verbose {
             tell(format_args!(

@@ -47,6 +47,10 @@ pub struct Args {
     /// Texel format of KTX2 and DDS output.
     #[arg(long, value_enum, default_value_t = GpuFormat::Rgba16f)]
     pub gpu_format: GpuFormat,
+    /// Supercompress KTX2 output with Zstandard at LEVEL (1 to 22; 19 when no level is given,
+    /// as in --zstd=19). Readers inflate it on load (three.js, Bevy, KTX-Software); DDS has none.
+    #[arg(long, value_name = "LEVEL", num_args = 0..=1, require_equals = true, default_missing_value = "19", value_parser = clap::value_parser!(i32).range(1..=22))]
+    pub zstd: Option<i32>,
     #[command(flatten)]
     pub input: super::InputArgs,
 }
@@ -68,6 +72,12 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
                 a.format
             ))
         })?;
+    match container {
+        Some(FileFormat::Ktx2) => {}
+        Some(_) if a.zstd.is_some() => return Err(io::zstd_needs_ktx2(&a.output)),
+        _ if a.zstd.is_some() => super::warn("--zstd applies to KTX2 outputs: ignored"),
+        _ => {}
+    }
     if a.samples == 0 {
         return Err(Error::usage("--samples must be at least 1"));
     }
@@ -124,6 +134,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     }
     let write = WriteOptions {
         linear: a.input.linear,
+        zstd: a.zstd.filter(|_| container == Some(FileFormat::Ktx2)),
         ..WriteOptions::default()
     };
     let files = cubeforge::chain::encode(
@@ -135,6 +146,13 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         a.gpu_format,
         &loaded.files,
     )?;
+    if container.is_some() && a.gpu_format.is_lossy() {
+        let faces: Vec<&cubeforge::image::Image> = chain.levels[0].iter().collect();
+        let psnr = files
+            .first()
+            .and_then(|(_, bytes)| io::container_psnr(bytes, a.gpu_format, &faces));
+        stages.quality(a.gpu_format, psnr);
+    }
     stages.done("encode");
     super::write_files(&files)?;
     stages.done("write");

@@ -144,14 +144,32 @@ pub fn pack(engine: Engine, l: &Lighting, ctx: &Context) -> Result<Delivery> {
     }
 }
 
-/// A KTX2 cube map of `cube` in `format`, its levels described in the metadata.
-fn ktx2(cube: &CubeMap, levels: Option<&LevelsFile>, format: GpuFormat) -> Vec<u8> {
-    match levels {
-        Some(d) => {
-            let json = d.to_json();
-            io::ktx2::encode_with_metadata(cube, format, &[(io::ktx2::LEVELS_KEY, &json)])
-        }
-        None => io::ktx2::encode(cube, format),
+/// A KTX2 cube map of `cube` in `format`, supercompressed when asked, its levels described in
+/// the metadata.
+fn ktx2(
+    path: &Path,
+    cube: &CubeMap,
+    levels: Option<&LevelsFile>,
+    format: GpuFormat,
+    ctx: &Context,
+) -> Result<Vec<u8>> {
+    let json = levels.map(LevelsFile::to_json);
+    let extra: Vec<(&str, &[u8])> = json
+        .as_deref()
+        .map(|j| (io::ktx2::LEVELS_KEY, j))
+        .into_iter()
+        .collect();
+    io::ktx2::encode_cube_with(cube, format, ctx.opts.zstd, &extra)
+        .map_err(|e| crate::Error::file(path, e))
+}
+
+/// Refuses --zstd for targets whose containers have no supercompression.
+fn no_zstd(ctx: &Context, what: &str) -> Result<()> {
+    match ctx.opts.zstd {
+        Some(_) => Err(crate::Error::usage(format!(
+            "--zstd supercompresses KTX2; {what} has none"
+        ))),
+        None => Ok(()),
     }
 }
 
@@ -178,8 +196,11 @@ fn bevy(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     let spec = ctx.path("_specular.ktx2");
     let diff = ctx.path("_diffuse.ktx2");
     let files = vec![
-        (spec.clone(), ktx2(&l.specular, Some(&describe(l)), format)),
-        (diff.clone(), ktx2(&l.diffuse, None, format)),
+        (
+            spec.clone(),
+            ktx2(&spec, &l.specular, Some(&describe(l)), format, ctx)?,
+        ),
+        (diff.clone(), ktx2(&diff, &l.diffuse, None, format, ctx)?),
     ];
     let snippet = format!(
         r#"// Bevy: both files in assets/; the specular chain's level m holds roughness m / (levels - 1).
@@ -208,8 +229,11 @@ fn gltf(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     let spec = ctx.path("_ggx.ktx2");
     let diff = ctx.path("_lambertian.ktx2");
     let files = vec![
-        (spec.clone(), ktx2(&l.specular, Some(&describe(l)), format)),
-        (diff.clone(), ktx2(&l.diffuse, None, format)),
+        (
+            spec.clone(),
+            ktx2(&spec, &l.specular, Some(&describe(l)), format, ctx)?,
+        ),
+        (diff.clone(), ktx2(&diff, &l.diffuse, None, format, ctx)?),
     ];
     let snippet = format!(
         "glTF (Khronos glTF Sample Viewer, glTF-IBL-Sampler's files and orientation):\n\
@@ -230,8 +254,9 @@ fn gltf(l: &Lighting, ctx: &Context) -> Result<Delivery> {
 
 fn filament(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     use io::ktx1::{self, KeyValue, Ktx1Format};
-    let gpu = ctx.opts.gpu_format.unwrap_or(GpuFormat::Rgba16f);
-    let format = Ktx1Format::from_gpu(gpu);
+    // cmgen's own format: R11F_G11F_B10F.
+    let gpu = ctx.opts.gpu_format.unwrap_or(GpuFormat::Rg11b10);
+    let format = Ktx1Format::from_gpu(gpu).map_err(crate::Error::usage)?;
     let sh = ktx1::filament_sh(&l.sh);
     let levels_json = describe(l).to_json();
     let ibl = ctx.path("_ibl.ktx");
@@ -303,6 +328,12 @@ auto sky = Skybox::Builder().environment(ktxreader::Ktx1Reader::createTexture(en
 
 fn babylon(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     use io::babylon_env::{self, SphericalPolynomial};
+    no_zstd(ctx, "Babylon's .env")?;
+    if ctx.opts.gpu_format.is_some() {
+        return Err(crate::Error::usage(
+            "--gpu-format: Babylon's .env holds RGBD PNG faces only",
+        ));
+    }
     let path = ctx.path(".env");
     let poly = SphericalPolynomial::from_radiance_sh(&l.sh);
     let bytes = babylon_env::encode(
@@ -337,8 +368,11 @@ fn generic(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     let shp = ctx.path("_sh.json");
     let sh_json = serde_json::to_vec_pretty(&sh::ShFile::new(&l.sh)).unwrap_or_default();
     let files = vec![
-        (spec.clone(), ktx2(&l.specular, Some(&describe(l)), format)),
-        (diff.clone(), ktx2(&l.diffuse, None, format)),
+        (
+            spec.clone(),
+            ktx2(&spec, &l.specular, Some(&describe(l)), format, ctx)?,
+        ),
+        (diff.clone(), ktx2(&diff, &l.diffuse, None, format, ctx)?),
         (shp.clone(), sh_json),
     ];
     let snippet = format!(

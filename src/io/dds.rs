@@ -1,17 +1,21 @@
 //! DDS cube maps with every mip level (and 2D textures, read as their level 0 image).
 //!
-//! Writes a DX10-header cube map (DXGI R16G16B16A16_FLOAT, R32G32B32A32_FLOAT,
-//! R8G8B8A8_UNORM_SRGB or R8G8B8A8_UNORM) with the cube-map caps and the TEXTURECUBE misc flag;
-//! the texels follow face-major, as DDS wants: for each face +X -X +Y -Y +Z -Z, all its levels.
+//! Writes a DX10-header cube map in any [`GpuFormat`] (DXGI R16G16B16A16_FLOAT,
+//! R32G32B32A32_FLOAT, R8G8B8A8_UNORM_SRGB, R8G8B8A8_UNORM, BC6H_UF16, BC7_UNORM(_SRGB),
+//! R9G9B9E5_SHAREDEXP, R11G11B10_FLOAT) with the cube-map caps and the TEXTURECUBE misc flag;
+//! the texels follow face-major, as DDS wants: for each face +X -X +Y -Y +Z -Z, all its levels
+//! (block formats in whole 4x4 blocks). DDS has no supercompression.
 //!
-//! Reads those four DX10 formats and their legacy-header forms: FourCC 113 (A16B16G16R16F),
-//! FourCC 116 (A32B32G32R32F) and the 32-bit RGBA8 masks (A8B8G8R8, X8B8G8R8, and the
-//! BGRA-ordered A8R8G8B8, X8R8G8B8), which have no colour-space flag and are read as UNORM.
-//! The headers are parsed with `ddsfile`; every size is checked here, with checked arithmetic,
-//! against the file's length and against [`Limits`] before any texel is allocated.
+//! Reads those DX10 formats and the legacy-header forms of the first four: FourCC 113
+//! (A16B16G16R16F), FourCC 116 (A32B32G32R32F) and the 32-bit RGBA8 masks (A8B8G8R8, X8B8G8R8,
+//! and the BGRA-ordered A8R8G8B8, X8R8G8B8), which have no colour-space flag and are read as
+//! UNORM. The headers are parsed with `ddsfile`; the declared shape is checked against
+//! [`Limits`] by [`super::container::Shape`] (shared with KTX2), and every size against the
+//! file's length with checked arithmetic, before any texel is allocated.
 
 #![warn(missing_docs)]
 
+use super::container::Shape;
 use super::guard::{caught, one_line};
 use super::{Decoded, FileFormat, GpuFormat, Limits, Meta};
 use crate::cube::CubeMap;
@@ -29,7 +33,8 @@ const HEADER_END: usize = 4 + 124;
 /// ... plus the 20-byte DX10 header.
 const HEADER10_END: usize = HEADER_END + 20;
 
-const SUPPORTED: &str = "cubeforge reads RGBA16F, RGBA32F, RGBA8 sRGB/UNORM";
+const SUPPORTED: &str =
+    "cubeforge reads RGBA16F, RGBA32F, RGBA8 sRGB/UNORM, BC6H UF16, BC7 sRGB/UNORM, R9G9B9E5 and R11G11B10";
 
 fn dxgi_format(format: GpuFormat) -> DxgiFormat {
     match format {
@@ -37,26 +42,37 @@ fn dxgi_format(format: GpuFormat) -> DxgiFormat {
         GpuFormat::Rgba32f => DxgiFormat::R32G32B32A32_Float,
         GpuFormat::Rgba8Srgb => DxgiFormat::R8G8B8A8_UNorm_sRGB,
         GpuFormat::Rgba8 => DxgiFormat::R8G8B8A8_UNorm,
+        GpuFormat::Bc6h => DxgiFormat::BC6H_UF16,
+        GpuFormat::Bc7 => DxgiFormat::BC7_UNorm,
+        GpuFormat::Bc7Srgb => DxgiFormat::BC7_UNorm_sRGB,
+        GpuFormat::Rgb9e5 => DxgiFormat::R9G9B9E5_SharedExp,
+        GpuFormat::Rg11b10 => DxgiFormat::R11G11B10_Float,
     }
 }
 
 fn from_dxgi(raw: u32) -> Option<GpuFormat> {
-    Some(match raw {
-        x if x == DxgiFormat::R16G16B16A16_Float as u32 => GpuFormat::Rgba16f,
-        x if x == DxgiFormat::R32G32B32A32_Float as u32 => GpuFormat::Rgba32f,
-        x if x == DxgiFormat::R8G8B8A8_UNorm_sRGB as u32 => GpuFormat::Rgba8Srgb,
-        x if x == DxgiFormat::R8G8B8A8_UNorm as u32 => GpuFormat::Rgba8,
-        _ => return None,
-    })
+    const ALL: [GpuFormat; 9] = [
+        GpuFormat::Rgba16f,
+        GpuFormat::Rgba32f,
+        GpuFormat::Rgba8Srgb,
+        GpuFormat::Rgba8,
+        GpuFormat::Bc6h,
+        GpuFormat::Bc7,
+        GpuFormat::Bc7Srgb,
+        GpuFormat::Rgb9e5,
+        GpuFormat::Rg11b10,
+    ];
+    ALL.into_iter().find(|&f| dxgi_format(f) as u32 == raw)
 }
 
-/// Encodes every level of `cube` as a DX10 DDS cube map in `format`.
+/// Encodes every level of `cube` as a DX10 DDS cube map in `format`; every face of every
+/// level is encoded at once, in parallel.
 pub fn encode(cube: &CubeMap, format: GpuFormat) -> std::result::Result<Vec<u8>, String> {
+    use rayon::prelude::*;
     let size = cube.size();
-    let bpt = format.bytes_per_texel();
     let edge = u32::try_from(size)
         .ok()
-        .filter(|n| n.checked_mul(bpt as u32).is_some())
+        .filter(|n| n.checked_mul(format.block_bytes() as u32).is_some())
         .ok_or_else(|| format!("faces of {size}x{size} pixels are too large for DDS"))?;
     let levels = u32::try_from(cube.levels.len()).map_err(|_| "too many mip levels for DDS")?;
     let dxgi = dxgi_format(format);
@@ -82,12 +98,16 @@ pub fn encode(cube: &CubeMap, format: GpuFormat) -> std::result::Result<Vec<u8>,
         AlphaMode::Unknown,
     );
 
-    let texels: usize = cube
-        .levels
-        .iter()
-        .map(|l| 6 * l[0].width * l[0].width)
-        .sum();
-    let mut out = Vec::with_capacity(HEADER10_END + texels * bpt);
+    // Face-major: for each face, all its levels.
+    let images: Vec<&Image> = (0..6)
+        .flat_map(|face| cube.levels.iter().map(move |l| &l[face]))
+        .collect();
+    let encoded: Vec<Vec<u8>> = images
+        .par_iter()
+        .map(|img| format.encode_image(img))
+        .collect();
+    let texels: usize = encoded.iter().map(Vec::len).sum();
+    let mut out = Vec::with_capacity(HEADER10_END + texels);
     out.extend_from_slice(MAGIC);
     header
         .write(&mut out)
@@ -95,10 +115,8 @@ pub fn encode(cube: &CubeMap, format: GpuFormat) -> std::result::Result<Vec<u8>,
     header10
         .write(&mut out)
         .map_err(|e| format!("cannot write a DDS header: {e}"))?;
-    for face in 0..6 {
-        for level in &cube.levels {
-            format.encode_into(&level[face].pixels, &mut out);
-        }
+    for bytes in encoded {
+        out.extend_from_slice(&bytes);
     }
     Ok(out)
 }
@@ -204,66 +222,58 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         ));
     }
 
-    let (width, height) = (header.width, header.height);
-    if !cube {
-        limits.check(path, width as u64, height as u64)?;
-        let size = (width as usize, height as usize);
-        // As for cube maps, the count as stored; 0 means a single level.
-        let levels = (le_u32(bytes, 28).unwrap_or(0) as usize).max(1);
-        let (decoded, mut meta) = decode_2d(bytes, path, size, format, order, data_start)?;
-        meta.stored_levels = levels;
-        return Ok((decoded, meta));
-    }
-    limits.check_cube(path, width as u64, height as u64)?;
-    if width != height {
-        return Err(err(format!(
-            "invalid cube map: faces must be square, but they are {width}x{height}"
-        )));
-    }
-    let size = width as usize;
-    // The count as stored, whether or not DDSD_MIPMAPCOUNT is set (as Microsoft's reader does);
-    // 0 means a single level.
-    let level_count = (le_u32(bytes, 28).unwrap_or(0) as usize).max(1);
-    let max_levels = CubeMap::full_chain_len(size);
-    if level_count > max_levels {
-        return Err(err(format!(
-            "invalid DDS header: it claims {level_count} mip levels, but a {size}x{size} face has at most {max_levels}"
-        )));
-    }
+    // The count as stored, whether or not DDSD_MIPMAPCOUNT is set (as Microsoft's reader
+    // does); 0 means a single level.
+    let level_field = le_u32(bytes, 28).unwrap_or(0);
+    let shape = Shape::check(
+        path,
+        limits,
+        format,
+        cube,
+        header.width,
+        header.height,
+        level_field,
+        "mipMapCount",
+    )?;
 
-    // Everything the header promises must be in the file before anything is allocated.
-    let bpt = format.bytes_per_texel() as u64;
-    let mut chain_len: u64 = 0;
-    for l in 0..level_count {
-        let n = (size >> l).max(1) as u64;
-        chain_len = n
-            .checked_mul(n)
-            .and_then(|t| t.checked_mul(bpt))
-            .and_then(|t| t.checked_add(chain_len))
-            .ok_or_else(|| err("invalid DDS header: sizes overflow".into()))?;
-    }
-    let needed = chain_len
-        .checked_mul(6)
-        .ok_or_else(|| err("invalid DDS header: sizes overflow".into()))?;
+    // Everything the header promises must be in the file before anything is allocated: a
+    // cube map's every level of six faces, a 2D texture's level 0 (its mips, when it has them,
+    // follow and are not needed).
+    let needed = if cube {
+        shape.total_bytes()
+    } else {
+        shape.face_bytes(0) as u64
+    };
     let have = (file_len - data_start) as u64;
     if have < needed {
+        let what = if cube {
+            format!("{} with {} levels need", shape.holds(0), shape.levels)
+        } else {
+            format!("{} needs", shape.holds(0))
+        };
         return Err(err(format!(
-            "truncated DDS file: six {size}x{size} {} faces with {level_count} levels need {needed} bytes of texels, but only {have} follow the header",
-            format.name()
+            "truncated DDS file: {what} {needed} bytes of texels, but only {have} follow the header"
         )));
     }
-
     let data = &bytes[data_start..];
-    let mut levels: Vec<Vec<Image>> = (0..level_count).map(|_| Vec::with_capacity(6)).collect();
-    let mut pos = 0usize;
     let mut scratch = Vec::new();
+    if !cube {
+        let (w, h) = shape.level_size(0);
+        let img = texels_image(&data[..needed as usize], w, h, format, order, &mut scratch);
+        let mut meta = meta(format);
+        meta.stored_levels = shape.levels;
+        return Ok((Decoded::Image(img), meta));
+    }
+
+    let mut levels: Vec<Vec<Image>> = (0..shape.levels).map(|_| Vec::with_capacity(6)).collect();
+    let mut pos = 0usize;
     for _face in 0..6 {
         for (l, faces) in levels.iter_mut().enumerate() {
-            let n = (size >> l).max(1);
-            let len = n * n * bpt as usize;
+            let (w, h) = shape.level_size(l);
+            let len = shape.face_bytes(l);
             let texels = &data[pos..pos + len];
             pos += len;
-            faces.push(texels_image(texels, n, n, format, order, &mut scratch));
+            faces.push(texels_image(texels, w, h, format, order, &mut scratch));
         }
     }
     let levels = levels
@@ -277,35 +287,6 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
     let mut meta = meta(format);
     meta.stored_levels = levels.len();
     Ok((Decoded::Cube(CubeMap { levels }), meta))
-}
-
-/// Level 0 of a 2D texture (its size checked against the limits), as an image: its mips, when
-/// it has them, follow and are not needed.
-fn decode_2d(
-    bytes: &[u8],
-    path: &Path,
-    (width, height): (usize, usize),
-    format: GpuFormat,
-    order: Order,
-    data_start: usize,
-) -> Result<(Decoded, Meta)> {
-    let needed = (width as u64)
-        .checked_mul(height as u64)
-        .and_then(|t| t.checked_mul(format.bytes_per_texel() as u64))
-        .ok_or_else(|| Error::file(path, "invalid DDS header: sizes overflow"))?;
-    let have = (bytes.len() - data_start) as u64;
-    if have < needed {
-        return Err(Error::file(
-            path,
-            format!(
-                "truncated DDS file: a {width}x{height} {} texture needs {needed} bytes of texels, but only {have} follow the header",
-                format.name()
-            ),
-        ));
-    }
-    let texels = &bytes[data_start..data_start + needed as usize];
-    let img = texels_image(texels, width, height, format, order, &mut Vec::new());
-    Ok((Decoded::Image(img), meta(format)))
 }
 
 /// One stored image of `w` x `h` texels, put in RGBA order first when stored otherwise.
@@ -332,23 +313,19 @@ fn texels_image(
         }
         &scratch[..]
     };
-    Image {
-        width: w,
-        height: h,
-        pixels: format.decode(texels, w * h),
-    }
+    format.decode_image(texels, w, h)
 }
 
 fn meta(format: GpuFormat) -> Meta {
     Meta {
         file_format: FileFormat::Dds,
         pixel_format: format.name().into(),
-        color_space: if format == GpuFormat::Rgba8Srgb {
+        color_space: if format.is_srgb() {
             ColorSpace::Srgb
         } else {
             ColorSpace::Linear
         },
-        hdr: matches!(format, GpuFormat::Rgba16f | GpuFormat::Rgba32f),
+        hdr: format.is_float(),
         replaced_values: 0,
         stored_levels: 1,
     }

@@ -45,6 +45,8 @@ const GL_SRGB8_ALPHA8: u32 = 0x8C43;
 const GL_RGBA32F: u32 = 0x8814;
 const GL_RGBA16F: u32 = 0x881A;
 const GL_RGB16F: u32 = 0x881B;
+const GL_R11F_G11F_B10F: u32 = 0x8C3A;
+const GL_UNSIGNED_INT_10F_11F_11F_REV: u32 = 0x8C3B;
 
 /// Key of the writer's name, as libktx writes it.
 pub const WRITER_KEY: &str = "KTXwriter";
@@ -72,7 +74,8 @@ pub enum Ktx1Format {
     Rgba8,
     /// GL_SRGB8_ALPHA8, GL_UNSIGNED_BYTE (sRGB colour).
     Rgba8Srgb,
-    // R11F_G11F_B10F: `Rg11b10` goes here.
+    /// GL_R11F_G11F_B10F, what cmgen deploys: three unsigned floats packed in 4 bytes.
+    Rg11b10,
 }
 
 /// The header fields that name a format: glType, glTypeSize, glFormat, glInternalFormat,
@@ -86,15 +89,22 @@ struct GlFields {
 }
 
 impl Ktx1Format {
-    /// The format that stores texels as `format` does.
-    pub fn from_gpu(format: GpuFormat) -> Ktx1Format {
-        match format {
+    /// The format that stores texels as `format` does; block-compressed and shared-exponent
+    /// formats have no KTX 1 form here (Filament's reader takes the ones below).
+    pub fn from_gpu(format: GpuFormat) -> std::result::Result<Ktx1Format, String> {
+        Ok(match format {
             GpuFormat::Rgba16f => Ktx1Format::Rgba16f,
             GpuFormat::Rgba32f => Ktx1Format::Rgba32f,
             GpuFormat::Rgba8 => Ktx1Format::Rgba8,
             GpuFormat::Rgba8Srgb => Ktx1Format::Rgba8Srgb,
-            // R11F_G11F_B10F: GpuFormat::Rg11b10 => Ktx1Format::Rg11b10,
-        }
+            GpuFormat::Rg11b10 => Ktx1Format::Rg11b10,
+            other => {
+                return Err(format!(
+                    "KTX 1 output takes rgba16f, rgba32f, rgba8, rgba8-srgb or rg11b10, not {}",
+                    other.name()
+                ))
+            }
+        })
     }
 
     /// The [`GpuFormat`] with the same texel encoding (None for RGB16F).
@@ -104,6 +114,7 @@ impl Ktx1Format {
             Ktx1Format::Rgba32f => Some(GpuFormat::Rgba32f),
             Ktx1Format::Rgba8 => Some(GpuFormat::Rgba8),
             Ktx1Format::Rgba8Srgb => Some(GpuFormat::Rgba8Srgb),
+            Ktx1Format::Rg11b10 => Some(GpuFormat::Rg11b10),
             Ktx1Format::Rgb16f => None,
         }
     }
@@ -120,7 +131,7 @@ impl Ktx1Format {
     pub fn bytes_per_texel(self) -> usize {
         match self {
             Ktx1Format::Rgb16f => 6,
-            f => f.gpu().map_or(0, GpuFormat::bytes_per_texel),
+            f => f.gpu().map_or(0, GpuFormat::block_bytes),
         }
     }
 
@@ -128,7 +139,7 @@ impl Ktx1Format {
     pub fn is_float(self) -> bool {
         matches!(
             self,
-            Ktx1Format::Rgba16f | Ktx1Format::Rgb16f | Ktx1Format::Rgba32f
+            Ktx1Format::Rgba16f | Ktx1Format::Rgb16f | Ktx1Format::Rgba32f | Ktx1Format::Rg11b10
         )
     }
 
@@ -139,6 +150,8 @@ impl Ktx1Format {
             Ktx1Format::Rgba32f => (GL_FLOAT, 4, GL_RGBA, GL_RGBA32F),
             Ktx1Format::Rgba8 => (GL_UNSIGNED_BYTE, 1, GL_RGBA, GL_RGBA8),
             Ktx1Format::Rgba8Srgb => (GL_UNSIGNED_BYTE, 1, GL_RGBA, GL_SRGB8_ALPHA8),
+            // cmgen's glType (the internal format's value): the only one Filament's reader maps.
+            Ktx1Format::Rg11b10 => (GL_R11F_G11F_B10F, 4, GL_RGB, GL_R11F_G11F_B10F),
         };
         GlFields {
             gl_type,
@@ -158,7 +171,12 @@ impl Ktx1Format {
             GL_RGBA32F => Ktx1Format::Rgba32f,
             GL_RGBA8 => Ktx1Format::Rgba8,
             GL_SRGB8_ALPHA8 => Ktx1Format::Rgba8Srgb,
-            // R11F_G11F_B10F: 0x8C3A with glType 0x8C3A or 0x8C3B.
+            // cmgen writes glType 0x8C3A; the GL specification's is 0x8C3B.
+            GL_R11F_G11F_B10F
+                if gl_type == GL_R11F_G11F_B10F || gl_type == GL_UNSIGNED_INT_10F_11F_11F_REV =>
+            {
+                return Some(Ktx1Format::Rg11b10)
+            }
             _ => return None,
         };
         (f.gl().gl_type == gl_type).then_some(f)
@@ -172,20 +190,23 @@ impl Ktx1Format {
     /// Appends one face's texels, row by row, each row padded to 4 bytes.
     fn encode_face(self, face: &Image, out: &mut Vec<u8>) {
         let row = self.row_bytes(face.width);
-        for y in 0..face.height {
-            let start = out.len();
-            let texels = &face.pixels[y * face.width..(y + 1) * face.width];
-            match self.gpu() {
-                Some(g) => g.encode_into(texels, out),
-                None => {
-                    for p in texels {
-                        for v in [p.x, p.y, p.z] {
-                            let h = half::f16::from_f32(super::finite(v, HALF_MAX));
-                            out.extend_from_slice(&h.to_le_bytes());
-                        }
+        let texels = face.width * self.bytes_per_texel();
+        let bytes = match self.gpu() {
+            Some(g) => g.encode_image(face),
+            None => {
+                let mut b = Vec::with_capacity(face.pixels.len() * 6);
+                for p in &face.pixels {
+                    for v in [p.x, p.y, p.z] {
+                        let h = half::f16::from_f32(super::finite(v, HALF_MAX));
+                        b.extend_from_slice(&h.to_le_bytes());
                     }
                 }
+                b
             }
+        };
+        for r in bytes.chunks_exact(texels.max(1)).take(face.height) {
+            let start = out.len();
+            out.extend_from_slice(r);
             out.resize(start + row, 0);
         }
     }
@@ -193,21 +214,25 @@ impl Ktx1Format {
     /// Decodes one face of `w` x `h` texels from little-endian `bytes` (padded rows).
     fn decode_face(self, bytes: &[u8], w: usize, h: usize) -> Image {
         let row = self.row_bytes(w);
-        let mut pixels = Vec::with_capacity(w * h);
+        let texels = w * self.bytes_per_texel();
+        let mut packed = Vec::with_capacity(texels * h);
         for y in 0..h {
-            let r = &bytes[y * row..y * row + w * self.bytes_per_texel()];
-            match self.gpu() {
-                Some(g) => pixels.extend(g.decode(r, w)),
-                None => pixels.extend(r.chunks_exact(6).map(|t| {
-                    let c = |i: usize| half::f16::from_le_bytes([t[2 * i], t[2 * i + 1]]).to_f32();
-                    Vec4::new(c(0), c(1), c(2), 1.0)
-                })),
-            }
+            packed.extend_from_slice(&bytes[y * row..y * row + texels]);
         }
-        Image {
-            width: w,
-            height: h,
-            pixels,
+        match self.gpu() {
+            Some(g) => g.decode_image(&packed, w, h),
+            None => Image {
+                width: w,
+                height: h,
+                pixels: packed
+                    .chunks_exact(6)
+                    .map(|t| {
+                        let c =
+                            |i: usize| half::f16::from_le_bytes([t[2 * i], t[2 * i + 1]]).to_f32();
+                        Vec4::new(c(0), c(1), c(2), 1.0)
+                    })
+                    .collect(),
+            },
         }
     }
 }
@@ -426,11 +451,15 @@ pub fn read(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Ktx1> {
     let format = Ktx1Format::from_gl(internal, gl_type).ok_or_else(|| {
         Error::unsupported(
             path,
-            format!("unsupported KTX format (glInternalFormat {internal:#06x}, glType {gl_type:#06x}): cubeforge reads RGBA16F, RGB16F, RGBA32F and RGBA8"),
+            format!("unsupported KTX format (glInternalFormat {internal:#06x}, glType {gl_type:#06x}): cubeforge reads RGBA16F, RGB16F, RGBA32F, RGBA8 and R11F_G11F_B10F"),
         )
     })?;
     let gl = format.gl();
-    if type_size != gl.type_size || gl_format != gl.format {
+    // cmgen's R11F_G11F_B10F files say glTypeSize 1 and glFormat GL_R11F_G11F_B10F.
+    let cmgen = format == Ktx1Format::Rg11b10
+        && (type_size == 1 || type_size == 4)
+        && (gl_format == GL_RGB || gl_format == GL_R11F_G11F_B10F);
+    if !cmgen && (type_size != gl.type_size || gl_format != gl.format) {
         return Err(err(format!(
             "invalid header: {} needs glTypeSize {} and glFormat {:#06x}, but the file says {type_size} and {gl_format:#06x}",
             format.name(),

@@ -1,19 +1,25 @@
-//! KTX2 cube maps with every mip level, in uncompressed RGBA16F, RGBA32F or RGBA8 (sRGB or
-//! UNORM), written and read by hand after the Khronos KTX 2.0 specification. 2D textures with a
-//! mip chain (faceCount 1, for control maps) are written by [`encode_2d`] the same way.
+//! KTX2 cube maps with every mip level, in any [`GpuFormat`] (RGBA16F, RGBA32F, RGBA8 sRGB or
+//! UNORM, BC6H, BC7, E5B9G9R9, B10G11R11), written and read by hand after the Khronos KTX 2.0
+//! specification, optionally with Zstandard supercompression (scheme 2). 2D textures with a mip
+//! chain (faceCount 1, for control maps) are written by [`encode_2d`] the same way.
 //!
 //! File layout as written: the 80-byte header, the level index (one entry per level, level 0
 //! first), a Data Format Descriptor with one basic block, one key/value pair (`KTXwriter`), then
 //! the levels, smallest first, each holding its six faces in order +X -X +Y -Y +Z -Z and starting
-//! on a multiple of lcm(texel size, 4). Nothing in the output depends on the time or the machine,
-//! so the same cube map always gives the same bytes.
+//! on a multiple of lcm(texel block size, 4). With Zstandard each level is one zstd frame of
+//! those bytes (byteLength its compressed size, uncompressedByteLength the plain one), levels are
+//! byte-aligned, there is no supercompression global data, and the DFD is the plain format's, as
+//! the specification asks. Nothing in the output depends on the time, the machine's thread count
+//! or the order work finishes in, so the same cube map always gives the same bytes.
 //!
 //! The reader takes both: a cube map with its levels, a 2D texture as its level 0 image. It
-//! checks every header field, index entry and size against the file's length with
-//! checked arithmetic, and the declared size against [`Limits`], before it allocates any texels.
+//! checks every header field and index entry against the file's length with checked arithmetic,
+//! and the declared shape against [`Limits`] ([`super::container::Shape`], shared with DDS),
+//! before it allocates any texels.
 
 #![warn(missing_docs)]
 
+use super::container::Shape;
 use super::{Decoded, FileFormat, GpuFormat, Limits, Meta};
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
@@ -34,12 +40,22 @@ const VK_FORMAT_R8G8B8A8_UNORM: u32 = 37;
 const VK_FORMAT_R8G8B8A8_SRGB: u32 = 43;
 const VK_FORMAT_R16G16B16A16_SFLOAT: u32 = 97;
 const VK_FORMAT_R32G32B32A32_SFLOAT: u32 = 109;
+const VK_FORMAT_B10G11R11_UFLOAT_PACK32: u32 = 122;
+const VK_FORMAT_E5B9G9R9_UFLOAT_PACK32: u32 = 123;
+const VK_FORMAT_BC6H_UFLOAT_BLOCK: u32 = 143;
+const VK_FORMAT_BC7_UNORM_BLOCK: u32 = 145;
+const VK_FORMAT_BC7_SRGB_BLOCK: u32 = 146;
+
+/// supercompressionScheme of Zstandard.
+const SCHEME_ZSTD: u32 = 2;
 
 // Khronos Data Format Specification constants used by the basic descriptor block.
 const KHR_DF_VENDORID_KHRONOS: u32 = 0;
 const KHR_DF_KHR_DESCRIPTORTYPE_BASICFORMAT: u32 = 0;
 const KHR_DF_VERSIONNUMBER_1_3: u32 = 2;
 const KHR_DF_MODEL_RGBSDA: u32 = 1;
+const KHR_DF_MODEL_BC6H: u32 = 133;
+const KHR_DF_MODEL_BC7: u32 = 134;
 const KHR_DF_PRIMARIES_BT709: u32 = 1;
 const KHR_DF_TRANSFER_LINEAR: u32 = 1;
 const KHR_DF_TRANSFER_SRGB: u32 = 2;
@@ -49,6 +65,7 @@ const KHR_DF_CHANNEL_RGBSDA_GREEN: u32 = 1;
 const KHR_DF_CHANNEL_RGBSDA_BLUE: u32 = 2;
 const KHR_DF_CHANNEL_RGBSDA_ALPHA: u32 = 15;
 const KHR_DF_SAMPLE_DATATYPE_LINEAR: u32 = 0x10;
+const KHR_DF_SAMPLE_DATATYPE_EXPONENT: u32 = 0x20;
 const KHR_DF_SAMPLE_DATATYPE_SIGNED: u32 = 0x40;
 const KHR_DF_SAMPLE_DATATYPE_FLOAT: u32 = 0x80;
 /// Bytes of a basic descriptor block before its samples.
@@ -64,6 +81,11 @@ fn vk_format(format: GpuFormat) -> u32 {
         GpuFormat::Rgba32f => VK_FORMAT_R32G32B32A32_SFLOAT,
         GpuFormat::Rgba8Srgb => VK_FORMAT_R8G8B8A8_SRGB,
         GpuFormat::Rgba8 => VK_FORMAT_R8G8B8A8_UNORM,
+        GpuFormat::Bc6h => VK_FORMAT_BC6H_UFLOAT_BLOCK,
+        GpuFormat::Bc7 => VK_FORMAT_BC7_UNORM_BLOCK,
+        GpuFormat::Bc7Srgb => VK_FORMAT_BC7_SRGB_BLOCK,
+        GpuFormat::Rgb9e5 => VK_FORMAT_E5B9G9R9_UFLOAT_PACK32,
+        GpuFormat::Rg11b10 => VK_FORMAT_B10G11R11_UFLOAT_PACK32,
     }
 }
 
@@ -73,22 +95,35 @@ fn from_vk_format(vk: u32) -> Option<GpuFormat> {
         VK_FORMAT_R32G32B32A32_SFLOAT => GpuFormat::Rgba32f,
         VK_FORMAT_R8G8B8A8_SRGB => GpuFormat::Rgba8Srgb,
         VK_FORMAT_R8G8B8A8_UNORM => GpuFormat::Rgba8,
+        VK_FORMAT_BC6H_UFLOAT_BLOCK => GpuFormat::Bc6h,
+        VK_FORMAT_BC7_UNORM_BLOCK => GpuFormat::Bc7,
+        VK_FORMAT_BC7_SRGB_BLOCK => GpuFormat::Bc7Srgb,
+        VK_FORMAT_E5B9G9R9_UFLOAT_PACK32 => GpuFormat::Rgb9e5,
+        VK_FORMAT_B10G11R11_UFLOAT_PACK32 => GpuFormat::Rg11b10,
         _ => return None,
     })
 }
 
-/// Size of the data type, for endian conversion: bytes per channel.
+/// What the reader takes, for messages.
+const SUPPORTED: &str =
+    "cubeforge reads RGBA16F, RGBA32F, RGBA8 sRGB/UNORM, BC6H UFLOAT, BC7 sRGB/UNORM, E5B9G9R9 and B10G11R11";
+
+/// typeSize: the size of the data type for endian conversion (1 for block formats, 4 for
+/// the packed 32-bit ones).
 fn type_size(format: GpuFormat) -> u32 {
-    format.bytes_per_texel() as u32 / 4
+    match format {
+        GpuFormat::Rgba16f => 2,
+        GpuFormat::Rgba32f | GpuFormat::Rgb9e5 | GpuFormat::Rg11b10 => 4,
+        _ => 1,
+    }
 }
 
-fn is_float(format: GpuFormat) -> bool {
-    matches!(format, GpuFormat::Rgba16f | GpuFormat::Rgba32f)
-}
-
-/// Alignment of every level's data: lcm(texel block size, 4).
-fn level_alignment(format: GpuFormat) -> u64 {
-    let t = format.bytes_per_texel() as u64;
+/// Alignment of every level's data: lcm(texel block size, 4), or 1 when supercompressed.
+fn level_alignment(format: GpuFormat, supercompressed: bool) -> u64 {
+    if supercompressed {
+        return 1;
+    }
+    let t = format.block_bytes() as u64;
     t / gcd(t, 4) * 4
 }
 
@@ -104,50 +139,104 @@ fn align_up(v: usize, a: usize) -> usize {
     v.div_ceil(a) * a
 }
 
-/// The Data Format Descriptor: dfdTotalSize, then one basic block with a sample per channel.
+/// One sample description: bit offset and length, channel with its qualifiers, and the
+/// values that stand for 0 and 1 (lower, upper).
+type Sample = (u32, u32, u32, u32, u32);
+
+/// The Data Format Descriptor: dfdTotalSize, then one basic block (colour model, transfer,
+/// texel block size and bytes, then its samples), as the Khronos Data Format Specification
+/// describes each Vulkan format.
 fn data_format_descriptor(format: GpuFormat) -> Vec<u8> {
-    let bpt = format.bytes_per_texel() as u32;
-    let bits = bpt * 8 / 4;
-    let block_size = DFD_BLOCK_HEADER_LEN + 4 * DFD_SAMPLE_LEN;
-    let transfer = if format == GpuFormat::Rgba8Srgb {
-        KHR_DF_TRANSFER_SRGB
-    } else {
-        KHR_DF_TRANSFER_LINEAR
-    };
-    let mut words: Vec<u32> = vec![
-        4 + block_size,
-        KHR_DF_VENDORID_KHRONOS | (KHR_DF_KHR_DESCRIPTORTYPE_BASICFORMAT << 17),
-        KHR_DF_VERSIONNUMBER_1_3 | (block_size << 16),
-        KHR_DF_MODEL_RGBSDA
-            | (KHR_DF_PRIMARIES_BT709 << 8)
-            | (transfer << 16)
-            | (KHR_DF_FLAG_ALPHA_STRAIGHT << 24),
-        0,   // texelBlockDimension0..3: a 1x1x1x1 block (stored as value - 1)
-        bpt, // bytesPlane0; bytesPlane1..3 are 0
-        0,   // bytesPlane4..7
+    const ONE: u32 = 0x3F80_0000; // 1.0f
+    const MINUS_ONE: u32 = 0xBF80_0000; // -1.0f
+    let float = KHR_DF_SAMPLE_DATATYPE_FLOAT;
+    let signed_float = KHR_DF_SAMPLE_DATATYPE_FLOAT | KHR_DF_SAMPLE_DATATYPE_SIGNED;
+    let rgb = [
+        KHR_DF_CHANNEL_RGBSDA_RED,
+        KHR_DF_CHANNEL_RGBSDA_GREEN,
+        KHR_DF_CHANNEL_RGBSDA_BLUE,
     ];
-    let channels = [
+    let rgba = [
         KHR_DF_CHANNEL_RGBSDA_RED,
         KHR_DF_CHANNEL_RGBSDA_GREEN,
         KHR_DF_CHANNEL_RGBSDA_BLUE,
         KHR_DF_CHANNEL_RGBSDA_ALPHA,
     ];
-    for (i, channel) in channels.into_iter().enumerate() {
-        let mut qualifiers = 0;
-        if is_float(format) {
-            qualifiers |= KHR_DF_SAMPLE_DATATYPE_FLOAT | KHR_DF_SAMPLE_DATATYPE_SIGNED;
+    let transfer = if format.is_srgb() {
+        KHR_DF_TRANSFER_SRGB
+    } else {
+        KHR_DF_TRANSFER_LINEAR
+    };
+    let (model, samples): (u32, Vec<Sample>) = match format {
+        GpuFormat::Rgba16f | GpuFormat::Rgba32f | GpuFormat::Rgba8 | GpuFormat::Rgba8Srgb => {
+            let bits = format.block_bytes() as u32 * 2;
+            let samples = rgba
+                .iter()
+                .enumerate()
+                .map(|(i, &channel)| {
+                    let mut q = 0;
+                    if format.is_float() {
+                        q |= signed_float;
+                    }
+                    // Alpha is never sRGB-encoded: the spec asks for the LINEAR bit on it when
+                    // the transfer function is not linear.
+                    if channel == KHR_DF_CHANNEL_RGBSDA_ALPHA && transfer != KHR_DF_TRANSFER_LINEAR
+                    {
+                        q |= KHR_DF_SAMPLE_DATATYPE_LINEAR;
+                    }
+                    let (lower, upper) = if format.is_float() {
+                        (MINUS_ONE, ONE)
+                    } else {
+                        (0, 255)
+                    };
+                    (i as u32 * bits, bits, channel | q, lower, upper)
+                })
+                .collect();
+            (KHR_DF_MODEL_RGBSDA, samples)
         }
-        // Alpha is never sRGB-encoded: the spec asks for the LINEAR bit on it when the
-        // transfer function is not linear.
-        if channel == KHR_DF_CHANNEL_RGBSDA_ALPHA && transfer != KHR_DF_TRANSFER_LINEAR {
-            qualifiers |= KHR_DF_SAMPLE_DATATYPE_LINEAR;
-        }
-        let (lower, upper) = if is_float(format) {
-            (0xBF80_0000, 0x3F80_0000) // -1.0f and 1.0f
-        } else {
-            (0, 255)
-        };
-        words.push((i as u32 * bits) | ((bits - 1) << 16) | ((channel | qualifiers) << 24));
+        // Packed from bit 0: R 11 bits, G 11, B 10, each an unsigned float.
+        GpuFormat::Rg11b10 => (
+            KHR_DF_MODEL_RGBSDA,
+            vec![
+                (0, 11, rgb[0] | float, 0, ONE),
+                (11, 11, rgb[1] | float, 0, ONE),
+                (22, 10, rgb[2] | float, 0, ONE),
+            ],
+        ),
+        // Each channel: its 9-bit mantissa and the shared 5-bit exponent at bit 27, with the
+        // lower and upper values libktx's reader expects of this format (it compares them).
+        GpuFormat::Rgb9e5 => (
+            KHR_DF_MODEL_RGBSDA,
+            rgb.iter()
+                .enumerate()
+                .flat_map(|(i, &c)| {
+                    [
+                        (9 * i as u32, 9, c, 0, 8448),
+                        (27, 5, c | KHR_DF_SAMPLE_DATATYPE_EXPONENT, 15, 31),
+                    ]
+                })
+                .collect(),
+        ),
+        // One 128-bit sample over the whole block.
+        GpuFormat::Bc6h => (KHR_DF_MODEL_BC6H, vec![(0, 128, float, 0, ONE)]),
+        GpuFormat::Bc7 | GpuFormat::Bc7Srgb => (KHR_DF_MODEL_BC7, vec![(0, 128, 0, 0, u32::MAX)]),
+    };
+    let block_size = DFD_BLOCK_HEADER_LEN + samples.len() as u32 * DFD_SAMPLE_LEN;
+    let dim = format.block_dim() as u32 - 1;
+    let mut words: Vec<u32> = vec![
+        4 + block_size,
+        KHR_DF_VENDORID_KHRONOS | (KHR_DF_KHR_DESCRIPTORTYPE_BASICFORMAT << 17),
+        KHR_DF_VERSIONNUMBER_1_3 | (block_size << 16),
+        model
+            | (KHR_DF_PRIMARIES_BT709 << 8)
+            | (transfer << 16)
+            | (KHR_DF_FLAG_ALPHA_STRAIGHT << 24),
+        dim | (dim << 8), // texelBlockDimension0..3, each stored as value - 1
+        format.block_bytes() as u32, // bytesPlane0; bytesPlane1..3 are 0
+        0,                // bytesPlane4..7
+    ];
+    for (offset, bits, channel, lower, upper) in samples {
+        words.push(offset | ((bits - 1) << 16) | (channel << 24));
         words.push(0); // samplePosition0..3
         words.push(lower);
         words.push(upper);
@@ -252,47 +341,104 @@ pub fn encode(cube: &CubeMap, format: GpuFormat) -> Vec<u8> {
 
 /// Encodes a cube map with extra key/value entries (e.g. [`LEVELS_KEY`]).
 pub fn encode_with_metadata(cube: &CubeMap, format: GpuFormat, extra: &[(&str, &[u8])]) -> Vec<u8> {
+    // Without supercompression nothing can fail.
+    encode_cube_with(cube, format, None, extra).unwrap_or_default()
+}
+
+/// Encodes a cube map in `format`, each level Zstandard-supercompressed at level `zstd` when
+/// given (1 to 22), with extra key/value entries; fails only on a level zstd refuses.
+pub fn encode_cube_with(
+    cube: &CubeMap,
+    format: GpuFormat,
+    zstd: Option<i32>,
+    extra: &[(&str, &[u8])],
+) -> std::result::Result<Vec<u8>, String> {
     let levels: Vec<&[Image]> = cube.levels.iter().map(|faces| &faces[..]).collect();
-    encode_levels(&levels, format, extra)
+    encode_levels(&levels, format, zstd, extra)
 }
 
 /// Encodes a 2D texture (faceCount 1) with its mip chain, `levels[0]` the full size and each
 /// further level the next smaller one (what [`Image::downsample_2x`] makes), in `format`.
-/// Used for control maps, which hold data: pass [`GpuFormat::Rgba8`] (UNORM) or a float format.
+/// Used for control maps, which hold data: pass [`GpuFormat::Rgba8`] (UNORM), BC7, or a
+/// float format.
 pub fn encode_2d(levels: &[Image], format: GpuFormat) -> Vec<u8> {
+    encode_2d_with(levels, format, None).unwrap_or_default()
+}
+
+/// [`encode_2d`] with optional Zstandard supercompression (level 1 to 22).
+pub fn encode_2d_with(
+    levels: &[Image],
+    format: GpuFormat,
+    zstd: Option<i32>,
+) -> std::result::Result<Vec<u8>, String> {
     let levels: Vec<&[Image]> = levels.iter().map(std::slice::from_ref).collect();
-    encode_levels(&levels, format, &[])
+    encode_levels(&levels, format, zstd, &[])
+}
+
+/// Each level's bytes: its faces encoded in parallel (every face of every level at once),
+/// then joined in order, then supercompressed level by level when asked. Every image and
+/// every zstd frame is made on its own, so the result does not depend on the thread count.
+fn level_data(
+    levels: &[&[Image]],
+    format: GpuFormat,
+    zstd: Option<i32>,
+) -> std::result::Result<Vec<(Vec<u8>, u64)>, String> {
+    use rayon::prelude::*;
+    let images: Vec<(usize, &Image)> = levels
+        .iter()
+        .enumerate()
+        .flat_map(|(l, faces)| faces.iter().map(move |f| (l, f)))
+        .collect();
+    let encoded: Vec<Vec<u8>> = images
+        .par_iter()
+        .map(|(_, img)| format.encode_image(img))
+        .collect();
+    let mut plain: Vec<Vec<u8>> = vec![Vec::new(); levels.len()];
+    for ((l, _), bytes) in images.iter().zip(encoded) {
+        plain[*l].extend_from_slice(&bytes);
+    }
+    plain
+        .into_par_iter()
+        .map(|bytes| {
+            let len = bytes.len() as u64;
+            match zstd {
+                None => Ok((bytes, len)),
+                Some(level) => zstd::bulk::compress(&bytes, level)
+                    .map(|z| (z, len))
+                    .map_err(|e| format!("Zstandard level {level} failed: {e}")),
+            }
+        })
+        .collect()
 }
 
 /// Writes the file: `levels[l]` holds the faces of level `l` (six for a cube map, one for a 2D
 /// texture), all of one size.
-fn encode_levels(levels: &[&[Image]], format: GpuFormat, extra: &[(&str, &[u8])]) -> Vec<u8> {
-    let bpt = format.bytes_per_texel();
+fn encode_levels(
+    levels: &[&[Image]],
+    format: GpuFormat,
+    zstd: Option<i32>,
+    extra: &[(&str, &[u8])],
+) -> std::result::Result<Vec<u8>, String> {
     let (width, height) = levels
         .first()
         .and_then(|faces| faces.first())
         .map_or((0, 0), |f| (f.width, f.height));
     let face_count = levels.first().map_or(1, |faces| faces.len());
     let level_count = levels.len();
-    let level_len = |l: usize| {
-        levels[l]
-            .iter()
-            .map(|f| f.width * f.height * bpt)
-            .sum::<usize>()
-    };
+    let data = level_data(levels, format, zstd)?;
 
     let dfd = data_format_descriptor(format);
     let kvd = key_value_data(extra);
     let dfd_offset = HEADER_LEN + level_count * LEVEL_ENTRY_LEN;
     let kvd_offset = dfd_offset + dfd.len();
-    let align = level_alignment(format) as usize;
+    let align = level_alignment(format, zstd.is_some()) as usize;
 
     // Levels go into the file smallest first; each starts on the alignment.
     let mut offsets = vec![0usize; level_count];
     let mut end = kvd_offset + kvd.len();
     for l in (0..level_count).rev() {
         offsets[l] = align_up(end, align);
-        end = offsets[l] + level_len(l);
+        end = offsets[l] + data[l].0.len();
     }
 
     let mut out = Vec::with_capacity(end);
@@ -306,7 +452,7 @@ fn encode_levels(levels: &[&[Image]], format: GpuFormat, extra: &[(&str, &[u8])]
         0,             // layerCount
         face_count as u32,
         level_count as u32,
-        0, // supercompressionScheme: none
+        if zstd.is_some() { SCHEME_ZSTD } else { 0 },
         dfd_offset as u32,
         dfd.len() as u32,
         kvd_offset as u32,
@@ -315,23 +461,21 @@ fn encode_levels(levels: &[&[Image]], format: GpuFormat, extra: &[(&str, &[u8])]
         out.extend_from_slice(&v.to_le_bytes());
     }
     out.extend_from_slice(&0u64.to_le_bytes()); // sgdByteOffset
-    out.extend_from_slice(&0u64.to_le_bytes()); // sgdByteLength
+    out.extend_from_slice(&0u64.to_le_bytes()); // sgdByteLength: none for Zstandard either
     for (l, &offset) in offsets.iter().enumerate() {
-        let len = level_len(l) as u64;
         out.extend_from_slice(&(offset as u64).to_le_bytes());
-        out.extend_from_slice(&len.to_le_bytes()); // byteLength
-        out.extend_from_slice(&len.to_le_bytes()); // uncompressedByteLength
+        out.extend_from_slice(&(data[l].0.len() as u64).to_le_bytes()); // byteLength
+        out.extend_from_slice(&data[l].1.to_le_bytes()); // uncompressedByteLength
     }
     out.extend_from_slice(&dfd);
     out.extend_from_slice(&kvd);
+    let mut data = data;
     for l in (0..level_count).rev() {
         out.resize(offsets[l], 0); // mipPadding
-        for face in levels[l] {
-            format.encode_into(&face.pixels, &mut out);
-        }
+        out.extend_from_slice(&std::mem::take(&mut data[l].0));
     }
     debug_assert_eq!(out.len(), end);
-    out
+    Ok(out)
 }
 
 fn le_u32(bytes: &[u8], offset: usize) -> Option<u32> {
@@ -391,7 +535,6 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             )))
         }
     };
-    let what = if cube { "cube map" } else { "2D texture" };
     if layer_count > 0 {
         return Err(err(format!(
             "texture arrays are not supported (layerCount {layer_count})"
@@ -407,22 +550,18 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             "a 1D texture (pixelHeight 0) is not supported: cubeforge reads 2D textures and cube maps".into(),
         ));
     }
-    if scheme != 0 {
+    if scheme != 0 && scheme != SCHEME_ZSTD {
         let name = match scheme {
             1 => "BasisLZ",
-            2 => "Zstandard",
             3 => "ZLIB",
             _ => "unknown",
         };
         return Err(err(format!(
-            "supercompressed KTX2 (scheme {scheme}, {name}) is not supported: write it without supercompression"
+            "supercompressed KTX2 (scheme {scheme}, {name}) is not supported: cubeforge reads plain and Zstandard (scheme 2) levels"
         )));
     }
-    let format = from_vk_format(vk).ok_or_else(|| {
-        err(format!(
-            "unsupported vkFormat {vk} (cubeforge reads RGBA16F, RGBA32F, RGBA8 sRGB/UNORM)"
-        ))
-    })?;
+    let format = from_vk_format(vk)
+        .ok_or_else(|| err(format!("unsupported vkFormat {vk} ({SUPPORTED})")))?;
     if type_size_field != type_size(format) {
         return Err(err(format!(
             "invalid header: typeSize is {type_size_field}, but {} needs {}",
@@ -430,26 +569,18 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             type_size(format)
         )));
     }
-    if cube {
-        limits.check_cube(path, width as u64, height as u64)?;
-        if width != height {
-            return Err(err(format!(
-                "invalid cube map: faces must be square, but they are {width}x{height}"
-            )));
-        }
-    } else {
-        limits.check(path, width as u64, height as u64)?;
-    }
-    // Both fit the limits, so in usize.
-    let (width, height) = (width as usize, height as usize);
-    let max_levels = CubeMap::full_chain_len(width.max(height));
     // levelCount 0 asks the loader to make the mips; the file then holds level 0 only.
-    let level_count = (level_count_field as usize).max(1);
-    if level_count > max_levels {
-        return Err(err(format!(
-            "invalid header: levelCount is {level_count_field}, but a {width}x{height} {what} has at most {max_levels} levels"
-        )));
-    }
+    let shape = Shape::check(
+        path,
+        limits,
+        format,
+        cube,
+        width,
+        height,
+        level_count_field,
+        "levelCount",
+    )?;
+    let level_count = shape.levels;
     let index_end = HEADER_LEN + level_count * LEVEL_ENTRY_LEN;
     if index_end > file_len {
         return Err(err(format!(
@@ -487,26 +618,19 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
     }
 
     // Every level's place and size, checked before anything is allocated.
-    let bpt = format.bytes_per_texel() as u64;
+    let zstd = scheme == SCHEME_ZSTD;
     let mut spans = Vec::with_capacity(level_count);
     for l in 0..level_count {
         let entry = HEADER_LEN + l * LEVEL_ENTRY_LEN;
         let offset = le_u64(bytes, entry).unwrap_or(0);
         let len = le_u64(bytes, entry + 8).unwrap_or(0);
         let uncompressed = le_u64(bytes, entry + 16).unwrap_or(0);
-        let (w, h) = ((width >> l).max(1) as u64, (height >> l).max(1) as u64);
-        let expected = w
-            .checked_mul(h)
-            .and_then(|t| t.checked_mul(face_count as u64 * bpt))
-            .ok_or_else(|| err("invalid header: level size overflows".into()))?;
-        if len != expected || uncompressed != expected {
-            let holds = if cube {
-                format!("six {w}x{h} {} faces take", format.name())
-            } else {
-                format!("a {w}x{h} {} image takes", format.name())
-            };
+        let expected = shape.level_bytes(l);
+        if uncompressed != expected || (!zstd && len != expected) {
+            let take = if cube { "take" } else { "takes" };
             return Err(err(format!(
-                "invalid level index: level {l} claims {len} bytes ({uncompressed} uncompressed), but {holds} {expected}"
+                "invalid level index: level {l} claims {len} bytes ({uncompressed} uncompressed), but {} {take} {expected}",
+                shape.holds(l)
             )));
         }
         if !in_file(offset, len, file_len) {
@@ -516,39 +640,65 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             )));
         }
         // Both fit in the file, so in usize.
-        spans.push((offset as usize, w as usize, h as usize));
+        spans.push((offset as usize, len as usize));
     }
 
-    let image = |&(offset, w, h): &(usize, usize, usize), face: usize| {
-        let len = w * h * bpt as usize;
-        let start = offset + face * len;
-        Image {
-            width: w,
-            height: h,
-            pixels: format.decode(&bytes[start..start + len], w * h),
-        }
+    // A cube map's every level, a 2D texture's level 0 (its mips are that image made smaller).
+    let wanted = if cube { level_count } else { 1 };
+    use rayon::prelude::*;
+    let inflated: Vec<std::borrow::Cow<[u8]>> = spans[..wanted]
+        .par_iter()
+        .enumerate()
+        .map(|(l, &(offset, len))| {
+            let stored = &bytes[offset..offset + len];
+            if !zstd {
+                return Ok(std::borrow::Cow::Borrowed(stored));
+            }
+            let expected = shape.level_bytes(l) as usize;
+            let plain = zstd::bulk::decompress(stored, expected).map_err(|e| {
+                err(format!(
+                    "level {l}: its Zstandard data does not decompress: {}",
+                    super::io_msg(&e)
+                ))
+            })?;
+            if plain.len() != expected {
+                return Err(err(format!(
+                    "level {l}: its Zstandard data holds {} bytes, but {} take {expected}",
+                    plain.len(),
+                    shape.holds(l)
+                )));
+            }
+            Ok(std::borrow::Cow::Owned(plain))
+        })
+        .collect::<Result<_>>()?;
+    let image = |l: usize, face: usize| {
+        let (w, h) = shape.level_size(l);
+        let len = shape.face_bytes(l);
+        format.decode_image(&inflated[l][face * len..(face + 1) * len], w, h)
     };
     let decoded = if cube {
         Decoded::Cube(CubeMap {
-            levels: spans
-                .iter()
-                .map(|span| std::array::from_fn(|f| image(span, f)))
+            levels: (0..level_count)
+                .map(|l| std::array::from_fn(|f| image(l, f)))
                 .collect(),
         })
     } else {
-        // Its mips are this image made smaller: level 0 is the whole of it.
-        Decoded::Image(image(&spans[0], 0))
+        Decoded::Image(image(0, 0))
     };
 
+    let mut pixel_format = format.name().to_string();
+    if zstd {
+        pixel_format.push_str(", Zstandard supercompressed");
+    }
     let meta = Meta {
         file_format: FileFormat::Ktx2,
-        pixel_format: format.name().into(),
-        color_space: if format == GpuFormat::Rgba8Srgb {
+        pixel_format,
+        color_space: if format.is_srgb() {
             ColorSpace::Srgb
         } else {
             ColorSpace::Linear
         },
-        hdr: is_float(format),
+        hdr: format.is_float(),
         replaced_values: 0,
         stored_levels: level_count,
     };
@@ -583,8 +733,34 @@ mod tests {
 
     #[test]
     fn alignment_is_lcm_with_4() {
-        assert_eq!(level_alignment(GpuFormat::Rgba8), 4);
-        assert_eq!(level_alignment(GpuFormat::Rgba16f), 8);
-        assert_eq!(level_alignment(GpuFormat::Rgba32f), 16);
+        assert_eq!(level_alignment(GpuFormat::Rgba8, false), 4);
+        assert_eq!(level_alignment(GpuFormat::Rgba16f, false), 8);
+        assert_eq!(level_alignment(GpuFormat::Rgba32f, false), 16);
+        assert_eq!(level_alignment(GpuFormat::Bc6h, false), 16);
+        assert_eq!(level_alignment(GpuFormat::Rgb9e5, false), 4);
+        // Supercompressed levels are byte-aligned.
+        assert_eq!(level_alignment(GpuFormat::Bc7, true), 1);
+    }
+
+    #[test]
+    fn block_and_packed_descriptors() {
+        let w = |d: &[u8], i: usize| u32::from_le_bytes(d[4 * i..4 * i + 4].try_into().unwrap());
+        let d = data_format_descriptor(GpuFormat::Bc6h);
+        assert_eq!(d.len(), 4 + 24 + 16);
+        assert_eq!(w(&d, 3) & 0xFF, KHR_DF_MODEL_BC6H);
+        assert_eq!(w(&d, 4), 3 | (3 << 8)); // 4x4 blocks
+        assert_eq!(w(&d, 5), 16);
+        assert_eq!(w(&d, 7), (127 << 16) | (0x80 << 24)); // 128 bits, float, unsigned
+        let d = data_format_descriptor(GpuFormat::Bc7Srgb);
+        assert_eq!(w(&d, 3) & 0xFF, KHR_DF_MODEL_BC7);
+        assert_eq!((w(&d, 3) >> 16) & 0xFF, KHR_DF_TRANSFER_SRGB);
+        assert_eq!(w(&d, 10), u32::MAX);
+        let d = data_format_descriptor(GpuFormat::Rgb9e5);
+        assert_eq!(d.len(), 4 + 24 + 6 * 16);
+        // Green's exponent sample: bit 27, 5 bits, exponent qualifier, bias 15.
+        assert_eq!(w(&d, 7 + 12), 27 | (4 << 16) | ((1 | 0x20) << 24));
+        assert_eq!(w(&d, 7 + 14), 15);
+        let d = data_format_descriptor(GpuFormat::Rg11b10);
+        assert_eq!(w(&d, 7 + 8), 22 | (9 << 16) | ((2 | 0x80) << 24));
     }
 }

@@ -5,8 +5,10 @@
 
 pub mod atomic;
 pub mod babylon_env;
+mod container;
 pub mod dds;
 pub mod exr;
+pub mod gpu;
 mod guard;
 pub mod ktx1;
 pub mod ktx2;
@@ -19,6 +21,7 @@ use crate::image::{ColorSpace, Image};
 use std::path::Path;
 
 pub use atomic::{remove_temporaries, stage, write_all_atomic, Staged};
+pub use gpu::{finite, unorm8, GpuFormat, HALF_MAX};
 
 /// Refuses images larger than this before any pixel memory is allocated.
 #[derive(Clone, Copy, Debug)]
@@ -269,151 +272,51 @@ impl FileFormat {
     }
 }
 
-/// Texel formats of GPU containers (KTX2, DDS).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
-#[serde(rename_all = "lowercase")]
-pub enum GpuFormat {
-    /// RGBA half float (the default: HDR, half the memory of f32).
-    #[default]
-    Rgba16f,
-    /// RGBA 32-bit float.
-    Rgba32f,
-    /// RGBA 8-bit, sRGB-encoded colour.
-    Rgba8Srgb,
-    /// RGBA 8-bit, linear (UNORM) data.
-    Rgba8,
-}
-
-impl GpuFormat {
-    /// Size of one texel in bytes.
-    pub fn bytes_per_texel(self) -> usize {
-        match self {
-            GpuFormat::Rgba16f => 8,
-            GpuFormat::Rgba32f => 16,
-            GpuFormat::Rgba8Srgb | GpuFormat::Rgba8 => 4,
-        }
-    }
-    /// The format's name for messages and metadata ("RGBA16F").
-    pub fn name(self) -> &'static str {
-        match self {
-            GpuFormat::Rgba16f => "RGBA16F",
-            GpuFormat::Rgba32f => "RGBA32F",
-            GpuFormat::Rgba8Srgb => "RGBA8 sRGB",
-            GpuFormat::Rgba8 => "RGBA8 UNORM",
-        }
-    }
-
-    /// Encodes linear texels into this format's bytes (little-endian), appending to `out`.
-    pub fn encode_into(self, pixels: &[glam::Vec4], out: &mut Vec<u8>) {
-        use crate::image::linear_to_srgb;
-        out.reserve(pixels.len() * self.bytes_per_texel());
-        for p in pixels {
-            let a = p.to_array();
-            match self {
-                GpuFormat::Rgba16f => {
-                    for v in a {
-                        let h = half::f16::from_f32(finite(v, HALF_MAX));
-                        out.extend_from_slice(&h.to_le_bytes());
-                    }
-                }
-                GpuFormat::Rgba32f => {
-                    for v in a {
-                        out.extend_from_slice(&finite(v, f32::MAX).to_le_bytes());
-                    }
-                }
-                GpuFormat::Rgba8Srgb => {
-                    for (i, v) in a.into_iter().enumerate() {
-                        let e = if i < 3 { linear_to_srgb(v) } else { v };
-                        out.push(unorm8(e));
-                    }
-                }
-                GpuFormat::Rgba8 => {
-                    for v in a {
-                        out.push(unorm8(v));
-                    }
-                }
-            }
-        }
-    }
-
-    /// Decodes `count` texels of this format from `bytes` into linear values.
-    pub fn decode(self, bytes: &[u8], count: usize) -> Vec<glam::Vec4> {
-        use crate::image::srgb_to_linear;
-        let bpt = self.bytes_per_texel();
-        bytes[..count * bpt]
-            .chunks_exact(bpt)
-            .map(|t| match self {
-                GpuFormat::Rgba16f => glam::Vec4::from_array(std::array::from_fn(|i| {
-                    half::f16::from_le_bytes([t[2 * i], t[2 * i + 1]]).to_f32()
-                })),
-                GpuFormat::Rgba32f => glam::Vec4::from_array(std::array::from_fn(|i| {
-                    f32::from_le_bytes([t[4 * i], t[4 * i + 1], t[4 * i + 2], t[4 * i + 3]])
-                })),
-                GpuFormat::Rgba8Srgb => glam::Vec4::new(
-                    srgb_to_linear(t[0] as f32 / 255.0),
-                    srgb_to_linear(t[1] as f32 / 255.0),
-                    srgb_to_linear(t[2] as f32 / 255.0),
-                    t[3] as f32 / 255.0,
-                ),
-                GpuFormat::Rgba8 => glam::Vec4::new(
-                    t[0] as f32 / 255.0,
-                    t[1] as f32 / 255.0,
-                    t[2] as f32 / 255.0,
-                    t[3] as f32 / 255.0,
-                ),
-            })
-            .collect()
-    }
-}
-
-/// The largest half float: values above it would be written as infinity.
-pub const HALF_MAX: f32 = 65504.0;
-
-/// `v` made finite within +-`max` (NaN becomes 0): what every float encoder writes.
-#[inline]
-pub fn finite(v: f32, max: f32) -> f32 {
-    if v.is_nan() {
-        0.0
-    } else {
-        v.clamp(-max, max)
-    }
-}
-
 /// The largest magnitude `format` (with `gpu` for containers) stores as a finite float; None
-/// where values are clamped to [0, 1] as a matter of course (8-bit formats).
+/// where values are clamped to [0, 1] as a matter of course (8-bit formats, BC7).
 pub fn largest_value(format: FileFormat, gpu: GpuFormat) -> Option<f32> {
     match format {
         FileFormat::Exr => Some(HALF_MAX),
         FileFormat::Hdr => Some(f32::MAX),
         FileFormat::Env => Some(babylon_env::RGBD_MAX),
-        FileFormat::Ktx2 | FileFormat::Dds | FileFormat::Ktx1 => match gpu {
-            GpuFormat::Rgba16f => Some(HALF_MAX),
-            GpuFormat::Rgba32f => Some(f32::MAX),
-            GpuFormat::Rgba8Srgb | GpuFormat::Rgba8 => None,
-        },
+        FileFormat::Ktx2 | FileFormat::Dds | FileFormat::Ktx1 => gpu.largest_value(),
         _ => None,
     }
 }
 
 /// How many channel values of `images` are NaN or beyond +-`max`: what the encoders clamp.
 pub fn count_out_of_range<'a>(images: impl IntoIterator<Item = &'a Image>, max: f32) -> u64 {
+    count_outside(images, -max, max, 4)
+}
+
+/// How many of the first `channels` values of each texel are NaN or outside [`min`, `max`].
+fn count_outside<'a>(
+    images: impl IntoIterator<Item = &'a Image>,
+    min: f32,
+    max: f32,
+    channels: usize,
+) -> u64 {
     use rayon::prelude::*;
+    let keep = (1u32 << channels) - 1;
     images
         .into_iter()
         .map(|img| {
             img.pixels
                 .par_iter()
                 .map(|p| {
-                    let bad = p.is_nan_mask() | p.abs().cmpgt(glam::Vec4::splat(max));
-                    bad.bitmask().count_ones() as u64
+                    let bad = p.is_nan_mask()
+                        | p.cmpgt(glam::Vec4::splat(max))
+                        | p.cmplt(glam::Vec4::splat(min));
+                    (bad.bitmask() & keep).count_ones() as u64
                 })
                 .sum::<u64>()
         })
         .sum()
 }
 
-/// The warning for an output whose values `format` cannot hold, None when all fit.
+/// The warning for an output whose values `format` cannot hold, None when all fit. Unsigned
+/// float formats (BC6H, E5B9G9R9, B10G11R11) count negative values too, and only the RGB they
+/// store.
 pub fn clamp_warning<'a>(
     path: &Path,
     format: FileFormat,
@@ -421,6 +324,17 @@ pub fn clamp_warning<'a>(
     images: impl IntoIterator<Item = &'a Image>,
 ) -> Option<String> {
     let max = largest_value(format, gpu)?;
+    let unsigned = format.is_container() && gpu.is_unsigned_float();
+    if unsigned {
+        let n = count_outside(images, 0.0, max, 3);
+        return (n > 0).then(|| {
+            format!(
+                "{}: {n} values negative or beyond {max} (the range of {}) written as 0 or that value",
+                path.display(),
+                gpu.name()
+            )
+        });
+    }
     let n = count_out_of_range(images, max);
     (n > 0).then(|| {
         format!(
@@ -442,12 +356,6 @@ pub fn clamp_warning<'a>(
             }
         )
     })
-}
-
-/// A value in [0, 1] as an 8-bit UNORM, rounded to nearest (clamped outside the range).
-#[inline]
-pub fn unorm8(v: f32) -> u8 {
-    (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
 }
 
 /// What a reader found besides the pixels.
@@ -627,6 +535,8 @@ pub struct WriteOptions {
     pub png16: bool,
     /// Texel format of KTX2 and DDS.
     pub gpu_format: GpuFormat,
+    /// Zstandard level (1 to 22) of KTX2 supercompression; None writes the levels plain.
+    pub zstd: Option<i32>,
 }
 
 /// Encodes an image in the format its name asks for.
@@ -650,11 +560,40 @@ pub fn encode_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<Vec
 /// Encodes a cube map (every level) as KTX2, DDS or KTX in `format`, or as a Babylon env
 /// (RGBD, with the irradiance polynomial of its level 0), by the name's extension.
 pub fn encode_cube(path: &Path, cube: &CubeMap, format: GpuFormat) -> Result<Vec<u8>> {
+    encode_cube_with(
+        path,
+        cube,
+        &WriteOptions {
+            gpu_format: format,
+            ..WriteOptions::default()
+        },
+        &[],
+    )
+}
+
+/// Encodes a cube map (every level) as KTX2 or DDS, by the name's extension, in
+/// `opts.gpu_format`, with KTX2 key/value entries `extra`. Zstandard supercompression
+/// (`opts.zstd`) is KTX2's: a DDS output with it is refused.
+pub fn encode_cube_with(
+    path: &Path,
+    cube: &CubeMap,
+    opts: &WriteOptions,
+    extra: &[(&str, &[u8])],
+) -> Result<Vec<u8>> {
     match FileFormat::from_extension(path) {
-        Some(FileFormat::Ktx2) => Ok(ktx2::encode(cube, format)),
-        Some(FileFormat::Dds) => dds::encode(cube, format).map_err(|e| Error::file(path, e)),
-        Some(FileFormat::Ktx1) => ktx1::encode(cube, ktx1::Ktx1Format::from_gpu(format), &[])
+        Some(FileFormat::Ktx2) => ktx2::encode_cube_with(cube, opts.gpu_format, opts.zstd, extra)
             .map_err(|e| Error::file(path, e)),
+        Some(FileFormat::Dds | FileFormat::Ktx1 | FileFormat::Env) if opts.zstd.is_some() => {
+            Err(zstd_needs_ktx2(path))
+        }
+        Some(FileFormat::Dds) => {
+            dds::encode(cube, opts.gpu_format).map_err(|e| Error::file(path, e))
+        }
+        Some(FileFormat::Ktx1) => {
+            let format = ktx1::Ktx1Format::from_gpu(opts.gpu_format)
+                .map_err(|e| Error::unsupported(path, e))?;
+            ktx1::encode(cube, format, &[]).map_err(|e| Error::file(path, e))
+        }
         Some(FileFormat::Env) => {
             let sh = crate::filter::sh::project(cube);
             let poly = babylon_env::SphericalPolynomial::from_radiance_sh(&sh);
@@ -666,6 +605,36 @@ pub fn encode_cube(path: &Path, cube: &CubeMap, format: GpuFormat) -> Result<Vec
             "a cube-map container must be named .ktx2, .dds, .ktx or .env",
         )),
     }
+}
+
+/// The error for `--zstd` with an output that is not KTX2.
+pub fn zstd_needs_ktx2(path: &Path) -> Error {
+    Error::file(
+        path,
+        "--zstd supercompresses KTX2 only (DDS has no supercompression): write .ktx2 or leave out --zstd",
+    )
+}
+
+/// How close level 0 of a KTX2 or DDS file's `bytes` is to `original` (the faces of a cube
+/// map, or a 2D texture's image), in dB by [`gpu::psnr`]; None when they cannot be compared.
+pub fn container_psnr(bytes: &[u8], format: GpuFormat, original: &[&Image]) -> Option<f64> {
+    let name = Path::new("encoded");
+    let limits = Limits {
+        max_pixels: u64::MAX,
+        max_dimension: u32::MAX,
+        max_memory: u64::MAX,
+    };
+    let (decoded, _) = match FileFormat::from_magic(bytes)? {
+        FileFormat::Ktx2 => ktx2::decode(bytes, name, &limits).ok()?,
+        FileFormat::Dds => dds::decode(bytes, name, &limits).ok()?,
+        _ => return None,
+    };
+    let level0: Vec<&Image> = match &decoded {
+        Decoded::Cube(c) => c.levels.first()?.iter().collect(),
+        Decoded::Image(img) => vec![img],
+    };
+    (level0.len() == original.len())
+        .then(|| gpu::psnr(format, original.iter().copied(), level0.iter().copied()))
 }
 
 /// The error for an output name whose extension no writer knows.

@@ -168,7 +168,8 @@ pub fn sphere_mean(faces: &[Image; 6], channel: usize) -> f64 {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Independent readers (OpenImageIO, nvddsinfo, ktx-parse, Pillow). A test that needs one calls
+// Independent readers (OpenImageIO, nvddsinfo, ktx-parse, Pillow, texture2ddecoder,
+// zstandard). A test that needs one calls
 // its finder first: where the reader is missing the test prints a skip line on stderr and
 // returns, or fails when CI is set to a true value (.ci/run installs every reader and sets
 // CI=true, so a reader that went missing there is a failure, not a silent pass).
@@ -226,6 +227,25 @@ pub fn nvddsinfo() -> bool {
         "nvddsinfo",
         "apt-get install libnvtt-bin",
         runs("nvddsinfo", &[], true),
+    )
+}
+
+/// Python's `texture2ddecoder` (Perfare's BC6H/BC7 decoders, C++): an independent block
+/// decoder.
+pub fn texture2ddecoder() -> bool {
+    reader_found(
+        "texture2ddecoder",
+        "python3 -m pip install texture2ddecoder",
+        runs("python3", &["-c", "import texture2ddecoder"], false),
+    )
+}
+
+/// Python's `zstandard` (bindings to the reference libzstd): inflates KTX2 levels on its own.
+pub fn zstandard() -> bool {
+    reader_found(
+        "zstandard",
+        "python3 -m pip install zstandard",
+        runs("python3", &["-c", "import zstandard"], false),
     )
 }
 

@@ -16,6 +16,7 @@ mod engine_containers;
 mod finite;
 mod flux;
 mod formats;
+mod gpu_formats;
 mod hostile_exr;
 mod ibl;
 mod info;
