@@ -654,13 +654,19 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             if !zstd {
                 return Ok(std::borrow::Cow::Borrowed(stored));
             }
+            // Streamed, so memory grows with what really inflates (a tiny file cannot make
+            // us reserve its whole claimed size), and never past one byte over the claim.
+            use std::io::Read;
             let expected = shape.level_bytes(l) as usize;
-            let plain = zstd::bulk::decompress(stored, expected).map_err(|e| {
-                err(format!(
-                    "level {l}: its Zstandard data does not decompress: {}",
-                    super::io_msg(&e)
-                ))
-            })?;
+            let mut plain = Vec::new();
+            zstd::stream::read::Decoder::with_buffer(stored)
+                .and_then(|d| d.take(expected as u64 + 1).read_to_end(&mut plain))
+                .map_err(|e| {
+                    err(format!(
+                        "level {l}: its Zstandard data does not decompress: {}",
+                        super::io_msg(&e)
+                    ))
+                })?;
             if plain.len() != expected {
                 return Err(err(format!(
                     "level {l}: its Zstandard data holds {} bytes, but {} take {expected}",
