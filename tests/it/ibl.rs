@@ -454,6 +454,23 @@ fn bad_ibl_requests_are_one_line_errors() {
             "name",
         ),
         (vec!["ibl", inp, "-o", o, "--target", "nope"], "nope"),
+        (
+            vec!["ibl", inp, "-o", o, "--target", "babylon", "--zstd"],
+            "zstd",
+        ),
+        (
+            vec![
+                "ibl",
+                inp,
+                "-o",
+                o,
+                "--target",
+                "filament",
+                "--gpu-format",
+                "bc6h",
+            ],
+            "KTX 1",
+        ),
     ] {
         let r = run(&args);
         assert!(!r.status.success());
@@ -506,5 +523,24 @@ fn bevys_own_loader_takes_the_bevy_files_as_cube_maps() {
         assert_eq!(v["layers"], 6, "{v}");
         assert_eq!(v["mips"], mips, "{v}");
         assert_eq!(v["format"], "Rgba16Float", "{v}");
+    }
+    // Compressed as Bevy's own example maps are, and as BC6H: still cube maps to Bevy.
+    for (format, bevy_name) in [("rgb9e5", "Rgb9e5Ufloat"), ("bc6h", "Bc6hRgbUfloat")] {
+        let out = dir.path().join(format);
+        let mut args = SMALL.to_vec();
+        args.extend(["--gpu-format", format, "--zstd=3"]);
+        ibl(&input, &out, "bevy", &args);
+        let o = Command::new(&bevy)
+            .arg(out.join("env_specular.ktx2"))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["view"], "Cube", "{v}");
+        assert_eq!(v["mips"], 4, "{v}");
+        assert_eq!(v["format"], bevy_name, "{v}");
+        // And cubeforge reads them back as the same chain.
+        let back = read_cube(&out.join("env_specular.ktx2"));
+        assert_eq!(back.levels.len(), 4);
     }
 }
