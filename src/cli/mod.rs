@@ -6,6 +6,7 @@ mod convert;
 mod fixtures;
 mod info;
 mod irradiance;
+mod lut;
 mod man;
 mod prefilter;
 mod preview;
@@ -45,6 +46,8 @@ pub enum Command {
     Prefilter(prefilter::Args),
     /// The diffuse side: a Lambertian irradiance cube map and 9 spherical-harmonic coefficients.
     Irradiance(irradiance::Args),
+    /// BRDF lookup tables for split-sum shading: GGX DFG (scale/bias or multiscatter), Charlie sheen.
+    Lut(lut::Args),
     /// Bake a control map (reflectivity, transmittance, blur, Fresnel mask) from a recipe.
     Control(control::Args),
     /// Preview a map on a sphere: reflection, refraction, Fresnel and dispersion (Cg Tutorial ch. 7).
@@ -414,6 +417,7 @@ pub fn run() -> i32 {
         Command::Info(a) => info::run(a),
         Command::Prefilter(a) => prefilter::run(a, cli.verbose),
         Command::Irradiance(a) => irradiance::run(a, cli.verbose),
+        Command::Lut(a) => lut::run(a, cli.verbose),
         Command::Control(a) => control::run(a, cli.verbose),
         Command::Preview(a) => preview::run(a, cli.verbose),
         Command::Completions(a) => completions::run(a),

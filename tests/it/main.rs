@@ -17,6 +17,7 @@ mod flux;
 mod formats;
 mod hostile_exr;
 mod info;
+mod lut;
 mod man_pages;
 mod prefilter;
 mod preview;
