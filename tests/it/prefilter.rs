@@ -486,3 +486,30 @@ fn min_size_on_the_command_line() {
     assert_eq!(o.status.code(), Some(2));
     assert!(!out.exists());
 }
+
+/// Texels at 1e28 (the most any reader passes on: `image::MAX_RADIANCE`) leave every Charlie
+/// and GGX level finite: the bright split takes them, and no sum overflows.
+#[test]
+fn charlie_and_ggx_stay_finite_next_to_the_largest_radiance() {
+    let hot = Vec3::new(0.3, 0.2, 0.93).normalize();
+    let base = CubeMap::from_fn(16, |d| {
+        let v = if d.dot(hot) > 0.99 {
+            cubeforge::image::MAX_RADIANCE
+        } else {
+            0.5
+        };
+        Vec4::new(v, v, v, 1.0)
+    });
+    let hot_texels = base.levels[0]
+        .iter()
+        .flat_map(|f| f.pixels.iter())
+        .filter(|p| p.x >= cubeforge::image::MAX_RADIANCE)
+        .count();
+    assert!(hot_texels > 0);
+    for filter in [FilterKind::Ggx, FilterKind::Charlie] {
+        let (out, _) = chain(filter, &base, 16);
+        for p in out.levels.iter().flatten().flat_map(|f| f.pixels.iter()) {
+            assert!(p.is_finite(), "{filter:?}: {p}");
+        }
+    }
+}
