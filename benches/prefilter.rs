@@ -1,6 +1,7 @@
 //! Benchmark (not a timed test): prefilter a 512-face HDR cube map into a full GGX chain and a
-//! full cosine chain (and a 256 cosine chain, cmft's 5.8 s case); seconds per level and
-//! samples per second. Run with `cargo bench --bench prefilter`.
+//! full cosine chain (and a 256 cosine chain, cmft's 5.8 s case, and a 256 Charlie chain down
+//! to 16 px); seconds per level and samples per second; and the 128 BRDF lookup tables.
+//! Run with `cargo bench --bench prefilter`.
 
 use cubeforge::cube::CubeMap;
 use cubeforge::filter::{self, ChainOptions, FilterKind, LightingModel};
@@ -55,4 +56,32 @@ fn main() {
     run("ggx 512 (target < 2 s)", &base512, ggx);
     run("cosine phongbrdf 256 (cmft 5.8 s)", &base256, cosine);
     run("cosine phongbrdf 512 (cmft 81 s)", &base512, cosine);
+    let charlie = ChainOptions {
+        filter: FilterKind::Charlie,
+        min_size: Some(16),
+        ..ChainOptions::default()
+    };
+    run("charlie 256, min size 16", &base256, charlie);
+    lut();
+}
+
+/// The 128 lookup tables at the default sample count, best of 5.
+fn lut() {
+    use cubeforge::lut::{self, LutOptions};
+    let opts = LutOptions::default();
+    let best = |f: &dyn Fn()| {
+        (0..5)
+            .map(|_| {
+                let t = Instant::now();
+                f();
+                t.elapsed().as_secs_f64()
+            })
+            .fold(f64::MAX, f64::min)
+    };
+    let dfg = best(&|| drop(lut::dfg(128, &opts)));
+    let sheen = best(&|| drop(lut::charlie(128, &opts)));
+    println!(
+        "lut 128, {} samples (target well under 1 s): dfg {dfg:.3} s, charlie {sheen:.3} s",
+        opts.samples
+    );
 }

@@ -25,6 +25,10 @@ pub struct LevelsFile {
     pub face_size: usize,
     /// Levels in the chain (`levels.len()`).
     pub level_count: usize,
+    /// `--min-size`: the chain was stopped at the level whose faces are at least this large
+    /// (its roughness mapping spans the shortened chain).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub min_size: Option<usize>,
     /// Cosine chains only: the lighting model applied to each level's power.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub lighting: Option<LightingModel>,
@@ -46,6 +50,7 @@ impl LevelsFile {
             filter: opts.filter,
             face_size,
             level_count: levels.len(),
+            min_size: opts.min_size,
             lighting: cosine.then_some(opts.lighting),
             gloss_scale: cosine.then_some(opts.gloss_scale),
             gloss_bias: cosine.then_some(opts.gloss_bias),

@@ -34,6 +34,7 @@ pub mod image;
 pub mod info;
 pub mod io;
 pub mod layout;
+pub mod lut;
 pub mod output;
 pub mod preview;
 pub mod resample;

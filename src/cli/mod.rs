@@ -7,6 +7,7 @@ mod fixtures;
 mod ibl;
 mod info;
 mod irradiance;
+mod lut;
 mod man;
 mod prefilter;
 mod preview;
@@ -48,6 +49,8 @@ pub enum Command {
     Irradiance(irradiance::Args),
     /// One command to the files an engine loads: specular chain, diffuse term, SH, tables.
     Ibl(ibl::Args),
+    /// BRDF lookup tables for split-sum shading: GGX DFG (scale/bias or multiscatter), Charlie sheen.
+    Lut(lut::Args),
     /// Bake a control map (reflectivity, transmittance, blur, Fresnel mask) from a recipe.
     Control(control::Args),
     /// Preview a map on a sphere: reflection, refraction, Fresnel and dispersion (Cg Tutorial ch. 7).
@@ -453,6 +456,7 @@ pub fn run() -> i32 {
         Command::Prefilter(a) => prefilter::run(a, cli.verbose),
         Command::Irradiance(a) => irradiance::run(a, cli.verbose),
         Command::Ibl(a) => ibl::run(a, cli.verbose),
+        Command::Lut(a) => lut::run(a, cli.verbose),
         Command::Control(a) => control::run(a, cli.verbose),
         Command::Preview(a) => preview::run(a, cli.verbose),
         Command::Completions(a) => completions::run(a),

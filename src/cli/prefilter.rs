@@ -19,7 +19,7 @@ pub struct Args {
     #[arg(short, long)]
     pub output: PathBuf,
     /// box: plain mipmaps; gaussian: LOD-bias blur; cosine: Phong lobes (cmft); ggx: split-sum
-    /// GGX radiance.
+    /// GGX radiance; charlie: sheen radiance (the Khronos glTF-IBL-Sampler's Charlie chain).
     #[arg(long, value_enum)]
     pub filter: FilterKind,
     /// Face edge of level 0 (default: the input's).
@@ -28,8 +28,13 @@ pub struct Args {
     /// Number of levels (default: the full chain down to 1 x 1).
     #[arg(long)]
     pub levels: Option<usize>,
-    /// Importance samples per texel at the sharpest filtered level; doubled per level after it
-    /// (wider lobes), up to 32 times.
+    /// Stop the chain at the level whose faces are N texels (the smallest at least N); the
+    /// roughness m / (levels - 1) then reaches 1 there. Filament stops at 16: a 1 x 1 rough
+    /// level shows the cube's corners at a high LOD bias.
+    #[arg(value_parser = clap::value_parser!(u32).range(1..=16384), long, value_name = "N", conflicts_with = "levels")]
+    pub min_size: Option<u32>,
+    /// Importance samples per texel at the sharpest filtered level (charlie: 4 times as many,
+    /// its lobe is a ring); doubled per level after it (wider lobes), up to 32 times.
     #[arg(value_parser = clap::value_parser!(u32).range(1..=65536), long, default_value_t = filter::DEFAULT_SAMPLES)]
     pub samples: u32,
     /// cosine: specular power = 2^(gloss-scale * glossiness + gloss-bias), as cmft.
@@ -95,6 +100,11 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     if size == 0 || size > 16384 {
         return Err(Error::usage(format!("--size {size}: use 1 to 16384")));
     }
+    if let Some(min) = a.min_size.filter(|&m| m as usize > size) {
+        return Err(Error::usage(format!(
+            "--min-size {min} is larger than level 0, whose faces are {size} px"
+        )));
+    }
     // The base faces, the chain (4/3 of them), a bordered sampler copy and the encoding.
     a.input.limits().check_memory(
         format_args!("--size {size}"),
@@ -106,6 +116,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let opts = ChainOptions {
         filter: a.filter,
         levels: a.levels,
+        min_size: a.min_size.map(|m| m as usize),
         samples: a.samples,
         gloss_scale: a.gloss_scale,
         gloss_bias: a.gloss_bias,
@@ -170,6 +181,14 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         super::report(format_args!(
             "level {:2}  {:5} px  {what}{samples}",
             i.level, i.size
+        ))?;
+    }
+    if let (Some(min), Some(last)) = (a.min_size, description.levels.last()) {
+        super::report(format_args!(
+            "stopped at {} px (--min-size {min}): {} levels instead of {}",
+            last.size,
+            description.levels.len(),
+            cubeforge::cube::CubeMap::full_chain_len(size)
         ))?;
     }
     stages.total();

@@ -18,6 +18,13 @@ pub enum Lobe {
         /// Width: roughness^2, 0 a mirror, 1 the widest.
         alpha: f32,
     },
+    /// Charlie sheen (Estevez and Kulla) with alpha = roughness^2, weighted by n.l, n = v = r:
+    /// the Khronos glTF-IBL-Sampler's sheen prefilter. Unlike GGX it vanishes at the axis and
+    /// peaks towards the horizon (at n.l = 2 alpha / (2 alpha + 1)): a ring, not a spot.
+    Charlie {
+        /// Width: roughness^2.
+        alpha: f32,
+    },
     /// cos^power of the angle (Phong lobe around the reflection vector).
     CosinePower {
         /// Exponent: higher is narrower.
@@ -42,6 +49,12 @@ impl Lobe {
                 // Half vector between n and l: n.h = cos(theta / 2).
                 let nh = ((1.0 + c) * 0.5).sqrt();
                 ggx_d(nh, alpha) * c
+            }
+            Lobe::Charlie { alpha } => {
+                if c <= 0.0 {
+                    return 0.0;
+                }
+                charlie_d(((1.0 + c) * 0.5).sqrt(), alpha) * c
             }
             Lobe::CosinePower { power } => {
                 if c <= 0.0 {
@@ -79,6 +92,36 @@ pub(crate) fn ggx_d(nh: f32, alpha: f32) -> f32 {
     let a2 = alpha * alpha;
     let d = nh * nh * (a2 - 1.0) + 1.0;
     a2 / (PI * d * d)
+}
+
+/// Charlie sheen distribution D(h) for cos(n, h) = `nh`: (2 + 1/alpha) sin(theta)^(1/alpha)
+/// / (2 pi), normalised so that the integral of D(h) (n.h) over the hemisphere is 1.
+#[inline]
+pub(crate) fn charlie_d(nh: f32, alpha: f32) -> f32 {
+    let inv = 1.0 / alpha.max(1e-4);
+    let sin2 = (1.0 - nh * nh).max(0.0);
+    (2.0 + inv) * sin2.powf(inv * 0.5) / TAU
+}
+
+/// The cosine c = n.l at which the Charlie lobe's CDF reaches `u`, and the lobe's density there
+/// (per steradian). With y = 1 - c and k = 1 / (2 alpha) the lobe is y^k (1 - y), whose mass
+/// within y is P(y) = (k + 2) y^(k+1) - (k + 1) y^(k+2) of the whole: bisected for P(y) = u.
+fn charlie_sample(u: f64, alpha: f32) -> (f32, f32) {
+    let k = 0.5 / alpha.max(1e-4) as f64;
+    let mass = |y: f64| y.powf(k + 1.0) * ((k + 2.0) - (k + 1.0) * y);
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if mass(mid) < u {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let y = 0.5 * (lo + hi);
+    let c = 1.0 - y;
+    let pdf = (k + 1.0) * (k + 2.0) * y.powf(k) * c / std::f64::consts::TAU;
+    (c as f32, pdf as f32)
 }
 
 /// The i-th of n points of the Hammersley set: deterministic, low discrepancy.
@@ -135,6 +178,18 @@ impl Kernel {
                     // pdf(l) = D(h) (n.h) / (4 (v.h)) = D / 4 with n = v.
                     (cos_l, cos_l, ggx_d(cos_h, alpha) * 0.25)
                 }
+                Lobe::Charlie { alpha } => {
+                    // n.l drawn from the lobe itself, D(h) n.l = ((1 - c) / 2)^k c with
+                    // k = 1 / (2 alpha): every sample counts. (Drawing h from D(h) n.h and
+                    // reflecting, as the Khronos sampler does, converges to the same
+                    // convolution but puts almost every h near the horizon, its reflection
+                    // below it: 2^-(1 + k) of them land above, 1 in 10^4 at alpha 0.04.)
+                    let (c, pdf) = charlie_sample(u as f64, alpha);
+                    if c <= 0.0 {
+                        continue;
+                    }
+                    (c, 1.0, pdf)
+                }
                 Lobe::CosinePower { power } => {
                     let c = (1.0 - u).powf(1.0 / (power + 1.0));
                     (c, 1.0, (power + 1.0) / TAU * c.powf(power))
@@ -184,15 +239,24 @@ pub fn frame(n: Vec3) -> (Vec3, Vec3) {
 
 impl Lobe {
     /// The cosine below which the lobe's weight stays under 1e-10 of its peak: bright texels
-    /// further out are skipped (a 10^5 sun then moves an output by under 1e-3).
+    /// further out are skipped (a 10^5 sun then moves an output by under 1e-3). Found from
+    /// below, so it holds for lobes that peak off the axis too (Charlie's ring).
     pub(crate) fn cutoff_cos(&self) -> f32 {
-        let floor = self.weight(1.0) * 1e-10;
-        // The weights fall with the angle: bisect for where they cross the floor.
-        let (mut lo, mut hi) = (-1.0f32, 1.0f32);
-        if self.weight(lo) >= floor {
+        const STEPS: usize = 4096;
+        let at = |i: usize| -1.0 + 2.0 * i as f32 / STEPS as f32;
+        let peak = (0..=STEPS)
+            .map(|i| self.weight(at(i)))
+            .fold(0.0f32, f32::max);
+        let floor = peak * 1e-10;
+        // The first grid point at or above the floor, then bisect the step before it.
+        let Some(first) = (0..=STEPS).find(|&i| self.weight(at(i)) >= floor) else {
+            return -1.0;
+        };
+        if first == 0 {
             return -1.0;
         }
-        for _ in 0..40 {
+        let (mut lo, mut hi) = (at(first - 1), at(first));
+        for _ in 0..24 {
             let mid = 0.5 * (lo + hi);
             if self.weight(mid) >= floor {
                 hi = mid;
@@ -406,6 +470,63 @@ pub fn source_sampler(base: &CubeMap) -> CubeSampler {
 mod tests {
     use super::*;
 
+    /// The cutoff holds for lobes that peak on the axis and for Charlie's ring alike: every
+    /// weight beyond it is under 1e-10 of the peak, and it is no further out than it must be.
+    #[test]
+    fn cutoff_bounds_every_lobe() {
+        for lobe in [
+            Lobe::Ggx { alpha: 0.01 },
+            Lobe::Ggx { alpha: 1.0 },
+            Lobe::Charlie { alpha: 0.04 },
+            Lobe::Charlie { alpha: 1.0 },
+            Lobe::CosinePower { power: 1e6 },
+            Lobe::Gaussian { sigma: 0.1 },
+        ] {
+            let cut = lobe.cutoff_cos();
+            let peak = (0..=100_000)
+                .map(|i| lobe.weight(-1.0 + 2.0 * i as f32 / 100_000.0))
+                .fold(0.0f32, f32::max);
+            for i in 0..10_000 {
+                let c = -1.0 + (cut + 1.0) * i as f32 / 10_000.0;
+                assert!(lobe.weight(c) < peak * 1e-10, "{lobe:?}: {c} beyond {cut}");
+            }
+            assert!(
+                lobe.weight(cut + 1e-3) >= peak * 1e-10 || cut >= 0.999,
+                "{lobe:?}: {cut}"
+            );
+        }
+    }
+
+    /// Charlie's sampled directions follow its weight: the kernel's mean of n.l matches the
+    /// lobe's own, by quadrature.
+    #[test]
+    fn charlie_kernel_samples_its_lobe() {
+        for alpha in [0.04f32, 0.25, 1.0] {
+            let lobe = Lobe::Charlie { alpha };
+            let k = Kernel::new(lobe, 4096, 64);
+            let w: f64 = k.taps.iter().map(|t| t.weight as f64).sum();
+            let mean = k
+                .taps
+                .iter()
+                .map(|t| (t.weight * t.dir.z) as f64)
+                .sum::<f64>()
+                / w;
+            let steps = 100_000;
+            let (mut num, mut den) = (0.0f64, 0.0f64);
+            for i in 0..steps {
+                let t = (i as f64 + 0.5) / steps as f64 * std::f64::consts::PI;
+                let wt = lobe.weight(t.cos() as f32) as f64 * t.sin();
+                num += wt * t.cos();
+                den += wt;
+            }
+            let want = num / den;
+            assert!(
+                (mean - want).abs() < 2e-3,
+                "alpha {alpha}: {mean} vs {want}"
+            );
+        }
+    }
+
     /// Skipping patches beyond a lobe's reach changes no output by more than 1e-6 of it.
     #[test]
     fn patch_culling_keeps_the_exact_convolution() {
@@ -434,6 +555,7 @@ mod tests {
             Lobe::CosinePower { power: 2049.0 },
             Lobe::CosinePower { power: 40.0 },
             Lobe::Ggx { alpha: 0.05 },
+            Lobe::Charlie { alpha: 0.09 },
         ] {
             let k = Kernel::new(lobe, 16, 32);
             let culled = filter_level(&src, &k, 32, lobe, &bright);

@@ -1,4 +1,4 @@
-//! Prefiltered mip chains (box, LOD-bias Gaussian, cosine power, GGX) and the diffuse side
+//! Prefiltered mip chains (box, LOD-bias Gaussian, cosine power, GGX, Charlie sheen) and the diffuse side
 //! (irradiance, spherical harmonics). Every filter samples the same seamless cube map.
 
 #![warn(missing_docs)]
@@ -24,6 +24,9 @@ pub enum FilterKind {
     Cosine,
     /// Split-sum GGX radiance: level m has roughness m / (levels - 1).
     Ggx,
+    /// Charlie sheen radiance (the Khronos glTF-IBL-Sampler's): level m has roughness
+    /// m / (levels - 1).
+    Charlie,
 }
 
 impl FilterKind {
@@ -34,6 +37,7 @@ impl FilterKind {
             FilterKind::Gaussian => "gaussian",
             FilterKind::Cosine => "cosine",
             FilterKind::Ggx => "ggx",
+            FilterKind::Charlie => "charlie",
         }
     }
 }
@@ -73,7 +77,14 @@ pub struct ChainOptions {
     pub filter: FilterKind,
     /// Level count (None: down to 1 x 1).
     pub levels: Option<usize>,
-    /// Importance samples per texel for gaussian, cosine and ggx.
+    /// Stop at the level whose faces are this many texels (the smallest at least this
+    /// large when the sizes skip it): a 1 x 1 roughness-1 level shows the cube's corners when
+    /// sampled at a high LOD bias, so Filament stops at 16. The roughness mapping m / (L - 1)
+    /// spans the shortened chain: roughness 1 at its last level. None: no floor. With
+    /// `levels` too, the shorter chain wins.
+    pub min_size: Option<usize>,
+    /// Importance samples per texel at the first filtered level (gaussian, cosine, ggx;
+    /// charlie takes 4 times as many), doubled per level after it up to 32 times.
     pub samples: u32,
     /// Cosine only: how fast power rises with glossiness (power = 2^(scale * gloss + bias)).
     pub gloss_scale: f32,
@@ -88,6 +99,7 @@ impl Default for ChainOptions {
         ChainOptions {
             filter: FilterKind::Ggx,
             levels: None,
+            min_size: None,
             samples: DEFAULT_SAMPLES,
             gloss_scale: 10.0,
             gloss_bias: 1.0,
@@ -111,10 +123,10 @@ pub struct LevelInfo {
     pub size: usize,
     /// The chain's filter (level 0 is the source for every filter but box).
     pub filter: FilterKind,
-    /// GGX: perceptual roughness, level / (levels - 1).
+    /// GGX and Charlie: perceptual roughness, level / (levels - 1).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub roughness: Option<f32>,
-    /// GGX: alpha = roughness^2, the value the distribution takes.
+    /// GGX and Charlie: alpha = roughness^2, the value the distribution takes.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub alpha: Option<f32>,
     /// Cosine: the specular power after the lighting model.
@@ -137,12 +149,23 @@ pub(crate) fn specular_power(level: usize, count: usize, scale: f32, bias: f32) 
 
 use crate::cube::texel_angle;
 
+impl ChainOptions {
+    /// How many levels a chain from a base of face edge `base` gets: `levels`, at most the
+    /// full chain, cut at `min_size`; at least 1.
+    pub fn level_count(&self, base: usize) -> usize {
+        let full = CubeMap::full_chain_len(base);
+        let mut count = self.levels.unwrap_or(usize::MAX).clamp(1, full);
+        if let Some(min) = self.min_size {
+            let keep = (0..full).take_while(|&m| (base >> m).max(1) >= min).count();
+            count = count.min(keep.max(1));
+        }
+        count
+    }
+}
+
 /// Per-level lobes (None: the level is copied or box-reduced, not convolved).
 pub fn plan(opts: &ChainOptions, base: usize) -> Vec<(LevelInfo, Option<Lobe>)> {
-    let count = opts
-        .levels
-        .unwrap_or(usize::MAX)
-        .clamp(1, CubeMap::full_chain_len(base));
+    let count = opts.level_count(base);
     let mut plan: Vec<(LevelInfo, Option<Lobe>)> = (0..count)
         .map(|m| {
             let size = (base >> m).max(1);
@@ -173,7 +196,7 @@ pub fn plan(opts: &ChainOptions, base: usize) -> Vec<(LevelInfo, Option<Lobe>)> 
                     info.power = Some(p);
                     Some(Lobe::CosinePower { power: p })
                 }
-                FilterKind::Ggx => {
+                FilterKind::Ggx | FilterKind::Charlie => {
                     let r = if count > 1 {
                         m as f32 / (count - 1) as f32
                     } else {
@@ -181,20 +204,38 @@ pub fn plan(opts: &ChainOptions, base: usize) -> Vec<(LevelInfo, Option<Lobe>)> 
                     };
                     info.roughness = Some(r);
                     info.alpha = Some(r * r);
-                    // Level 0 is the mirror: the source itself.
-                    (m > 0).then_some(Lobe::Ggx { alpha: r * r })
+                    // Level 0 is the mirror: the source itself. (Charlie at roughness 0 is a
+                    // distribution on the horizon of h; the Khronos sampler's level 0 comes
+                    // down to the mirror lookup too: its only sample above n.l = 0 is h = n.)
+                    let alpha = r * r;
+                    (m > 0).then_some(if opts.filter == FilterKind::Ggx {
+                        Lobe::Ggx { alpha }
+                    } else {
+                        Lobe::Charlie { alpha }
+                    })
                 }
             };
             (info, lobe)
         })
         .collect();
     // Wider lobes need more samples for the same accuracy, and smaller levels can afford them:
-    // double per level from the first convolved one, up to 32 times the base count.
+    // double per level from the first convolved one, up to 32 times the base count. Charlie's
+    // lobe is a ring around the axis, spread over far more of the sphere than a GGX lobe of
+    // the same roughness: it starts at 4 times the count (next to a 10^5 sun, 64 samples
+    // were 10% off the exact convolution, 256 2.4%, as GGX with 64).
+    let start = opts
+        .samples
+        .max(1)
+        .saturating_mul(if opts.filter == FilterKind::Charlie {
+            4
+        } else {
+            1
+        });
     let first = plan.iter().position(|(_, l)| l.is_some()).unwrap_or(0);
     for (info, lobe) in &mut plan {
         if lobe.is_some() {
             let doublings = (info.level - first).min(5) as u32;
-            info.samples = Some(opts.samples.max(1) << doublings);
+            info.samples = Some(start.saturating_mul(1 << doublings));
         }
     }
     plan

@@ -20,6 +20,7 @@ mod gpu_formats;
 mod hostile_exr;
 mod ibl;
 mod info;
+mod lut;
 mod man_pages;
 mod prefilter;
 mod preview;
