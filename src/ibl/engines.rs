@@ -224,28 +224,71 @@ commands.spawn((
     })
 }
 
+/// A 16-bit linear PNG of a lookup table (`charlie`: the sheen table, else the GGX DFG).
+fn lut_png(path: &Path, charlie: bool) -> Result<Vec<u8>> {
+    let opts = crate::lut::LutOptions::default();
+    let img = if charlie {
+        crate::lut::charlie(crate::lut::DEFAULT_SIZE, &opts)
+    } else {
+        crate::lut::dfg(crate::lut::DEFAULT_SIZE, &opts)
+    };
+    let write = io::WriteOptions {
+        linear: true,
+        png16: true,
+        ..io::WriteOptions::default()
+    };
+    io::encode_image(path, &img, &write)
+}
+
 fn gltf(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     let format = ctx.opts.gpu_format.unwrap_or(GpuFormat::Rgba16f);
     let spec = ctx.path("_ggx.ktx2");
     let diff = ctx.path("_lambertian.ktx2");
-    let files = vec![
+    let lut = ctx.out.join("lut_ggx.png");
+    let mut files = vec![
         (
             spec.clone(),
             ktx2(&spec, &l.specular, Some(&describe(l)), format, ctx)?,
         ),
         (diff.clone(), ktx2(&diff, &l.diffuse, None, format, ctx)?),
+        (lut.clone(), lut_png(&lut, false)?),
     ];
+    let mut cubes = vec![&l.specular, &l.diffuse];
+    let mut sheen_line = String::new();
+    if let Some((chain, levels)) = &l.sheen {
+        let path = ctx.path("_charlie.ktx2");
+        let d = LevelsFile::new(
+            &ChainOptions {
+                filter: crate::filter::FilterKind::Charlie,
+                ..ChainOptions::default()
+            },
+            chain.size(),
+            levels.clone(),
+        );
+        files.push((path.clone(), ktx2(&path, chain, Some(&d), format, ctx)?));
+        let lut_c = ctx.out.join("lut_charlie.png");
+        files.push((lut_c.clone(), lut_png(&lut_c, true)?));
+        cubes.push(chain);
+        sheen_line = format!(
+            ",\nu_CharlieEnvSampler = {}, u_CharlieLUT = {} (the sheen albedo E in every channel, clamped at 1 as the Sample Viewer's own table)",
+            file_name(&path),
+            file_name(&lut_c)
+        );
+    }
     let snippet = format!(
         "glTF (Khronos glTF Sample Viewer, glTF-IBL-Sampler's files and orientation):\n\
          u_GGXEnvSampler = {s} ({n} levels, lod = roughness * (u_MipCount - 1)),\n\
-         u_LambertianEnvSampler = {d}; keep u_EnvRotation at its default 90 degrees about +Y\n\
-         (the panorama's centre then faces world +Z, the front of glTF assets).",
+         u_LambertianEnvSampler = {d}, u_GGXLUT = {t} (R scale, G bias; uv = (n.v, roughness),\n\
+         16-bit linear){sheen_line};\n\
+         keep u_EnvRotation at its default 90 degrees about +Y (the panorama's centre then faces\n\
+         world +Z, the front of glTF assets).",
         s = file_name(&spec),
         d = file_name(&diff),
+        t = file_name(&lut),
         n = l.specular.levels.len(),
     );
     Ok(Delivery {
-        clamped: clamped(&spec, format, &[&l.specular, &l.diffuse]),
+        clamped: clamped(&spec, format, &cubes),
         files,
         snippet,
         levels: Vec::new(),
@@ -366,6 +409,7 @@ fn generic(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     let spec = ctx.path("_specular.ktx2");
     let diff = ctx.path("_diffuse.ktx2");
     let shp = ctx.path("_sh.json");
+    let dfg = ctx.path("_dfg.png");
     let sh_json = serde_json::to_vec_pretty(&sh::ShFile::new(&l.sh)).unwrap_or_default();
     let files = vec![
         (
@@ -374,11 +418,14 @@ fn generic(l: &Lighting, ctx: &Context) -> Result<Delivery> {
         ),
         (diff.clone(), ktx2(&diff, &l.diffuse, None, format, ctx)?),
         (shp.clone(), sh_json),
+        (dfg.clone(), lut_png(&dfg, false)?),
     ];
     let snippet = format!(
         "{s}: GGX chain, level m of L holds perceptual roughness m / (L - 1), alpha = roughness^2;\n\
          {d}: Lambertian irradiance over pi (multiply by the albedo);\n\
-         {h}: the same diffuse term as 9 SH coefficients (irradiance_over_pi).",
+         {h}: the same diffuse term as 9 SH coefficients (irradiance_over_pi);\n\
+         {g}: split-sum DFG, R scale and G bias of F0 at uv = (n.v, roughness), 16-bit linear.",
+        g = file_name(&dfg),
         s = file_name(&spec),
         d = file_name(&diff),
         h = file_name(&shp),

@@ -137,6 +137,8 @@ pub struct Lighting {
     pub specular: CubeMap,
     /// What each level holds.
     pub levels: Vec<LevelInfo>,
+    /// The Charlie (sheen) chain and its levels, when asked for.
+    pub sheen: Option<(CubeMap, Vec<LevelInfo>)>,
     /// The Lambertian irradiance cube, over pi (a white environment gives 1).
     pub diffuse: CubeMap,
     /// Order-2 SH of the radiance, [`crate::filter::sh::BASIS`] order.
@@ -156,17 +158,6 @@ pub struct Defaults {
     pub mapping: RoughnessMapping,
     /// The engine's view of cube-map space: applied to the environment before filtering.
     pub orientation: Orientation,
-}
-
-/// Levels in a chain from `size` down to `min_size` (at least 1).
-pub fn chain_len(size: usize, min_size: usize) -> usize {
-    let mut n = 1;
-    let mut s = size;
-    while s / 2 >= min_size.max(1) && s > 1 {
-        s /= 2;
-        n += 1;
-    }
-    n
 }
 
 /// Builds the specular chain, irradiance and SH for `engine` from `loaded`, then packs them as
@@ -194,6 +185,11 @@ pub fn deliver(
         return Err(Error::usage(format!(
             "min size {min_size}: use 1 to the specular size ({specular_size})"
         )));
+    }
+    if opts.sheen && engine != Engine::Gltf {
+        return Err(Error::usage(
+            "the sheen (Charlie) chain is for --target gltf".to_string(),
+        ));
     }
     let name = opts.name.clone().unwrap_or_else(|| "env".into());
     if name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.') {
@@ -253,23 +249,29 @@ fn compute(
     };
     let base = convert::to_cube(loaded, specular_size, &resampler);
     progress("resample");
-    let count = chain_len(specular_size, min_size);
-    let chain_opts = ChainOptions {
-        filter: FilterKind::Ggx,
-        levels: Some(count),
-        samples: opts.samples.unwrap_or(filter::DEFAULT_SAMPLES),
-        ..ChainOptions::default()
-    };
-    let mut plan = filter::plan(&chain_opts, specular_size);
-    for (info, lobe) in &mut plan {
-        let r = d.mapping.roughness(info.level, count, specular_size);
-        info.roughness = Some(r);
-        info.alpha = Some(r * r);
-        if lobe.is_some() {
-            *lobe = Some(Lobe::Ggx { alpha: r * r });
+    let chain = |filter: FilterKind| {
+        let chain_opts = ChainOptions {
+            filter,
+            min_size: Some(min_size),
+            samples: opts.samples.unwrap_or(filter::DEFAULT_SAMPLES),
+            ..ChainOptions::default()
+        };
+        let count = chain_opts.level_count(specular_size);
+        let mut plan = filter::plan(&chain_opts, specular_size);
+        for (info, lobe) in &mut plan {
+            let r = d.mapping.roughness(info.level, count, specular_size);
+            let alpha = r * r;
+            info.roughness = Some(r);
+            info.alpha = Some(alpha);
+            *lobe = lobe.map(|l| match l {
+                Lobe::Charlie { .. } => Lobe::Charlie { alpha },
+                _ => Lobe::Ggx { alpha },
+            });
         }
-    }
-    let (specular, levels) = filter::prefilter_planned(&base, &chain_opts, plan, &|_| {});
+        filter::prefilter_planned(&base, &chain_opts, plan, &|_| {})
+    };
+    let (specular, levels) = chain(FilterKind::Ggx);
+    let sheen = opts.sheen.then(|| chain(FilterKind::Charlie));
     progress("specular");
     // The irradiance integral needs no more than 256 faces of the turned source.
     let small = if specular_size > 256 {
@@ -282,6 +284,7 @@ fn compute(
     Lighting {
         specular,
         levels,
+        sheen,
         diffuse,
         sh,
     }

@@ -381,6 +381,53 @@ fn filament_gets_cmgen_files_and_its_sh_convention() {
 }
 
 #[test]
+fn gltf_ships_the_sheen_chain_and_the_tables() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = marker_panorama(dir.path());
+    let out = dir.path().join("gltf");
+    let mut args = SMALL.to_vec();
+    args.push("--sheen");
+    ibl(&input, &out, "gltf", &args);
+    let charlie = levels_of(&out.join("env_charlie.ktx2"));
+    assert_eq!(charlie.level_count, 4);
+    for l in &charlie.levels {
+        assert_eq!(l.filter, cubeforge::filter::FilterKind::Charlie);
+        assert!(
+            (l.roughness.unwrap() - l.level as f32 / 3.0).abs() < 1e-6,
+            "{l:?}"
+        );
+    }
+    // The tables: 16-bit linear, roughness 0 in row 0; the DFG's scale + bias is 1 for a
+    // smooth surface at normal incidence (Schlick at F0 = 1).
+    for (file, charlie) in [("lut_ggx.png", false), ("lut_charlie.png", true)] {
+        let opts = ReadOptions {
+            linear: true,
+            ..ReadOptions::default()
+        };
+        let Ok((Decoded::Image(img), _)) = io::read(&out.join(file), &opts) else {
+            panic!("{file}");
+        };
+        assert_eq!((img.width, img.height), (128, 128), "{file}");
+        if !charlie {
+            let p = img.pixels[127];
+            assert!((p.x + p.y - 1.0).abs() < 0.01, "{file}: {p}");
+        }
+    }
+    // The sheen chain is gltf's alone.
+    let r = run([
+        "ibl",
+        input.to_str().unwrap(),
+        "-o",
+        dir.path().join("b").to_str().unwrap(),
+        "--target",
+        "bevy",
+        "--sheen",
+    ]);
+    assert!(!r.status.success());
+    assert!(stderr(&r).contains("gltf"), "{}", stderr(&r));
+}
+
+#[test]
 fn panorama_targets_write_what_the_engine_imports() {
     let dir = tempfile::tempdir().unwrap();
     let input = marker_panorama(dir.path());
