@@ -83,6 +83,9 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     if let Some(w) = &delivery.clamped {
         super::warn(w);
     }
+    if let Some(f) = a.gpu_format {
+        stages.quality(f, delivery.psnr);
+    }
     super::write_files(&delivery.files)?;
     stages.done("write");
     for (p, bytes) in &delivery.files {

@@ -125,23 +125,32 @@ pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<De
         snippet: snippet.replace("{f}", &file_name(&path)),
         files: vec![(path, bytes)],
         levels: Vec::new(),
+        psnr: None,
         clamped,
     })
 }
 
 /// Packs the computed lighting as `engine` loads it.
 pub fn pack(engine: Engine, l: &Lighting, ctx: &Context) -> Result<Delivery> {
-    match engine {
-        Engine::Bevy => bevy(l, ctx),
-        Engine::Gltf => gltf(l, ctx),
-        Engine::Filament => filament(l, ctx),
-        Engine::Babylon => babylon(l, ctx),
-        Engine::Generic => generic(l, ctx),
-        _ => Err(crate::Error::usage(format!(
-            "--target {} is not available yet",
-            engine.name()
-        ))),
+    let mut delivery = match engine {
+        Engine::Bevy => bevy(l, ctx)?,
+        Engine::Gltf => gltf(l, ctx)?,
+        Engine::Filament => filament(l, ctx)?,
+        Engine::Babylon => babylon(l, ctx)?,
+        Engine::Generic => generic(l, ctx)?,
+        Engine::Godot | Engine::Unity | Engine::Unreal => {
+            return panorama(engine, ctx, Some(l.specular.size()))
+        }
+    };
+    // What a lossy format (BC6H) kept of the mirror level, as convert -v reports it.
+    let format = ctx.opts.gpu_format.unwrap_or_default();
+    if let (true, Some((path, bytes))) = (format.is_lossy(), delivery.files.first()) {
+        if FileFormat::from_extension(path) == Some(FileFormat::Ktx2) {
+            let faces: Vec<&Image> = l.specular.levels[0].iter().collect();
+            delivery.psnr = io::container_psnr(bytes, format, &faces);
+        }
     }
+    Ok(delivery)
 }
 
 /// A KTX2 cube map of `cube` in `format`, supercompressed when asked, its levels described in
@@ -221,6 +230,7 @@ commands.spawn((
         files,
         snippet,
         levels: Vec::new(),
+        psnr: None,
     })
 }
 
@@ -292,6 +302,7 @@ fn gltf(l: &Lighting, ctx: &Context) -> Result<Delivery> {
         files,
         snippet,
         levels: Vec::new(),
+        psnr: None,
     })
 }
 
@@ -366,6 +377,7 @@ auto sky = Skybox::Builder().environment(ktxreader::Ktx1Reader::createTexture(en
         ],
         snippet,
         levels: Vec::new(),
+        psnr: None,
     })
 }
 
@@ -401,6 +413,7 @@ scene.createDefaultSkybox(scene.environmentTexture, true);"#,
         files: vec![(path, bytes)],
         snippet,
         levels: Vec::new(),
+        psnr: None,
     })
 }
 
@@ -435,6 +448,7 @@ fn generic(l: &Lighting, ctx: &Context) -> Result<Delivery> {
         files,
         snippet,
         levels: Vec::new(),
+        psnr: None,
     })
 }
 

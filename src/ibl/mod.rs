@@ -129,6 +129,9 @@ pub struct Delivery {
     pub levels: Vec<LevelInfo>,
     /// Texels beyond a format's range, written as its largest value (None: none).
     pub clamped: Option<String>,
+    /// Lossy formats (BC6H, BC7): the specular chain's level 0 as decoded against the map
+    /// before encoding, dB (see [`crate::io::container_psnr`]).
+    pub psnr: Option<f64>,
 }
 
 /// Everything an engine's files are made of, in cube-map space after the engine's turn.
@@ -218,6 +221,7 @@ pub fn deliver(
             progress,
         );
         let mut delivery = engines::pack(engine, &lighting, &ctx)?;
+        progress("encode");
         delivery.levels = lighting.levels;
         delivery
     };

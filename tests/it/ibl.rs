@@ -591,3 +591,34 @@ fn bevys_own_loader_takes_the_bevy_files_as_cube_maps() {
         assert_eq!(back.levels.len(), 4);
     }
 }
+
+#[test]
+fn bc6h_quality_is_reported_with_verbose() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = marker_panorama(dir.path());
+    let out = dir.path().join("bc6h");
+    let mut args = vec![
+        "ibl",
+        input.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--target",
+        "gltf",
+        "--gpu-format",
+        "bc6h",
+        "-v",
+    ];
+    args.extend_from_slice(&SMALL);
+    let r = run(&args);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let e = stderr(&r);
+    let line = e.lines().find(|l| l.contains("PSNR")).expect("a PSNR line");
+    let db: f64 = line
+        .split("PSNR ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap();
+    assert!(db > 35.0, "{line}");
+    assert!(e.contains("encode"), "{e}");
+}
