@@ -174,7 +174,8 @@ pub fn deliver(
 ) -> Result<Delivery> {
     let d = engines::defaults(engine);
     let specular_size = opts.specular_size.unwrap_or(d.specular_size);
-    let min_size = opts.min_size.unwrap_or(d.min_size);
+    // A target's default floor never exceeds a small --size; a given one is checked.
+    let min_size = opts.min_size.unwrap_or(d.min_size.min(specular_size));
     let diffuse_size = opts.diffuse_size.unwrap_or(d.diffuse_size);
     for (what, v) in [
         ("specular size", specular_size),

@@ -526,6 +526,9 @@ fn bad_ibl_requests_are_one_line_errors() {
         assert!(e.contains(needle), "{e}");
     }
     assert!(!out.exists());
+    // Without --min-size a size under the target's floor is simply a one-level chain.
+    ibl(&input, &out, "bevy", &["--size", "4", "--samples", "4"]);
+    assert_eq!(read_cube(&out.join("env_specular.ktx2")).levels.len(), 1);
 }
 
 #[test]
