@@ -31,6 +31,41 @@ impl Context<'_> {
     fn path(&self, suffix: &str) -> PathBuf {
         self.out.join(format!("{}{suffix}", self.name))
     }
+
+    /// Resamples the input as the engine sees it.
+    pub(super) fn resampler(&self) -> crate::resample::Resampler {
+        crate::resample::Resampler {
+            orientation: self.orientation,
+            ..crate::resample::Resampler::default()
+        }
+    }
+}
+
+/// The specular chain and the diffuse cube as KTX2 files `NAME{spec}` and `NAME{diff}`, in the
+/// caller's format (RGBA16F by default): what bevy, gltf and generic all ship.
+struct Ktx2Pair {
+    spec: PathBuf,
+    diff: PathBuf,
+    format: GpuFormat,
+    files: Vec<(PathBuf, Vec<u8>)>,
+}
+
+fn ktx2_pair(l: &Lighting, ctx: &Context, spec: &str, diff: &str) -> Result<Ktx2Pair> {
+    let format = ctx.opts.gpu_format.unwrap_or(GpuFormat::Rgba16f);
+    let (spec, diff) = (ctx.path(spec), ctx.path(diff));
+    let files = vec![
+        (
+            spec.clone(),
+            ktx2(&spec, &l.specular, Some(&describe(l)), format, ctx)?,
+        ),
+        (diff.clone(), ktx2(&diff, &l.diffuse, None, format, ctx)?),
+    ];
+    Ok(Ktx2Pair {
+        spec,
+        diff,
+        format,
+        files,
+    })
 }
 
 /// Sizes, roughness mapping and orientation of each engine (the sources of each choice are
@@ -108,11 +143,7 @@ pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<De
     let face = size
         .unwrap_or_else(|| ctx.loaded.face_size())
         .clamp(1, 8192);
-    let resampler = crate::resample::Resampler {
-        orientation: ctx.orientation,
-        ..crate::resample::Resampler::default()
-    };
-    let img = crate::convert::to_image(ctx.loaded, Kind::Equirect, face, &resampler);
+    let img = crate::convert::to_image(ctx.loaded, Kind::Equirect, face, &ctx.resampler());
     let path = ctx.path(&format!(".{ext}"));
     let bytes = io::encode_image(&path, &img, &io::WriteOptions::default())?;
     let clamped = io::clamp_warning(
@@ -201,16 +232,12 @@ fn clamped(path: &Path, format: GpuFormat, cubes: &[&CubeMap]) -> Option<String>
 }
 
 fn bevy(l: &Lighting, ctx: &Context) -> Result<Delivery> {
-    let format = ctx.opts.gpu_format.unwrap_or(GpuFormat::Rgba16f);
-    let spec = ctx.path("_specular.ktx2");
-    let diff = ctx.path("_diffuse.ktx2");
-    let files = vec![
-        (
-            spec.clone(),
-            ktx2(&spec, &l.specular, Some(&describe(l)), format, ctx)?,
-        ),
-        (diff.clone(), ktx2(&diff, &l.diffuse, None, format, ctx)?),
-    ];
+    let Ktx2Pair {
+        spec,
+        diff,
+        format,
+        files,
+    } = ktx2_pair(l, ctx, "_specular.ktx2", "_diffuse.ktx2")?;
     let snippet = format!(
         r#"// Bevy: both files in assets/; the specular chain's level m holds roughness m / (levels - 1).
 commands.spawn((
@@ -251,18 +278,14 @@ fn lut_png(path: &Path, charlie: bool) -> Result<Vec<u8>> {
 }
 
 fn gltf(l: &Lighting, ctx: &Context) -> Result<Delivery> {
-    let format = ctx.opts.gpu_format.unwrap_or(GpuFormat::Rgba16f);
-    let spec = ctx.path("_ggx.ktx2");
-    let diff = ctx.path("_lambertian.ktx2");
+    let Ktx2Pair {
+        spec,
+        diff,
+        format,
+        mut files,
+    } = ktx2_pair(l, ctx, "_ggx.ktx2", "_lambertian.ktx2")?;
     let lut = ctx.out.join("lut_ggx.png");
-    let mut files = vec![
-        (
-            spec.clone(),
-            ktx2(&spec, &l.specular, Some(&describe(l)), format, ctx)?,
-        ),
-        (diff.clone(), ktx2(&diff, &l.diffuse, None, format, ctx)?),
-        (lut.clone(), lut_png(&lut, false)?),
-    ];
+    files.push((lut.clone(), lut_png(&lut, false)?));
     let mut cubes = vec![&l.specular, &l.diffuse];
     let mut sheen_line = String::new();
     if let Some((chain, levels)) = &l.sheen {
@@ -337,11 +360,7 @@ fn filament(l: &Lighting, ctx: &Context) -> Result<Delivery> {
         .loaded
         .face_size()
         .clamp(l.specular.size().min(2048), 2048);
-    let resampler = crate::resample::Resampler {
-        orientation: ctx.orientation,
-        ..crate::resample::Resampler::default()
-    };
-    let skybox = crate::convert::to_cube(ctx.loaded, sky_size, &resampler);
+    let skybox = crate::convert::to_cube(ctx.loaded, sky_size, &ctx.resampler());
     let sky_bytes = enc(&skybox, &[], &sky)?;
     let names = [
         "L00", "L1-1", "L10", "L11", "L2-2", "L2-1", "L20", "L21", "L22",
@@ -418,21 +437,17 @@ scene.createDefaultSkybox(scene.environmentTexture, true);"#,
 }
 
 fn generic(l: &Lighting, ctx: &Context) -> Result<Delivery> {
-    let format = ctx.opts.gpu_format.unwrap_or(GpuFormat::Rgba16f);
-    let spec = ctx.path("_specular.ktx2");
-    let diff = ctx.path("_diffuse.ktx2");
+    let Ktx2Pair {
+        spec,
+        diff,
+        format,
+        mut files,
+    } = ktx2_pair(l, ctx, "_specular.ktx2", "_diffuse.ktx2")?;
     let shp = ctx.path("_sh.json");
     let dfg = ctx.path("_dfg.png");
     let sh_json = serde_json::to_vec_pretty(&sh::ShFile::new(&l.sh)).unwrap_or_default();
-    let files = vec![
-        (
-            spec.clone(),
-            ktx2(&spec, &l.specular, Some(&describe(l)), format, ctx)?,
-        ),
-        (diff.clone(), ktx2(&diff, &l.diffuse, None, format, ctx)?),
-        (shp.clone(), sh_json),
-        (dfg.clone(), lut_png(&dfg, false)?),
-    ];
+    files.push((shp.clone(), sh_json));
+    files.push((dfg.clone(), lut_png(&dfg, false)?));
     let snippet = format!(
         "{s}: GGX chain, level m of L holds perceptual roughness m / (L - 1), alpha = roughness^2;\n\
          {d}: Lambertian irradiance over pi (multiply by the albedo);\n\

@@ -16,7 +16,7 @@ use crate::error::{Error, Result};
 use crate::filter::lobe::Lobe;
 use crate::filter::{self, ChainOptions, FilterKind, IrradianceMethod, LevelInfo};
 use crate::io::GpuFormat;
-use crate::resample::{Orientation, Resampler};
+use crate::resample::Orientation;
 use std::path::{Path, PathBuf};
 
 /// The engines (and engine families) `ibl` writes for.
@@ -248,10 +248,7 @@ fn compute(
     progress: &(dyn Fn(&str) + Sync),
 ) -> Lighting {
     let opts = ctx.opts;
-    let resampler = Resampler {
-        orientation: ctx.orientation,
-        ..Resampler::default()
-    };
+    let resampler = ctx.resampler();
     let base = convert::to_cube(loaded, specular_size, &resampler);
     progress("resample");
     let chain = |filter: FilterKind| {
