@@ -358,3 +358,21 @@ pub fn bevy_ktx2() -> Option<PathBuf> {
     );
     found.then_some(bin)
 }
+
+/// What ktx-parse (found by [`ktx_parse`] in `tools`) reads in `file`, as the JSON
+/// `tests/tools/ktx_check.mjs` prints; panics with ktx-parse's message and `what` when it fails.
+pub fn ktx_check(tools: &Path, file: &Path, what: &str) -> serde_json::Value {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/tools/ktx_check.mjs");
+    let out = Command::new("node")
+        .arg(&script)
+        .arg(tools)
+        .arg(file)
+        .output()
+        .expect("run node");
+    assert!(
+        out.status.success(),
+        "ktx-parse failed on {what}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("ktx_check.mjs prints JSON")
+}
