@@ -1,0 +1,134 @@
+//! Size and memory limits, checked from a file's header before any pixel memory is spent.
+
+use crate::error::{Error, LimitKind, Result};
+use std::path::Path;
+
+/// Refuses images larger than this before any pixel memory is allocated.
+#[derive(Clone, Copy, Debug)]
+pub struct Limits {
+    /// Most pixels in one image (width x height).
+    pub max_pixels: u64,
+    /// Longest edge in pixels.
+    pub max_dimension: u32,
+    /// Bytes a command may plan to use (default: half the machine's memory).
+    pub max_memory: u64,
+}
+
+/// Half the machine's physical memory: the default memory budget.
+pub(crate) fn default_memory_budget() -> u64 {
+    #[cfg(unix)]
+    {
+        // SAFETY: sysconf only reads system constants.
+        let (pages, size) = unsafe {
+            (
+                libc::sysconf(libc::_SC_PHYS_PAGES),
+                libc::sysconf(libc::_SC_PAGESIZE),
+            )
+        };
+        if pages > 0 && size > 0 {
+            return (pages as u64).saturating_mul(size as u64) / 2;
+        }
+    }
+    8 << 30
+}
+
+/// Bytes as people read them (3.2 GiB, 512 MiB).
+pub(crate) fn human_bytes(b: u64) -> String {
+    if b >= 1 << 30 {
+        format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
+    } else {
+        format!("{:.0} MiB", (b as f64 / (1u64 << 20) as f64).ceil())
+    }
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_pixels: 32768 * 16384,
+            max_dimension: 65536,
+            max_memory: default_memory_budget(),
+        }
+    }
+}
+
+impl Limits {
+    /// Checks a declared size (from a header) against the limit.
+    pub fn check(&self, path: &Path, w: u64, h: u64) -> Result<()> {
+        if w == 0 || h == 0 {
+            return Err(Error::file(path, format!("image is empty ({w}x{h})")));
+        }
+        if w > self.max_dimension as u64
+            || h > self.max_dimension as u64
+            || w.saturating_mul(h) > self.max_pixels
+        {
+            return Err(Error::limit(
+                Some(path),
+                LimitKind::Pixels,
+                format!(
+                    "image claims {w}x{h} pixels, over the limit of {} pixels ({} per side)",
+                    self.max_pixels, self.max_dimension
+                ),
+            ));
+        }
+        // The RGBA f32 image and, at worst, a decoder's buffer of the same size.
+        let needs = w.saturating_mul(h).saturating_mul(32);
+        self.check_decode_memory(path, format_args!("image claims {w}x{h} pixels"), needs)
+    }
+
+    /// Refuses a file whose claimed size (`claim`) needs more than the memory budget to decode.
+    fn check_decode_memory(
+        &self,
+        path: &Path,
+        claim: std::fmt::Arguments,
+        needs: u64,
+    ) -> Result<()> {
+        if needs > self.max_memory {
+            return Err(Error::limit(
+                Some(path),
+                LimitKind::Memory,
+                format!(
+                    "{claim}, about {} of memory to decode, over the budget of {}",
+                    human_bytes(needs),
+                    human_bytes(self.max_memory)
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Refuses a plan that needs more than the memory budget, naming what needs it.
+    pub fn check_memory(&self, what: impl std::fmt::Display, bytes: u64) -> Result<()> {
+        if bytes > self.max_memory {
+            return Err(Error::limit(None, LimitKind::Memory, format!(
+                "{what} needs about {} of memory, over the budget of {} (half this machine's memory by default)",
+                human_bytes(bytes),
+                human_bytes(self.max_memory)
+            )));
+        }
+        Ok(())
+    }
+}
+
+impl Limits {
+    /// Checks a cube map's declared face size: all six faces count against the pixel limit.
+    pub(crate) fn check_cube(&self, path: &Path, w: u64, h: u64) -> Result<()> {
+        self.check(path, w, h)?;
+        if w.saturating_mul(h).saturating_mul(6) > self.max_pixels {
+            return Err(Error::limit(
+                Some(path),
+                LimitKind::Pixels,
+                format!(
+                    "cube map claims six {w}x{h} faces, over the limit of {} pixels",
+                    self.max_pixels
+                ),
+            ));
+        }
+        // Six faces and their mips (4/3) as RGBA f32, and the file's own texels at worst.
+        let needs = w.saturating_mul(h).saturating_mul(6 * 32 * 4 / 3);
+        self.check_decode_memory(
+            path,
+            format_args!("cube map claims six {w}x{h} faces"),
+            needs,
+        )
+    }
+}
