@@ -213,8 +213,10 @@ pub(crate) fn encode_dir(
 
 /// The files a chain becomes at `path`: a KTX2 with its description in the metadata, a DDS
 /// and its sidecar, or (a name with no container extension) a chain folder of
-/// `face_format` faces, in `gpu_format` (KTX2 supercompressed as `write.zstd` asks). Refuses
-/// to overwrite any of `inputs`.
+/// `face_format` faces, in `gpu_format` (KTX2 supercompressed as `write.zstd` asks), with the
+/// count of texels every level had clamped to the format's range and a lossy format's
+/// quality, as [`crate::output::Target::encode`] reports them. Refuses to overwrite any of
+/// `inputs`.
 #[allow(clippy::too_many_arguments)]
 pub fn encode(
     path: &Path,
@@ -224,33 +226,53 @@ pub fn encode(
     write: &WriteOptions,
     gpu_format: GpuFormat,
     inputs: &[PathBuf],
-) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+) -> Result<crate::output::Encoded> {
     let refuse = |p: &[PathBuf]| crate::output::refuse_inputs(p, inputs);
-    match FileFormat::from_extension(path) {
+    let container = FileFormat::from_extension(path).filter(|f| f.is_container());
+    let clamped = io::clamp_warning(
+        path,
+        container.unwrap_or(face_format),
+        gpu_format,
+        chain.levels.iter().flatten(),
+    );
+    let opts = WriteOptions {
+        gpu_format,
+        ..*write
+    };
+    let files = match container {
         Some(FileFormat::Ktx2) => {
             refuse(&[path.to_path_buf()])?;
             let json = description.to_json();
-            let opts = WriteOptions {
-                gpu_format,
-                ..*write
-            };
             let bytes = io::encode_cube_with(path, chain, &opts, &[(io::ktx2::LEVELS_KEY, &json)])?;
-            Ok(vec![(path.to_path_buf(), bytes)])
+            vec![(path.to_path_buf(), bytes)]
         }
         Some(FileFormat::Dds) => {
             // DDS has no room for metadata: a sidecar that `info` reads.
             let side = dds_sidecar(path);
             refuse(&[path.to_path_buf(), side.clone()])?;
-            let opts = WriteOptions {
-                gpu_format,
-                ..*write
-            };
             let bytes = io::encode_cube_with(path, chain, &opts, &[])?;
-            Ok(vec![
-                (path.to_path_buf(), bytes),
-                (side, description.to_json()),
-            ])
+            vec![(path.to_path_buf(), bytes), (side, description.to_json())]
         }
-        _ => encode_dir(path, chain, description, face_format, write, inputs),
-    }
+        Some(_) => {
+            // KTX 1 and .env: the engines' own containers, read by their own level mappings.
+            refuse(&[path.to_path_buf()])?;
+            vec![(
+                path.to_path_buf(),
+                io::encode_cube_with(path, chain, &opts, &[])?,
+            )]
+        }
+        None => encode_dir(path, chain, description, face_format, write, inputs)?,
+    };
+    let psnr = match &files[..] {
+        [(_, bytes), ..] if container.is_some() && gpu_format.is_lossy() => {
+            let faces: Vec<&crate::image::Image> = chain.levels[0].iter().collect();
+            io::container_psnr(bytes, gpu_format, &faces)
+        }
+        _ => None,
+    };
+    Ok(crate::output::Encoded {
+        files,
+        clamped,
+        psnr,
+    })
 }

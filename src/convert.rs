@@ -304,7 +304,11 @@ fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Lo
                 Some(k) if k == Kind::Faces || k.is_container() => {
                     return Err(Error::file(
                         path,
-                        format!("--from {} does not describe a single image", k.name()),
+                        format!(
+                            "{} {} does not describe a single image",
+                            crate::error::param("from"),
+                            k.name()
+                        ),
                     ))
                 }
                 Some(k) if !k.fits(w, h) => {

@@ -71,6 +71,26 @@ pub enum LimitKind {
     Memory,
 }
 
+/// Whether messages name parameters as command-line flags (`--from`) rather than as the
+/// library's field names (`` `from` ``): the CLI switches once at start-up, so one message
+/// text serves both.
+static FLAG_NAMES: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// From now on, messages name parameters as command-line flags (`from` becomes `--from`,
+/// `lod_bias` becomes `--lod-bias`). For command-line front ends.
+pub fn name_parameters_as_flags() {
+    FLAG_NAMES.store(true, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// A parameter as messages name it: `` `from` `` in the library, `--from` in the CLI.
+pub(crate) fn param(name: &str) -> String {
+    if FLAG_NAMES.load(std::sync::atomic::Ordering::Relaxed) {
+        format!("--{}", name.replace('_', "-"))
+    } else {
+        format!("`{name}`")
+    }
+}
+
 /// The result of every fallible call in cubeforge.
 pub type Result<T> = std::result::Result<T, Error>;
 
@@ -127,5 +147,18 @@ impl Error {
             Error::Limit { path, .. } => path.as_deref(),
             Error::InvalidOption(_) => None,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_library_names_parameters_by_their_fields() {
+        // The CLI's flag wording (--lod-bias) is tested through the binary.
+        assert_eq!(param("lod_bias"), "`lod_bias`");
+        let e = crate::layout::detect(64, 64).unwrap_err();
+        assert!(e.contains("`from` sphere") && !e.contains("--"), "{e}");
     }
 }

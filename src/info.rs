@@ -6,7 +6,7 @@
 use crate::chain::{self, LevelsFile};
 use crate::convert::{self, Source};
 use crate::cube::{CubeMap, Faces, FACE_LONG_NAMES, FACE_NAMES};
-use crate::error::{Error, Result};
+use crate::error::{param, Error, Result};
 use crate::flux;
 use crate::image::{luminance, Image};
 use crate::io::{self, Decoded, ReadOptions};
@@ -155,8 +155,9 @@ fn cube_flux(faces: &Faces) -> [f64; 3] {
 /// What a square image with no `--from` may be.
 fn square_note(n: usize) -> String {
     format!(
-        "a square {n}x{n} image: a sphere or angular map (face size {}; say which with --from sphere or --from angular) or a single face (face size {n})",
-        (n / 2).max(1)
+        "a square {n}x{n} image: a sphere or angular map (face size {}; say which with {f} sphere or {f} angular) or a single face (face size {n})",
+        (n / 2).max(1),
+        f = param("from")
     )
 }
 
@@ -181,7 +182,8 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 return Err(Error::file(
                     path,
                     format!(
-                        "--from {}: the file is a {} cube map",
+                        "{} {}: the file is a {} cube map",
+                        param("from"),
                         k.name(),
                         meta.file_format.name()
                     ),
@@ -211,7 +213,8 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                     return Err(Error::file(
                         path,
                         format!(
-                            "--from {} does not describe a single image (give a folder of faces, or a .ktx2, .dds, .ktx or .env file)",
+                            "{} {} does not describe a single image (give a folder of faces, or a .ktx2, .dds, .ktx or .env file)",
+                            param("from"),
                             k.name()
                         ),
                     ))
@@ -256,8 +259,9 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
         return Err(Error::file(
             dir,
             format!(
-                "--from {}: a folder holds faces (--from faces) or a prefiltered chain",
-                k.name()
+                "{f} {}: a folder holds faces ({f} faces) or a prefiltered chain",
+                k.name(),
+                f = param("from")
             ),
         ));
     }

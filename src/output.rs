@@ -6,7 +6,7 @@
 
 use crate::convert::Output;
 use crate::cube::{CubeMap, Faces, FACE_NAMES};
-use crate::error::{Error, Result};
+use crate::error::{param, Error, Result};
 use crate::image::Image;
 use crate::io::{self, FileFormat, WriteOptions};
 use crate::layout::Kind;
@@ -163,19 +163,28 @@ pub(crate) fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
         }
         (Some(k), _) if k.is_container() => Err(Error::file(
             output,
-            format!("--to {} needs an output named .{}", k.name(), k.name()),
+            format!(
+                "{} {} needs an output named .{}",
+                param("to"),
+                k.name(),
+                k.name()
+            ),
         )),
         (Some(Kind::Faces), Some(_)) => Err(Error::file(
             output,
-            "--to faces writes a folder: give a folder name without an image extension",
+            format!(
+                "{} faces writes a folder: give a folder name without an image extension",
+                param("to")
+            ),
         )),
         (Some(Kind::Faces), None) => Ok(Kind::Faces),
         (Some(k), Some(f)) if f.is_container() => Err(Error::file(
             output,
             format!(
-                "{} holds cube maps, not a {} image: use --to {}",
+                "{} holds cube maps, not a {} image: use {} {}",
                 f.name(),
                 k.name(),
+                param("to"),
                 Kind::container(f).name()
             ),
         )),
@@ -201,7 +210,8 @@ pub fn face_format(name: &str) -> Result<FileFormat> {
     match FileFormat::from_ext_str(name) {
         Some(f) if !f.is_container() => Ok(f),
         _ => Err(Error::usage(format!(
-            "--format {name}: face images are png, jpg, tga, hdr or exr"
+            "{} {name}: face images are png, jpg, tga, hdr or exr",
+            param("format")
         ))),
     }
 }

@@ -138,17 +138,12 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     stages.done("filter");
 
     let description = LevelsFile::new(&opts, size, infos);
-    let format = container.unwrap_or(face_format);
-    let all = chain.levels.iter().flatten();
-    if let Some(w) = io::clamp_warning(&a.output, format, a.gpu_format, all) {
-        super::warn(w);
-    }
     let write = WriteOptions {
         linear: a.input.linear,
         zstd: a.zstd.filter(|_| container == Some(FileFormat::Ktx2)),
         ..WriteOptions::default()
     };
-    let files = cubeforge::chain::encode(
+    let encoded = cubeforge::chain::encode(
         &a.output,
         &chain,
         &description,
@@ -157,15 +152,12 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         a.gpu_format,
         &loaded.files,
     )?;
-    if container.is_some() && a.gpu_format.is_lossy() {
-        let faces: Vec<&cubeforge::image::Image> = chain.levels[0].iter().collect();
-        let psnr = files
-            .first()
-            .and_then(|(_, bytes)| io::container_psnr(bytes, a.gpu_format, &faces));
-        stages.quality(a.gpu_format, psnr);
+    if let Some(w) = &encoded.clamped {
+        super::warn(w);
     }
+    stages.quality(a.gpu_format, encoded.psnr);
     stages.done("encode");
-    super::write_files(&files)?;
+    super::write_files(&encoded.files)?;
     stages.done("write");
     for i in &description.levels {
         let what = match (i.roughness, i.power, i.sigma) {

@@ -213,9 +213,10 @@ impl Recipe {
                 })
             })
             .ok_or_else(|| {
-                Error::usage(
-                    "the recipe gives no size and names no image: add `size = \"512x512\"` or pass --size",
-                )
+                Error::usage(format!(
+                    "the recipe gives no size and names no image: add `size = \"512x512\"` or pass {}",
+                    crate::error::param("size")
+                ))
             })
     }
 }

@@ -152,13 +152,8 @@ pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<De
         GpuFormat::Rgba16f,
         [&img],
     );
-    Ok(Delivery {
-        snippet: snippet.replace("{f}", &file_name(&path)),
-        files: vec![(path, bytes)],
-        levels: Vec::new(),
-        psnr: None,
-        clamped,
-    })
+    let snippet = snippet.replace("{f}", &file_name(&path));
+    Ok(Delivery::new(vec![(path, bytes)], snippet, clamped))
 }
 
 /// Packs the computed lighting as `engine` loads it.
@@ -207,7 +202,8 @@ fn ktx2(
 fn no_zstd(ctx: &Context, what: &str) -> Result<()> {
     match ctx.opts.zstd {
         Some(_) => Err(crate::Error::usage(format!(
-            "--zstd supercompresses KTX2; {what} has none"
+            "{} supercompresses KTX2; {what} has none",
+            crate::error::param("zstd")
         ))),
         None => Ok(()),
     }
@@ -252,13 +248,11 @@ commands.spawn((
         d = file_name(&diff),
         s = file_name(&spec),
     );
-    Ok(Delivery {
-        clamped: clamped(&spec, format, &[&l.specular, &l.diffuse]),
+    Ok(Delivery::new(
         files,
         snippet,
-        levels: Vec::new(),
-        psnr: None,
-    })
+        clamped(&spec, format, &[&l.specular, &l.diffuse]),
+    ))
 }
 
 /// A 16-bit linear PNG of a lookup table (`charlie`: the sheen table, else the GGX DFG).
@@ -320,13 +314,11 @@ fn gltf(l: &Lighting, ctx: &Context) -> Result<Delivery> {
         t = file_name(&lut),
         n = l.specular.levels.len(),
     );
-    Ok(Delivery {
-        clamped: clamped(&spec, format, &cubes),
+    Ok(Delivery::new(
         files,
         snippet,
-        levels: Vec::new(),
-        psnr: None,
-    })
+        clamped(&spec, format, &cubes),
+    ))
 }
 
 fn filament(l: &Lighting, ctx: &Context) -> Result<Delivery> {
@@ -404,9 +396,10 @@ fn babylon(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     use io::babylon_env::{self, SphericalPolynomial};
     no_zstd(ctx, "Babylon's .env")?;
     if ctx.opts.gpu_format.is_some() {
-        return Err(crate::Error::usage(
-            "--gpu-format: Babylon's .env holds RGBD PNG faces only",
-        ));
+        return Err(crate::Error::usage(format!(
+            "{}: Babylon's .env holds RGBD PNG faces only",
+            crate::error::param("gpu_format")
+        )));
     }
     let path = ctx.path(".env");
     let poly = SphericalPolynomial::from_radiance_sh(&l.sh);
@@ -458,13 +451,11 @@ fn generic(l: &Lighting, ctx: &Context) -> Result<Delivery> {
         d = file_name(&diff),
         h = file_name(&shp),
     );
-    Ok(Delivery {
-        clamped: clamped(&spec, format, &[&l.specular, &l.diffuse]),
+    Ok(Delivery::new(
         files,
         snippet,
-        levels: Vec::new(),
-        psnr: None,
-    })
+        clamped(&spec, format, &[&l.specular, &l.diffuse]),
+    ))
 }
 
 fn file_name(p: &Path) -> String {

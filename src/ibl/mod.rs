@@ -134,6 +134,23 @@ pub struct Delivery {
     pub psnr: Option<f64>,
 }
 
+impl Delivery {
+    /// Files and their snippet, with no chain description or quality to report.
+    pub(crate) fn new(
+        files: Vec<(PathBuf, Vec<u8>)>,
+        snippet: String,
+        clamped: Option<String>,
+    ) -> Delivery {
+        Delivery {
+            files,
+            snippet,
+            levels: Vec::new(),
+            clamped,
+            psnr: None,
+        }
+    }
+}
+
 /// Everything an engine's files are made of, in cube-map space after the engine's turn.
 pub struct Lighting {
     /// The GGX chain, level 0 the mirror image.
@@ -191,9 +208,10 @@ pub fn deliver(
         )));
     }
     if opts.sheen && engine != Engine::Gltf {
-        return Err(Error::usage(
-            "the sheen (Charlie) chain is for --target gltf".to_string(),
-        ));
+        return Err(Error::usage(format!(
+            "the sheen (Charlie) chain is for {} gltf",
+            crate::error::param("target")
+        )));
     }
     let name = opts.name.clone().unwrap_or_else(|| "env".into());
     if name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.') {

@@ -214,7 +214,8 @@ pub fn encode(
     let n = cube.size();
     if !n.is_power_of_two() {
         return Err(format!(
-            "Babylon .env needs a power-of-two face size, not {n} (give --size)"
+            "Babylon .env needs a power-of-two face size, not {n} (give {})",
+            crate::error::param("size")
         ));
     }
     let levels = CubeMap::full_chain_len(n);

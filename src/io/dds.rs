@@ -20,7 +20,7 @@ use super::guard::{caught, one_line};
 use super::{Decoded, FileFormat, GpuFormat, Limits, Meta};
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
-use crate::image::{ColorSpace, Image};
+use crate::image::Image;
 use ddsfile::{
     AlphaMode, Caps2, D3D10ResourceDimension, D3DFormat, DxgiFormat, FourCC, Header, Header10,
     MiscFlag, PixelFormatFlags,
@@ -317,16 +317,5 @@ fn texels_image(
 }
 
 fn meta(format: GpuFormat) -> Meta {
-    Meta {
-        file_format: FileFormat::Dds,
-        pixel_format: format.name().into(),
-        color_space: if format.is_srgb() {
-            ColorSpace::Srgb
-        } else {
-            ColorSpace::Linear
-        },
-        hdr: format.is_float(),
-        replaced_values: 0,
-        stored_levels: 1,
-    }
+    Meta::for_gpu(FileFormat::Dds, format, 1)
 }

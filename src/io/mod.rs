@@ -249,6 +249,29 @@ pub struct Meta {
     pub stored_levels: usize,
 }
 
+impl Meta {
+    /// What a GPU container (`file_format`) holding `stored_levels` levels of `format` texels
+    /// says of itself.
+    pub(crate) fn for_gpu(
+        file_format: FileFormat,
+        format: GpuFormat,
+        stored_levels: usize,
+    ) -> Meta {
+        Meta {
+            file_format,
+            pixel_format: format.name().into(),
+            color_space: if format.is_srgb() {
+                ColorSpace::Srgb
+            } else {
+                ColorSpace::Linear
+            },
+            hdr: format.is_float(),
+            replaced_values: 0,
+            stored_levels,
+        }
+    }
+}
+
 /// A decoded file: one image, or a cube map with its levels (from KTX2 or DDS).
 #[derive(Clone, Debug)]
 pub enum Decoded {
@@ -421,8 +444,9 @@ pub fn encode_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<Vec
         f if f.is_container() => Err(Error::file(
             path,
             format!(
-                "{} holds cube maps: write a cube map (--to {})",
+                "{} holds cube maps: write a cube map ({} {})",
                 f.name(),
+                crate::error::param("to"),
                 FileFormat::container_kind_name(f)
             ),
         )),
@@ -484,7 +508,10 @@ pub fn encode_cube_with(
 pub fn zstd_needs_ktx2(path: &Path) -> Error {
     Error::file(
         path,
-        "--zstd supercompresses KTX2 only (DDS has no supercompression): write .ktx2 or leave out --zstd",
+        format!(
+            "{z} supercompresses KTX2 only (DDS has no supercompression): write .ktx2 or leave out {z}",
+            z = crate::error::param("zstd")
+        ),
     )
 }
 

@@ -146,7 +146,8 @@ pub fn detect(w: usize, h: usize) -> Result<Kind, String> {
     }
     if w == h {
         return Err(format!(
-            "a square {w}x{h} image may be a sphere map or an angular map: say which with --from sphere or --from angular"
+            "a square {w}x{h} image may be a sphere map or an angular map: say which with {f} sphere or {f} angular",
+            f = crate::error::param("from")
         ));
     }
     Err(format!(

@@ -395,8 +395,9 @@ pub fn resolve(spec: &str) -> Result<Material> {
     if !is_file_like {
         let names: Vec<String> = presets().into_iter().map(|(m, _)| m.name).collect();
         return Err(Error::usage(format!(
-            "unknown material \"{spec}\": use one of {} or a .toml file (--material list shows them)",
-            names.join(", ")
+            "unknown material \"{spec}\": use one of {} or a .toml file ({} list shows them)",
+            names.join(", "),
+            crate::error::param("material")
         )));
     }
     let text = crate::io::read_file(path)?;

@@ -3,7 +3,7 @@
 
 #![warn(missing_docs)]
 
-use crate::error::{Error, Result};
+use crate::error::{param, Error, Result};
 use glam::{Vec3, Vec4};
 
 /// Where the vectors come from.
@@ -129,43 +129,64 @@ impl Options {
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::usage(m));
         if self.size == 0 || self.size > 16384 {
-            return bad(format!("--size must be 1 to 16384 (got {})", self.size));
+            return bad(format!(
+                "{} must be 1 to 16384 (got {})",
+                param("size"),
+                self.size
+            ));
         }
         if !(self.fov > 0.0 && self.fov < 179.0) {
             return bad(format!(
-                "--fov must be between 0 and 179 degrees (got {})",
+                "{} must be between 0 and 179 degrees (got {})",
+                param("fov"),
                 self.fov
             ));
         }
         if !(self.distance.is_finite() && self.distance > 1.0) {
             return bad(format!(
-                "--distance must be more than 1, outside the unit sphere (got {})",
+                "{} must be more than 1, outside the unit sphere (got {})",
+                param("distance"),
                 self.distance
             ));
         }
         if !self.yaw.is_finite() || !self.pitch.is_finite() || !self.lod_bias.is_finite() {
-            return bad("--yaw, --pitch and --lod-bias must be finite numbers".into());
+            return bad(format!(
+                "{}, {} and {} must be finite numbers",
+                param("yaw"),
+                param("pitch"),
+                param("lod_bias")
+            ));
         }
         if self.samples == 0 || self.samples > 256 {
-            return bad(format!("--samples must be 1 to 256 (got {})", self.samples));
+            return bad(format!(
+                "{} must be 1 to 256 (got {})",
+                param("samples"),
+                self.samples
+            ));
         }
         if self.shading == Shading::PerVertex && !(2..=1024).contains(&self.tessellation) {
             return bad(format!(
-                "--tessellation must be 2 to 1024 (got {})",
+                "{} must be 2 to 1024 (got {})",
+                param("tessellation"),
                 self.tessellation
             ));
         }
         if let Some(p) = self.parallax {
             if !(p.radius.is_finite() && p.radius > 0.0 && p.center.is_finite()) {
                 return bad(format!(
-                    "--env-radius must be positive and --env-center finite (got {})",
+                    "{} must be positive and {} finite (got {})",
+                    param("env_radius"),
+                    param("env_center"),
                     p.radius
                 ));
             }
             if p.mode == ParallaxMode::Exact && p.radius <= 1.0 + p.center.length() {
                 return bad(format!(
-                    "--parallax exact needs the sphere inside the environment: --env-radius ({}) must exceed 1 + |--env-center| ({})",
+                    "{} exact needs the sphere inside the environment: {} ({}) must exceed 1 + |{}| ({})",
+                    param("parallax"),
+                    param("env_radius"),
                     p.radius,
+                    param("env_center"),
                     1.0 + p.center.length()
                 ));
             }

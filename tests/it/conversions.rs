@@ -527,7 +527,10 @@ fn detection_by_aspect_ratio() {
     assert_eq!(layout::detect(384, 512), Ok(Kind::Vcross));
     assert_eq!(layout::detect(768, 128), Ok(Kind::Hstrip));
     assert_eq!(layout::detect(128, 768), Ok(Kind::Vstrip));
-    assert!(layout::detect(256, 256).unwrap_err().contains("--from"));
+    // The library names the parameter; the CLI says --from (tests/it/cli_errors.rs).
+    assert!(layout::detect(256, 256)
+        .unwrap_err()
+        .contains("`from` sphere"));
     assert!(layout::detect(300, 200).is_err());
 }
 

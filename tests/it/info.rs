@@ -87,7 +87,7 @@ fn square_images_need_from_for_their_face_size() {
     assert_eq!((r.kind, r.face_size), (None, None));
     let note = r.kind_note.clone().unwrap();
     assert!(
-        note.contains("--from sphere") && note.contains("face size 32"),
+        note.contains("`from` sphere") && note.contains("face size 32"),
         "{note}"
     );
     assert!(note.contains("single face (face size 64)"), "{note}");

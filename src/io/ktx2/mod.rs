@@ -25,7 +25,7 @@ use super::container::Shape;
 use super::{Decoded, FileFormat, GpuFormat, Limits, Meta};
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
-use crate::image::{ColorSpace, Image};
+use crate::image::Image;
 use format::*;
 use std::path::Path;
 
@@ -510,22 +510,10 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         Decoded::Image(image(0, 0))
     };
 
-    let mut pixel_format = format.name().to_string();
+    let mut meta = Meta::for_gpu(FileFormat::Ktx2, format, level_count);
     if zstd {
-        pixel_format.push_str(", Zstandard supercompressed");
+        meta.pixel_format.push_str(", Zstandard supercompressed");
     }
-    let meta = Meta {
-        file_format: FileFormat::Ktx2,
-        pixel_format,
-        color_space: if format.is_srgb() {
-            ColorSpace::Srgb
-        } else {
-            ColorSpace::Linear
-        },
-        hdr: format.is_float(),
-        replaced_values: 0,
-        stored_levels: level_count,
-    };
     Ok((decoded, meta))
 }
 
