@@ -513,3 +513,29 @@ fn charlie_and_ggx_stay_finite_next_to_the_largest_radiance() {
         }
     }
 }
+
+#[test]
+fn chains_into_the_engines_containers() {
+    // -o x.ktx / x.env: the engine's own container with every level, not a folder of that name.
+    let dir = tempfile::tempdir().unwrap();
+    let sky = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.exr");
+    for name in ["chain.ktx", "chain.env"] {
+        let out = dir.path().join(name);
+        let o = common::run([
+            "prefilter",
+            sky,
+            "-o",
+            out.to_str().unwrap(),
+            "--filter",
+            "box",
+            "--size",
+            "16",
+        ]);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        assert!(out.is_file(), "{name}");
+        let o = common::run(["info", out.to_str().unwrap(), "--json"]);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["mip_levels"], 5, "{name}: {v}");
+    }
+}
