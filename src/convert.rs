@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 pub enum Source {
     /// Six faces with their mip levels.
     Cube(CubeMap),
-    /// A panorama, mirror ball or angular map, looked up by direction.
+    /// A panorama, mirror ball, angular or octahedral map, looked up by direction.
     Projection(layout::Projection, Image),
 }
 
@@ -373,8 +373,12 @@ pub fn to_image(loaded: &Loaded, to: Kind, size: usize, resampler: &Resampler) -
     match to.projection() {
         Some(p) => {
             let (w, h) = to.image_size(size);
-            let footprint =
-                (p == layout::Projection::Equirect).then(|| std::f32::consts::PI / h as f32);
+            // The widest output texel's angle, where it is bounded.
+            let footprint = match p {
+                layout::Projection::Equirect => Some(std::f32::consts::PI / h as f32),
+                layout::Projection::Octahedral => Some(6.0 / w as f32),
+                _ => None,
+            };
             resampler.to_projection(loaded.environment(footprint).as_ref(), p, w, h)
         }
         None => {

@@ -19,6 +19,28 @@ pub enum ColorSpace {
 /// whole map's texels times their weights (2^28 texels or fewer) stay finite in f32.
 pub const MAX_RADIANCE: f32 = 1e28;
 
+/// How lookups read past an image's edges.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Edges {
+    /// The edge texels repeat.
+    Clamp,
+    /// Columns wrap around (a panorama); rows clamp.
+    WrapX,
+    /// Each edge goes on as itself mirrored about its midpoint (an octahedral map): past
+    /// column w - 1 at row y lies column w - 1 at row h - 1 - y, and likewise at every edge.
+    Octahedral,
+}
+
+impl Edges {
+    fn wrap_x(wrap: bool) -> Edges {
+        if wrap {
+            Edges::WrapX
+        } else {
+            Edges::Clamp
+        }
+    }
+}
+
 /// A linear RGBA f32 image, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
@@ -282,19 +304,26 @@ impl Image {
     /// `wrap_x` repeats horizontally (panoramas); otherwise edges clamp.
     #[inline]
     pub fn bilinear(&self, x: f32, y: f32, wrap_x: bool) -> Vec4 {
-        self.bilinear_below(x, y, wrap_x, Vec4::INFINITY)
+        self.bilinear_below(x, y, Edges::wrap_x(wrap_x), Vec4::INFINITY)
     }
 
     /// `bilinear` of the image with every texel first clamped to `ceiling` (per channel).
     #[inline]
-    pub(crate) fn bilinear_below(&self, x: f32, y: f32, wrap_x: bool, ceiling: Vec4) -> Vec4 {
+    pub(crate) fn bilinear_below(&self, x: f32, y: f32, edges: Edges, ceiling: Vec4) -> Vec4 {
         let fx = x - 0.5;
         let fy = y - 0.5;
         let x0 = floor_small(fx);
         let y0 = floor_small(fy);
         let ax = fx - x0;
         let ay = fy - y0;
-        let (xa, xb) = self.cols(x0 as isize, wrap_x);
+        if edges == Edges::Octahedral {
+            let (x0, y0) = (x0 as isize, y0 as isize);
+            let p = |x: isize, y: isize| self.pixels[self.folded(x, y)].min(ceiling);
+            let r0 = p(x0, y0).lerp(p(x0 + 1, y0), ax);
+            let r1 = p(x0, y0 + 1).lerp(p(x0 + 1, y0 + 1), ax);
+            return r0.lerp(r1, ay);
+        }
+        let (xa, xb) = self.cols(x0 as isize, edges == Edges::WrapX);
         let ya = clampi(y0 as isize, self.height);
         let yb = clampi(y0 as isize + 1, self.height);
         let p = |y: usize, x: usize| self.pixels[y * self.width + x].min(ceiling);
@@ -399,14 +428,30 @@ impl Image {
         }
     }
 
+    /// The index of texel (x, y) of an octahedral map, at most an image's size beyond its
+    /// edges, each edge mirrored about its midpoint ([`Edges::Octahedral`]).
+    #[inline]
+    fn folded(&self, mut x: isize, mut y: isize) -> usize {
+        let (w, h) = (self.width as isize, self.height as isize);
+        if x < 0 || x >= w {
+            x = if x < 0 { -1 - x } else { 2 * w - 1 - x };
+            y = h - 1 - y;
+        }
+        if y < 0 || y >= h {
+            y = if y < 0 { -1 - y } else { 2 * h - 1 - y };
+            x = w - 1 - x;
+        }
+        clampi(y, self.height) * self.width + clampi(x, self.width)
+    }
+
     /// Catmull-Rom bicubic sample, clamped to the range of the 2x2 texels around the point so it
     /// sharpens without ringing (never below zero, never past the local extremes).
     pub fn bicubic(&self, x: f32, y: f32, wrap_x: bool) -> Vec4 {
-        self.bicubic_below(x, y, wrap_x, Vec4::INFINITY)
+        self.bicubic_below(x, y, Edges::wrap_x(wrap_x), Vec4::INFINITY)
     }
 
     /// `bicubic` of the image with every texel first clamped to `ceiling` (per channel).
-    pub(crate) fn bicubic_below(&self, x: f32, y: f32, wrap_x: bool, ceiling: Vec4) -> Vec4 {
+    pub(crate) fn bicubic_below(&self, x: f32, y: f32, edges: Edges, ceiling: Vec4) -> Vec4 {
         let fx = x - 0.5;
         let fy = y - 0.5;
         let x0 = fx.floor();
@@ -422,12 +467,12 @@ impl Image {
             let mut row = Vec4::ZERO;
             for (i, wxi) in wx.iter().enumerate() {
                 let xi = x0 as isize - 1 + i as isize;
-                let xx = if wrap_x {
-                    xi.rem_euclid(w) as usize
-                } else {
-                    clampi(xi, self.width)
+                let k = match edges {
+                    Edges::WrapX => yy * self.width + xi.rem_euclid(w) as usize,
+                    Edges::Clamp => yy * self.width + clampi(xi, self.width),
+                    Edges::Octahedral => self.folded(xi, y0 as isize - 1 + j as isize),
                 };
-                let p = self.pixels[yy * self.width + xx].min(ceiling);
+                let p = self.pixels[k].min(ceiling);
                 if (1..=2).contains(&i) && (1..=2).contains(&j) {
                     lo = lo.min(p);
                     hi = hi.max(p);

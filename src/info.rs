@@ -75,7 +75,8 @@ pub fn stats<'a>(images: impl IntoIterator<Item = &'a Image>) -> Stats {
 
 /// Statistics over the texels of `img` that hold part of a `kind` layout: a cross's or
 /// strip's six faces (not its empty cells), the disc of a sphere or angular map (not the
-/// corners outside it), every texel of a panorama. With no layout, every texel.
+/// corners outside it), every texel of a panorama or octahedral map. With no layout, every
+/// texel.
 pub(crate) fn layout_stats(kind: Option<Kind>, img: &Image) -> Stats {
     match kind {
         Some(k) if k.is_cells() => stats(&layout::cross::extract(k, img)),
@@ -132,8 +133,8 @@ fn stats_of<'a>(pixels: impl Iterator<Item = &'a Vec4>) -> Stats {
     s
 }
 
-/// The flux of a single image laid out as `kind`: a panorama, ball or angular map as it is,
-/// a cross or strip through its faces.
+/// The flux of a single image laid out as `kind`: a panorama, ball, angular or octahedral map
+/// as it is, a cross or strip through its faces.
 fn image_flux(kind: Kind, img: &Image) -> Option<[f64; 3]> {
     if let Some(p) = kind.projection() {
         let grid = flux::Grid::Projection(p, img.width, img.height);
@@ -155,7 +156,7 @@ fn cube_flux(faces: &Faces) -> [f64; 3] {
 /// What a square image with no `--from` may be.
 fn square_note(n: usize) -> String {
     format!(
-        "a square {n}x{n} image: a sphere or angular map (face size {}; say which with {f} sphere or {f} angular) or a single face (face size {n})",
+        "a square {n}x{n} image: a sphere, angular or octahedral map (face size {}; say which with {f} sphere, {f} angular or {f} octahedral) or a single face (face size {n})",
         (n / 2).max(1),
         f = param("from")
     )
@@ -335,7 +336,7 @@ impl std::fmt::Display for Report {
             Some(n) => writeln!(f, "  face size:    {n}")?,
             None if self.kind.is_none() && self.width == self.height => writeln!(
                 f,
-                "  face size:    unknown: {} as a sphere or angular map, {} as a single face",
+                "  face size:    unknown: {} as a sphere, angular or octahedral map, {} as a single face",
                 (self.width / 2).max(1),
                 self.width
             )?,

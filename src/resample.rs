@@ -6,7 +6,7 @@
 use crate::cube::{face_dir, CubeMap, Dirs, Environment, Interp, BATCH};
 use crate::flux::Grid;
 use crate::image::Image;
-use crate::layout::{equirect, Projection};
+use crate::layout::{equirect, octahedral, Projection};
 use glam::{Mat3, Vec3, Vec4};
 
 /// A rotation of the environment (degrees) and an optional handedness flip.
@@ -127,7 +127,7 @@ impl Resampler {
         }
     }
 
-    /// A panorama, mirror ball or angular map of `w` x `h` from any environment.
+    /// A panorama, mirror ball, angular or octahedral map of `w` x `h` from any environment.
     pub fn to_projection(
         &self,
         env: &dyn Environment,
@@ -162,6 +162,14 @@ impl Resampler {
                     let (sx, sy) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
                     let rr = (sx * sx + sy * sy).min(rim * rim);
                     4.0 * iw / (1.0 - rr).sqrt()
+                };
+                self.render(env, (w, h, w * h), at(proj), footprint, density)
+            }
+            // The larger singular value of the fold's map to directions, per texel.
+            Projection::Octahedral => {
+                let footprint = move |x: f32, y: f32| {
+                    let (a, b) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
+                    2.0 * iw * octahedral::stretch(a, b)
                 };
                 self.render(env, (w, h, w * h), at(proj), footprint, density)
             }

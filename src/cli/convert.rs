@@ -21,7 +21,8 @@ pub struct Args {
     /// Output layout (default: from the output's extension; hcross for images, faces for a folder).
     #[arg(long, value_enum)]
     pub to: Option<Kind>,
-    /// Cube face edge in texels (equirect output is 4N x 2N, sphere and angular 2N x 2N).
+    /// Cube face edge in texels (equirect output is 4N x 2N; sphere, angular and octahedral
+    /// 2N x 2N).
     #[arg(long)]
     pub size: Option<usize>,
     /// File type of face images (png, jpg, tga, hdr, exr; default exr for HDR input, png for

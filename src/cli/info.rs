@@ -10,8 +10,8 @@ pub struct Args {
     /// chain (m0/ m1/ ... and levels.json, as `cubeforge prefilter` writes one).
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
-    /// Layout of single images: settles a square image (sphere or angular) and overrides what
-    /// the aspect ratio says.
+    /// Layout of single images: settles a square image (sphere, angular or octahedral) and
+    /// overrides what the aspect ratio says.
     #[arg(long, value_enum)]
     pub from: Option<cubeforge::layout::Kind>,
     /// Print JSON: one object for one file, an array for several.

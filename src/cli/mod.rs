@@ -23,8 +23,8 @@ use std::time::Instant;
     version,
     about = "Turn photographs into cube maps and check them",
     long_about = "Turn photographs into cube maps and check them: convert between equirect panoramas, \
-                  face images, crosses, strips, mirror balls, angular maps, KTX2 and DDS; \
-                  describe what a file holds."
+                  face images, crosses, strips, mirror balls, angular and octahedral maps, KTX2 \
+                  and DDS; describe what a file holds."
 )]
 pub struct Cli {
     /// Print the time each stage takes (decode, resample, encode, write).
@@ -68,7 +68,8 @@ pub enum Command {
 /// How the inputs are read: shared by the commands that take environment maps.
 #[derive(clap::Args, Debug)]
 pub struct InputArgs {
-    /// Input layout (detected from the aspect ratio; square images need sphere or angular).
+    /// Input layout (detected from the aspect ratio; square images need sphere, angular
+    /// or octahedral).
     #[arg(long, value_enum)]
     pub from: Option<cubeforge::layout::Kind>,
     /// 8- and 16-bit files hold data, not colour: no sRGB decode on read or encode on write.

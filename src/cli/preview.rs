@@ -100,7 +100,8 @@ pub struct Args {
     /// Contact sheet of one material at several LOD biases, e.g. 0,1,2,3.
     #[arg(value_parser = super::finite_f32, long, value_delimiter = ',', allow_hyphen_values = true)]
     pub grid_bias: Vec<f32>,
-    /// Layout of ENV (detected from the aspect ratio; square images need sphere or angular).
+    /// Layout of ENV (detected from the aspect ratio; square images need sphere, angular or
+    /// octahedral).
     #[arg(long, value_enum)]
     pub from: Option<Kind>,
     /// Refuse images with more pixels than this (checked before decoding).

@@ -87,7 +87,7 @@ impl Grid {
             }
             Grid::Projection(p, w, h) => {
                 let mut uv = p.to_image(d);
-                if p != Projection::Equirect {
+                if p.is_ball() {
                     let c = uv * 2.0 - glam::Vec2::ONE;
                     let max = 1.0 - 1.0 / w.max(h) as f32;
                     let len = c.length();
@@ -102,7 +102,7 @@ impl Grid {
 
     /// A mirror ball or angular map: a disc in a square.
     fn is_ball(self) -> bool {
-        matches!(self, Grid::Projection(p, ..) if p != Projection::Equirect)
+        matches!(self, Grid::Projection(p, ..) if p.is_ball())
     }
 
     /// The texels along one axis (of `n`) that a span of `side` texels centred on `at`
@@ -150,6 +150,10 @@ impl Grid {
                         let lat = (0.5 - y * ih) * std::f32::consts::PI;
                         std::f32::consts::TAU * iw * std::f32::consts::PI * ih * lat.cos().max(0.0)
                     }
+                    Projection::Octahedral => {
+                        let (a, b) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
+                        4.0 * iw * ih * crate::layout::octahedral::density(a, b)
+                    }
                     Projection::Sphere | Projection::Angular => {
                         let (sx, sy) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
                         let r = (sx * sx + sy * sy).sqrt();
@@ -173,12 +177,16 @@ impl Grid {
         }
     }
 
-    /// Solid angle of texel (x, y) (the same on every face of a cube): exact for cube faces and panoramas (closed
-    /// forms), a fine midpoint sum on balls (16 x 16 on the rim, where the disc cuts texels).
+    /// Solid angle of texel (x, y) (the same on every face of a cube): exact for cube faces,
+    /// panoramas and octahedral maps (closed forms), a fine midpoint sum on balls (16 x 16 on
+    /// the rim, where the disc cuts texels).
     pub fn solid_angle(self, x: usize, y: usize) -> f64 {
         match self {
             Grid::Cube(n) => texel_solid_angle(n, x, y) as f64,
             Grid::Projection(Projection::Equirect, w, h) => equirect_row(w, h, y),
+            Grid::Projection(Projection::Octahedral, w, h) => {
+                crate::layout::octahedral::texel_solid_angle(w, h, x, y)
+            }
             Grid::Projection(_, w, h) => {
                 let corner_in = |cx: usize, cy: usize| {
                     let sx = 2.0 * cx as f64 / w as f64 - 1.0;
@@ -272,6 +280,8 @@ mod tests {
             Grid::Projection(Projection::Sphere, 64, 64),
             Grid::Projection(Projection::Angular, 64, 64),
             Grid::Projection(Projection::Angular, 257, 257),
+            Grid::Projection(Projection::Octahedral, 64, 64),
+            Grid::Projection(Projection::Octahedral, 33, 33),
         ] {
             let sum: f64 = grid.solid_angles().iter().sum();
             assert!((sum / (4.0 * PI) - 1.0).abs() < 2e-4, "{grid:?}: {sum}");

@@ -6,10 +6,11 @@
 pub mod angular;
 pub mod cross;
 pub mod equirect;
+pub mod octahedral;
 pub mod sphere;
 
 use crate::cube::{Dirs, Environment, Interp, BATCH};
-use crate::image::Image;
+use crate::image::{Edges, Image};
 use glam::{Vec2, Vec3, Vec4};
 
 /// Every kind of environment map cubeforge reads or writes.
@@ -33,6 +34,8 @@ pub enum Kind {
     Sphere,
     /// Angular map (light probe), square.
     Angular,
+    /// Octahedral map (engines' probes), square: +Y at the centre, -Y in the corners.
+    Octahedral,
     /// KTX2 cube-map container.
     Ktx2,
     /// DDS cube-map container.
@@ -55,6 +58,7 @@ impl Kind {
             Kind::Vstrip => "vstrip",
             Kind::Sphere => "sphere",
             Kind::Angular => "angular",
+            Kind::Octahedral => "octahedral",
             Kind::Ktx2 => "ktx2",
             Kind::Dds => "dds",
             Kind::Ktx => "ktx",
@@ -89,6 +93,7 @@ impl Kind {
             Kind::Equirect => Some(Projection::Equirect),
             Kind::Sphere => Some(Projection::Sphere),
             Kind::Angular => Some(Projection::Angular),
+            Kind::Octahedral => Some(Projection::Octahedral),
             _ => None,
         }
     }
@@ -97,7 +102,7 @@ impl Kind {
     pub(crate) fn fits(self, w: usize, h: usize) -> bool {
         match self {
             Kind::Equirect => w == 2 * h,
-            Kind::Sphere | Kind::Angular => w == h,
+            Kind::Sphere | Kind::Angular | Kind::Octahedral => w == h,
             _ => match cross::cells(self) {
                 Some(((c, r), _)) => w.is_multiple_of(c) && h.is_multiple_of(r) && w / c == h / r,
                 None => false,
@@ -109,7 +114,7 @@ impl Kind {
     pub fn image_size(self, n: usize) -> (usize, usize) {
         match self {
             Kind::Equirect => (4 * n, 2 * n),
-            Kind::Sphere | Kind::Angular => (2 * n, 2 * n),
+            Kind::Sphere | Kind::Angular | Kind::Octahedral => (2 * n, 2 * n),
             _ => match cross::cells(self) {
                 Some(((c, r), _)) => (c * n, r * n),
                 None => (n, n),
@@ -121,7 +126,7 @@ impl Kind {
     pub fn face_size(self, w: usize, h: usize) -> usize {
         match self {
             Kind::Equirect => w / 4,
-            Kind::Sphere | Kind::Angular => w / 2,
+            Kind::Sphere | Kind::Angular | Kind::Octahedral => w / 2,
             _ => match cross::cells(self) {
                 Some(((c, _), _)) => w / c,
                 None => w.min(h),
@@ -146,12 +151,12 @@ pub fn detect(w: usize, h: usize) -> Result<Kind, String> {
     }
     if w == h {
         return Err(format!(
-            "a square {w}x{h} image may be a sphere map or an angular map: say which with {f} sphere or {f} angular",
+            "a square {w}x{h} image may be a sphere map, an angular map or an octahedral map: say which with {f} sphere, {f} angular or {f} octahedral",
             f = crate::error::param("from")
         ));
     }
     Err(format!(
-        "{w}x{h} has an aspect ratio no layout has (2:1 equirect, 4:3 hcross, 3:4 vcross, 6:1 hstrip, 1:6 vstrip, 1:1 sphere or angular)"
+        "{w}x{h} has an aspect ratio no layout has (2:1 equirect, 4:3 hcross, 3:4 vcross, 6:1 hstrip, 1:6 vstrip, 1:1 sphere, angular or octahedral)"
     ))
 }
 
@@ -164,6 +169,8 @@ pub enum Projection {
     Sphere,
     /// Angular map (light probe), square.
     Angular,
+    /// Octahedral map, square (see [`octahedral`]).
+    Octahedral,
 }
 
 impl Projection {
@@ -174,6 +181,7 @@ impl Projection {
             Projection::Equirect => equirect::dir_to_uv(d),
             Projection::Sphere => flip(sphere::dir_to_st(d)),
             Projection::Angular => flip(angular::dir_to_st(d)),
+            Projection::Octahedral => octahedral::dir_to_uv(d),
         }
     }
 
@@ -184,6 +192,22 @@ impl Projection {
             Projection::Equirect => Some(equirect::uv_to_dir(u, v)),
             Projection::Sphere => sphere::st_to_dir(u, 1.0 - v).map(|d| d.normalize()),
             Projection::Angular => angular::st_to_dir(u, 1.0 - v),
+            Projection::Octahedral => Some(octahedral::uv_to_dir(u, v)),
+        }
+    }
+
+    /// A mirror ball or angular map: a disc in a square, its corners outside the sphere.
+    pub(crate) fn is_ball(self) -> bool {
+        matches!(self, Projection::Sphere | Projection::Angular)
+    }
+
+    /// How lookups read past the image's edges: a panorama's columns wrap, an octahedral
+    /// map's edges fold onto themselves, a ball's (dark outside) edges clamp.
+    pub(crate) fn edges(self) -> Edges {
+        match self {
+            Projection::Equirect => Edges::WrapX,
+            Projection::Octahedral => Edges::Octahedral,
+            Projection::Sphere | Projection::Angular => Edges::Clamp,
         }
     }
 }
@@ -210,8 +234,9 @@ fn flip(st: Vec2) -> Vec2 {
     Vec2::new(st.x, 1.0 - st.y)
 }
 
-/// A panorama, mirror ball or angular map prepared for lookups by direction, with a pyramid
-/// of 2x2-averaged levels so a coarse output can be antialiased cheaply. Level 0 is borrowed.
+/// A panorama, mirror ball, angular or octahedral map prepared for lookups by direction, with
+/// a pyramid of 2x2-averaged levels so a coarse output can be antialiased cheaply. Level 0 is
+/// borrowed.
 pub struct ImageEnv<'a> {
     projection: Projection,
     base: &'a Image,
@@ -324,8 +349,8 @@ impl ImageEnv<'_> {
     #[inline]
     fn at(&self, mut uv: Vec2, level: usize, interp: Interp) -> Vec4 {
         let img = self.level(level);
-        let wrap = self.projection == Projection::Equirect;
-        if !wrap {
+        let edges = self.projection.edges();
+        if self.projection.is_ball() {
             // Keep the taps half a texel inside the disc so its dark outside never bleeds in.
             let c = uv * 2.0 - Vec2::ONE;
             let max = 1.0 - 1.0 / img.width as f32;
@@ -342,8 +367,8 @@ impl ImageEnv<'_> {
             Vec4::INFINITY
         };
         match interp {
-            Interp::Bilinear => img.bilinear_below(x, y, wrap, ceiling),
-            Interp::Bicubic => img.bicubic_below(x, y, wrap, ceiling),
+            Interp::Bilinear => img.bilinear_below(x, y, edges, ceiling),
+            Interp::Bicubic => img.bicubic_below(x, y, edges, ceiling),
         }
     }
 }
@@ -365,6 +390,7 @@ impl Environment for ImageEnv<'_> {
             Projection::Equirect => project(dirs, &mut u, &mut v, equirect::dir_to_uv),
             Projection::Sphere => project(dirs, &mut u, &mut v, |d| flip(sphere::dir_to_st(d))),
             Projection::Angular => project(dirs, &mut u, &mut v, |d| flip(angular::dir_to_st(d))),
+            Projection::Octahedral => project(dirs, &mut u, &mut v, octahedral::dir_to_uv),
         }
         if self.projection == Projection::Equirect && interp == Interp::Bilinear {
             let img = self.level(level);
@@ -393,6 +419,9 @@ impl Environment for ImageEnv<'_> {
             // Angle per unit radius is 2 at the ball's centre, pi everywhere on an angular map.
             Projection::Sphere => 4.0 / img.width as f32,
             Projection::Angular => std::f32::consts::TAU / img.width as f32,
+            // One radian per unit of the square's half-width at its centre (up to 3 at
+            // the faces' centres): the centre's texel, as for a ball.
+            Projection::Octahedral => 2.0 / img.width as f32,
         }
     }
 

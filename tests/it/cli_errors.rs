@@ -299,7 +299,9 @@ fn square_without_from() {
     let p = s.write("ball.png", &encode("a.png", &equirect(32, 32)));
     let line = convert_fails(&s, &p, "o.png", &["--to", "equirect"], "ball.png");
     assert!(
-        line.contains("--from sphere") && line.contains("angular"),
+        line.contains("--from sphere")
+            && line.contains("angular")
+            && line.contains("--from octahedral"),
         "{line}"
     );
 }

@@ -87,7 +87,9 @@ fn square_images_need_from_for_their_face_size() {
     assert_eq!((r.kind, r.face_size), (None, None));
     let note = r.kind_note.clone().unwrap();
     assert!(
-        note.contains("`from` sphere") && note.contains("face size 32"),
+        note.contains("`from` sphere")
+            && note.contains("`from` octahedral")
+            && note.contains("face size 32"),
         "{note}"
     );
     assert!(note.contains("single face (face size 64)"), "{note}");
@@ -95,7 +97,9 @@ fn square_images_need_from_for_their_face_size() {
     assert_eq!(r.stats.min_luminance, 0.0, "every texel counts");
     let t = r.to_string();
     assert!(
-        t.contains("face size:    unknown: 32 as a sphere or angular map, 64 as a single face"),
+        t.contains(
+            "face size:    unknown: 32 as a sphere, angular or octahedral map, 64 as a single face"
+        ),
         "{t}"
     );
 

@@ -22,6 +22,7 @@ mod ibl;
 mod info;
 mod lut;
 mod man_pages;
+mod octahedral;
 mod prefilter;
 mod preview;
 mod readme;
