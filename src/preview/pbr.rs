@@ -216,6 +216,7 @@ impl SplitSum {
 }
 
 /// An environment made ready for `pbr` materials, and what the user should hear about it.
+#[derive(Debug)]
 pub struct PbrSetup {
     /// The lighting to render with.
     pub split_sum: SplitSum,
@@ -304,14 +305,14 @@ pub fn prepare(env: &mut LoadedEnv, name: &Path, target: Option<Engine>) -> Resu
         let (setup, made) = prefiltered(env, level0, engine_mapping, size);
         return Ok(PbrSetup {
             warning: Some(format!(
-                "{shown} {why}: prefiltering a GGX chain from its level 0 ({made}); --target ENGINE reads an engine's chain as it is"
+                "{shown} {why}: prefiltered a GGX chain from its level 0 in memory ({made}); --target ENGINE reads an engine's chain as it is"
             )),
             ..setup
         });
     }
     let (setup, made) = prefiltered(env, level0, engine_mapping, size);
     Ok(PbrSetup {
-        note: format!("{shown}: one level; {made}"),
+        note: format!("{shown}: one level; prefiltered a GGX chain in memory: {made}"),
         ..setup
     })
 }
@@ -365,7 +366,7 @@ fn prefiltered(
         None => LevelMapping::Levels(levels.iter().map(|l| l.roughness.unwrap_or(0.0)).collect()),
     };
     let made = format!(
-        "prefiltered a GGX chain in memory: {count} levels, faces {n} to {}{}, roughness {}{}",
+        "{count} levels, faces {n} to {}{}, roughness {}{}",
         chain.levels[count - 1][0].width,
         if n < size {
             format!(" (level 0 box-reduced from {size})")
@@ -380,7 +381,7 @@ fn prefiltered(
     (
         PbrSetup {
             split_sum,
-            note: made.clone(),
+            note: format!("prefiltered a GGX chain in memory: {made}"),
             warning: None,
         },
         made,

@@ -24,6 +24,7 @@ mod lut;
 mod man_pages;
 mod prefilter;
 mod preview;
+mod preview_pbr;
 mod readme;
 mod real_images;
 mod rgbe;
