@@ -7,7 +7,7 @@ use cubeforge::image::{srgb_to_linear, Image};
 use cubeforge::io::{self, FileFormat, Limits, ReadOptions, WriteOptions};
 use cubeforge::layout::Kind;
 use cubeforge::preview::material::{self, Material, Model};
-use cubeforge::preview::pbr::{self, SplitSum};
+use cubeforge::preview::pbr::{self, PbrSetup};
 use cubeforge::preview::tonemap::{self, Tonemap};
 use cubeforge::preview::{
     self, grid, Background, Control, LoadedEnv, Options, Parallax, ParallaxMode, Shading, Surface,
@@ -185,22 +185,22 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         ));
     };
     let plan = check(&a, output)?;
-    let mut env = load_env(env_path, a.from, plan.limits)?;
+    let env = load_env(env_path, a.from, plan.limits)?;
     let mut inputs: Vec<PathBuf> = env.files.clone();
     let textures = load_textures(&a, &plan.materials, verbose, &mut inputs)?;
     stages.done("decode");
     let split_sum = if plan.materials.iter().any(|m| m.model == Model::Pbr) {
-        let setup = pbr::prepare(&mut env, env_path, a.target)?;
+        let setup = pbr::prepare(&env, env_path, a.target)?;
         if let Some(w) = &setup.warning {
             warn(w);
         }
         stages.done("split-sum");
         stages.note(&setup.note);
-        Some(setup.split_sum)
+        Some(setup)
     } else {
         None
     };
-    warn_without_chain(&a, env_path, &env, &textures);
+    warn_without_chain(&a, env_path, &env, &plan.materials, &textures);
     let img = render_cells(&a, &plan, &env, split_sum.as_ref(), &textures)?;
     stages.done("render");
     write(&plan, &inputs, &img, &mut stages)?;
@@ -422,7 +422,17 @@ fn load_textures(
 
 /// Blur (a LOD bias, or a control map's) asked of an environment without a chain does nothing:
 /// say so rather than render a sharp picture silently.
-fn warn_without_chain(a: &Args, env_path: &Path, env: &LoadedEnv, textures: &Textures) {
+/// (pbr materials always sample a chain, made in memory when ENV has none.)
+fn warn_without_chain(
+    a: &Args,
+    env_path: &Path,
+    env: &LoadedEnv,
+    materials: &[Material],
+    textures: &Textures,
+) {
+    if materials.iter().all(|m| m.model == Model::Pbr) {
+        return;
+    }
     let wants_blur = a.lod_bias != 0.0
         || a.grid_bias.iter().any(|b| *b != 0.0)
         || textures
@@ -473,7 +483,7 @@ fn render_cells(
     a: &Args,
     plan: &Plan,
     env: &LoadedEnv,
-    split_sum: Option<&SplitSum>,
+    pbr_setup: Option<&PbrSetup>,
     textures: &Textures,
 ) -> Result<Image> {
     let materials = &plan.materials;
@@ -517,7 +527,12 @@ fn render_cells(
             ..plan.opts
         };
         let bar = super::progress(o.size as u64, format!("preview {label}"));
-        let mut img = preview::render_lit(&env.sampler, split_sum, &m, &surface, &o, &|n| {
+        // pbr materials sample the GGX chain (perhaps made in memory), the others the map.
+        let (sampler, split_sum) = match pbr_setup {
+            Some(p) if m.model == Model::Pbr => (p.sampler(env), Some(&p.split_sum)),
+            _ => (&env.sampler, None),
+        };
+        let mut img = preview::render_lit(sampler, split_sum, &m, &surface, &o, &|n| {
             if let Some(b) = &bar {
                 b.inc(n);
             }

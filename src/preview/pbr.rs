@@ -216,14 +216,34 @@ impl SplitSum {
 }
 
 /// An environment made ready for `pbr` materials, and what the user should hear about it.
-#[derive(Debug)]
 pub struct PbrSetup {
     /// The lighting to render with.
     pub split_sum: SplitSum,
+    /// The GGX chain made in memory, when the environment's own levels are not one (render
+    /// `pbr` materials with [`PbrSetup::sampler`]; the texts' materials keep the map as read).
+    pub chain: Option<CubeSampler>,
     /// What was read or made (for `-v`).
     pub note: String,
     /// What the user should know even without `-v`: the chain was not used as it is.
     pub warning: Option<String>,
+}
+
+impl std::fmt::Debug for PbrSetup {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PbrSetup")
+            .field("split_sum", &self.split_sum)
+            .field("chain_levels", &self.chain.as_ref().map(|c| c.levels()))
+            .field("note", &self.note)
+            .field("warning", &self.warning)
+            .finish()
+    }
+}
+
+impl PbrSetup {
+    /// The chain `pbr` materials sample: the one made in memory, or `env`'s own.
+    pub fn sampler<'a>(&'a self, env: &'a LoadedEnv) -> &'a CubeSampler {
+        self.chain.as_ref().unwrap_or(&env.sampler)
+    }
 }
 
 fn list(r: &[f32]) -> String {
@@ -237,8 +257,8 @@ fn list(r: &[f32]) -> String {
 /// their roughness from its description (levels.json, the KTX2 key, the DDS sidecar), or
 /// `target`'s mapping when one is named; anything else (one level, another filter's chain, a
 /// chain that does not say its roughness) gets a GGX chain prefiltered from its level 0 in
-/// memory, with `target`'s mapping or the linear one, replacing `env.sampler`.
-pub fn prepare(env: &mut LoadedEnv, name: &Path, target: Option<Engine>) -> Result<PbrSetup> {
+/// memory, with `target`'s mapping or the linear one ([`PbrSetup::chain`]).
+pub fn prepare(env: &LoadedEnv, name: &Path, target: Option<Engine>) -> Result<PbrSetup> {
     let engine_mapping = match target {
         Some(e) if ibl::engines::filters_itself(e) => {
             return Err(Error::usage(format!(
@@ -267,6 +287,7 @@ pub fn prepare(env: &mut LoadedEnv, name: &Path, target: Option<Engine>) -> Resu
             );
             return Ok(PbrSetup {
                 split_sum: SplitSum::for_cube(&level0, m),
+                chain: None,
                 note,
                 warning: None,
             });
@@ -289,6 +310,7 @@ pub fn prepare(env: &mut LoadedEnv, name: &Path, target: Option<Engine>) -> Resu
                         );
                         return Ok(PbrSetup {
                             split_sum: SplitSum::for_cube(&level0, m),
+                            chain: None,
                             note,
                             warning: None,
                         });
@@ -302,7 +324,7 @@ pub fn prepare(env: &mut LoadedEnv, name: &Path, target: Option<Engine>) -> Resu
                 crate::io::ktx2::LEVELS_KEY
             ),
         };
-        let (setup, made) = prefiltered(env, level0, engine_mapping, size);
+        let (setup, made) = prefiltered(level0, engine_mapping, size);
         return Ok(PbrSetup {
             warning: Some(format!(
                 "{shown} {why}: prefiltered a GGX chain from its level 0 in memory ({made}); --target ENGINE reads an engine's chain as it is"
@@ -310,7 +332,7 @@ pub fn prepare(env: &mut LoadedEnv, name: &Path, target: Option<Engine>) -> Resu
             ..setup
         });
     }
-    let (setup, made) = prefiltered(env, level0, engine_mapping, size);
+    let (setup, made) = prefiltered(level0, engine_mapping, size);
     Ok(PbrSetup {
         note: format!("{shown}: one level; prefiltered a GGX chain in memory: {made}"),
         ..setup
@@ -326,10 +348,9 @@ fn level0(s: &CubeSampler) -> CubeMap {
     }
 }
 
-/// Replaces `env.sampler` by a GGX chain prefiltered from `level0` (box-reduced to
-/// [`PREFILTER_MAX_SIZE`] first), with the engine's mapping or the linear one.
+/// A GGX chain prefiltered from `level0` (box-reduced to [`PREFILTER_MAX_SIZE`] first), with
+/// the engine's mapping or the linear one.
 fn prefiltered(
-    env: &mut LoadedEnv,
     level0: CubeMap,
     engine: Option<(Engine, RoughnessMapping)>,
     size: usize,
@@ -377,10 +398,10 @@ fn prefiltered(
         engine.map_or(String::new(), |(e, _)| format!(" ({}'s mapping)", e.name()))
     );
     let split_sum = SplitSum::for_cube(&chain, m);
-    env.sampler = CubeSampler::new(&chain);
     (
         PbrSetup {
             split_sum,
+            chain: Some(CubeSampler::new(&chain)),
             note: format!("prefiltered a GGX chain in memory: {made}"),
             warning: None,
         },

@@ -3,7 +3,7 @@
 
 use super::{pbr, render};
 use crate::common;
-use cubeforge::cube::{CubeMap, CubeSampler};
+use cubeforge::cube::{CubeMap, CubeSampler, Environment};
 use cubeforge::ibl::Engine;
 use cubeforge::io::ReadOptions;
 use cubeforge::preview::material::{self, Model};
@@ -71,24 +71,25 @@ fn chains_keep_their_own_mapping_and_anything_else_is_prefiltered() {
     // A GGX chain: its levels and their roughness from its description (KTX2 key or
     // levels.json), nothing prefiltered.
     for (path, want) in [(&ggx, vec![0.0, 0.5, 1.0]), (&folder, vec![0.0, 0.5, 1.0])] {
-        let mut env = load(path);
+        let env = load(path);
         let levels = env.levels();
-        let setup = pbr::prepare(&mut env, path, None).unwrap();
+        let setup = pbr::prepare(&env, path, None).unwrap();
         assert!(setup.warning.is_none(), "{:?}", setup.warning);
         assert!(setup.note.contains("its description"), "{}", setup.note);
         assert_eq!(setup.split_sum.mapping(), &LevelMapping::Levels(want));
-        assert_eq!(env.levels(), levels, "the chain as it is");
+        assert!(setup.chain.is_none(), "the chain as it is");
+        assert_eq!(setup.sampler(&env).levels(), levels);
     }
     // An engine's mapping, continuous, when --target names one.
-    let mut env = load(&ggx);
-    let setup = pbr::prepare(&mut env, &ggx, Some(Engine::Filament)).unwrap();
+    let env = load(&ggx);
+    let setup = pbr::prepare(&env, &ggx, Some(Engine::Filament)).unwrap();
     assert!(
         setup.note.contains("filament's roughness mapping"),
         "{}",
         setup.note
     );
     assert!((setup.split_sum.lod(0.5) - 2.0 * 0.75).abs() < 1e-5);
-    let e = pbr::prepare(&mut load(&ggx), &ggx, Some(Engine::Godot)).unwrap_err();
+    let e = pbr::prepare(&load(&ggx), &ggx, Some(Engine::Godot)).unwrap_err();
     assert!(
         e.to_string().contains("prefilters the panorama itself"),
         "{e}"
@@ -99,30 +100,31 @@ fn chains_keep_their_own_mapping_and_anything_else_is_prefiltered() {
         (&gauss, "is a gaussian chain, not GGX"),
         (&mips, "does not say their roughness"),
     ] {
-        let mut env = load(path);
-        let setup = pbr::prepare(&mut env, path, None).unwrap();
-        let w = setup.warning.expect("a warning");
+        let env = load(path);
+        let setup = pbr::prepare(&env, path, None).unwrap();
+        let w = setup.warning.as_deref().expect("a warning");
         assert!(
             w.contains(why) && w.contains("prefiltered a GGX chain"),
             "{w}"
         );
-        assert_eq!(env.levels(), 3, "32, 16, 8");
+        assert_eq!(setup.sampler(&env).levels(), 3, "32, 16, 8");
         assert_eq!(
             setup.split_sum.mapping(),
             &LevelMapping::Levels(vec![0.0, 0.5, 1.0])
         );
     }
     // One level: prefiltered in memory, said with -v only.
-    let mut env = load(&sky_exr());
+    let env = load(&sky_exr());
     assert_eq!(env.levels(), 1);
-    let setup = pbr::prepare(&mut env, &sky_exr(), None).unwrap();
+    let setup = pbr::prepare(&env, &sky_exr(), None).unwrap();
     assert!(setup.warning.is_none());
     assert!(
         setup.note.contains("prefiltered a GGX chain in memory"),
         "{}",
         setup.note
     );
-    assert_eq!(env.levels(), 5, "128 down to 8");
+    assert_eq!(setup.sampler(&env).levels(), 5, "128 down to 8");
+    assert_eq!(env.levels(), 1, "the map itself is as read");
 }
 
 // ---------------------------------------------------------------------------------------
@@ -307,11 +309,12 @@ fn real_panorama_sweep_is_finite_and_falls_with_roughness() {
         return;
     };
     let path = real.join("hdr/esplanade.hdr");
-    let mut env = load(&path);
-    let split = pbr::prepare(&mut env, &path, None).unwrap().split_sum;
+    let env = load(&path);
+    let setup = pbr::prepare(&env, &path, None).unwrap();
+    let (env, split) = (setup.sampler(&env), &setup.split_sum);
     let mut last = f32::INFINITY;
     for r in [0.0f32, 0.25, 0.5, 0.75, 1.0] {
-        let img = render(&env.sampler, &split, &pbr(Vec3::ONE, 1.0, r), 64);
+        let img = render(env, split, &pbr(Vec3::ONE, 1.0, r), 64);
         assert!(img
             .pixels
             .iter()
@@ -320,5 +323,69 @@ fn real_panorama_sweep_is_finite_and_falls_with_roughness() {
         println!("esplanade, roughness {r}: peak {peak:.1}");
         assert!(peak <= last, "roughness {r}");
         last = peak;
+    }
+}
+
+/// Next to a sun of 1e28 (the largest value a reader passes on) the pbr preview stays finite.
+#[test]
+fn pbr_stays_finite_next_to_the_largest_radiance() {
+    let sun = Vec3::new(0.3, 0.5, 0.8).normalize();
+    let base = CubeMap::from_fn(16, |d| {
+        if d.dot(sun) > 0.99 {
+            Vec4::new(1e28, 1e28, 1e28, 1.0)
+        } else {
+            Vec4::splat(0.5)
+        }
+    });
+    let opts = cubeforge::filter::ChainOptions::default();
+    let (chain, levels) = cubeforge::filter::prefilter(&base, &opts, &|_| {});
+    let mapping = LevelMapping::levels(levels.iter().map(|l| l.roughness.unwrap()).collect());
+    let split = cubeforge::preview::pbr::SplitSum::for_cube(&chain, mapping.unwrap());
+    for r in [0.0, 0.3, 1.0] {
+        for metallic in [0.0, 1.0] {
+            let img = render(
+                &CubeSampler::new(&chain),
+                &split,
+                &pbr(Vec3::ONE, metallic, r),
+                32,
+            );
+            assert!(
+                img.pixels
+                    .iter()
+                    .all(|p| p.is_finite() && p.min_element() >= 0.0),
+                "roughness {r}, metallic {metallic}"
+            );
+        }
+    }
+}
+
+/// In a grid with a pbr material, the texts' materials still see the map as read, not the
+/// GGX chain made for the pbr cells.
+#[test]
+fn texts_materials_beside_pbr_see_the_map_as_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let sky = sky_exr();
+    let (alone, grid) = (dir.path().join("alone.exr"), dir.path().join("grid.exr"));
+    let base = ["preview", sky.to_str().unwrap(), "--size", "32", "-o"];
+    run_ok(
+        &[
+            &base[..],
+            &[alone.to_str().unwrap(), "--material", "chrome"],
+        ]
+        .concat(),
+    );
+    run_ok(
+        &[
+            &base[..],
+            &[grid.to_str().unwrap(), "--grid", "chrome,gold"],
+        ]
+        .concat(),
+    );
+    let (a, g) = (common::read_image(&alone), common::read_image(&grid));
+    // The first cell of the sheet starts after the 2-pixel gap.
+    for y in 0..32 {
+        for x in 0..32 {
+            assert_eq!(a.get(x, y), g.get(x + 2, y + 2), "({x}, {y})");
+        }
     }
 }
