@@ -246,6 +246,7 @@ impl PbrSetup {
     }
 }
 
+/// Roughness values as a message lists them.
 fn list(r: &[f32]) -> String {
     r.iter()
         .map(|v| format!("{}", (v * 1000.0).round() / 1000.0))
@@ -320,14 +321,14 @@ pub fn prepare(env: &LoadedEnv, name: &Path, target: Option<Engine>) -> Result<P
                 }
             }
             None => format!(
-                "has {count} levels but does not say their roughness (levels.json, KTX2 key {})",
+                "has {count} levels but does not say their roughness (levels.json, KTX2 key {}; --target ENGINE reads an engine's chain as it is)",
                 crate::io::ktx2::LEVELS_KEY
             ),
         };
         let (setup, made) = prefiltered(level0, engine_mapping, size);
         return Ok(PbrSetup {
             warning: Some(format!(
-                "{shown} {why}: prefiltered a GGX chain from its level 0 in memory ({made}); --target ENGINE reads an engine's chain as it is"
+                "{shown} {why}: prefiltered a GGX chain from its level 0 in memory ({made})"
             )),
             ..setup
         });
