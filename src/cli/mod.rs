@@ -53,7 +53,7 @@ pub enum Command {
     Lut(lut::Args),
     /// Bake a control map (reflectivity, transmittance, blur, Fresnel mask) from a recipe.
     Control(control::Args),
-    /// Preview a map on a sphere: reflection, refraction, Fresnel and dispersion (Cg Tutorial ch. 7).
+    /// Preview a map on a sphere: reflection, refraction, Fresnel and dispersion (Cg Tutorial ch. 7), split-sum pbr.
     Preview(preview::Args),
     /// Print a shell completion script: `source <(cubeforge completions bash)`.
     Completions(completions::Args),

@@ -2,10 +2,12 @@
 //! programs of The Cg Tutorial, chapter 7.
 
 use super::{warn, Stages};
+use cubeforge::ibl::{self, Engine};
 use cubeforge::image::{srgb_to_linear, Image};
 use cubeforge::io::{self, FileFormat, Limits, ReadOptions, WriteOptions};
 use cubeforge::layout::Kind;
-use cubeforge::preview::material::{self, Material};
+use cubeforge::preview::material::{self, Material, Model};
+use cubeforge::preview::pbr::{self, PbrSetup};
 use cubeforge::preview::tonemap::{self, Tonemap};
 use cubeforge::preview::{
     self, grid, Background, Control, LoadedEnv, Options, Parallax, ParallaxMode, Shading, Surface,
@@ -19,7 +21,8 @@ use std::path::{Path, PathBuf};
     after_help = "Geometry: the unit sphere at the origin in cube-map space, the camera at \
     (0, 0, D) looking at the origin with +Y up (image right is -X, so the environment reads as \
     its face images do). Materials: reflect, refract and dispersion models of The Cg Tutorial \
-    chapter 7; `--material list` prints the presets."
+    chapter 7, and pbr (glTF metallic-roughness, split-sum GGX + Lambert, a GGX chain \
+    prefiltered in memory when ENV is not one); `--material list` prints the presets."
 )]
 pub struct Args {
     /// Environment: anything `convert` reads (panorama, cross, folder of faces, KTX2 or DDS
@@ -33,8 +36,9 @@ pub struct Args {
     /// File type of the output when it is - (standard output): png, jpg, tga, exr or hdr.
     #[arg(long)]
     pub format: Option<String>,
-    /// Material: a preset (chrome, mirror-decal, glass, water, diamond, plastic, crystal), a
-    /// .toml material file, or `list` to print the presets.
+    /// Material: a preset (chrome, mirror-decal, glass, water, diamond, plastic, crystal; pbr,
+    /// gold, copper, plastic-glossy, plastic-rough), a .toml material file, or `list` to print
+    /// the presets.
     #[arg(short, long, default_value = "chrome")]
     pub material: String,
     /// Image edge in pixels (square; each cell of a --grid).
@@ -100,6 +104,18 @@ pub struct Args {
     /// Contact sheet of one material at several LOD biases, e.g. 0,1,2,3.
     #[arg(value_parser = super::finite_f32, long, value_delimiter = ',', allow_hyphen_values = true)]
     pub grid_bias: Vec<f32>,
+    /// Contact sheet of one pbr material at several roughness values, e.g. 0,0.25,0.5,0.75,1:
+    /// one row (one per --grid-metallic value).
+    #[arg(value_parser = super::finite_f32, long, value_delimiter = ',', conflicts_with_all = ["grid", "grid_bias"])]
+    pub grid_roughness: Vec<f32>,
+    /// Contact sheet of one pbr material at several metallic values, e.g. 0,1: one row each.
+    #[arg(value_parser = super::finite_f32, long, value_delimiter = ',', conflicts_with_all = ["grid", "grid_bias"])]
+    pub grid_metallic: Vec<f32>,
+    /// pbr materials: read ENV's levels with this engine's roughness mapping (bevy, gltf,
+    /// babylon, filament, generic) instead of its description (an ENV without a chain is
+    /// prefiltered with that mapping).
+    #[arg(long, value_enum)]
+    pub target: Option<Engine>,
     /// Layout of ENV (detected from the aspect ratio; square images need sphere, angular or
     /// octahedral).
     #[arg(long, value_enum)]
@@ -174,8 +190,19 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let mut inputs: Vec<PathBuf> = env.files.clone();
     let textures = load_textures(&a, &plan.materials, verbose, &mut inputs)?;
     stages.done("decode");
-    warn_without_chain(&a, env_path, &env, &textures);
-    let img = render_cells(&a, &plan, &env, &textures)?;
+    let split_sum = if plan.materials.iter().any(|m| m.model == Model::Pbr) {
+        let setup = pbr::prepare(&env, env_path, a.target)?;
+        if let Some(w) = &setup.warning {
+            warn(w);
+        }
+        stages.done("split-sum");
+        stages.note(&setup.note);
+        Some(setup)
+    } else {
+        None
+    };
+    warn_without_chain(&a, env_path, &env, &plan.materials, &textures);
+    let img = render_cells(&a, &plan, &env, split_sum.as_ref(), &textures)?;
     stages.done("render");
     write(&plan, &inputs, &img, &mut stages)?;
     stages.total();
@@ -221,6 +248,7 @@ fn check(a: &Args, output: &Path) -> Result<Plan> {
         .iter()
         .map(|s| material::resolve(s.trim()))
         .collect::<Result<_>>()?;
+    check_pbr(a, &materials)?;
     if a.env_radius.is_none() && (a.env_center.is_some() || a.parallax.is_some()) {
         return Err(Error::usage(
             "--env-center and --parallax need --env-radius (the environment's distance)",
@@ -248,7 +276,11 @@ fn check(a: &Args, output: &Path) -> Result<Plan> {
     if a.max_lod_bias < 0.0 {
         return Err(Error::usage("--max-lod-bias must be a number >= 0"));
     }
-    let cells = a.grid.len().max(a.grid_bias.len()).max(1);
+    let cells = a
+        .grid
+        .len()
+        .max(a.grid_bias.len())
+        .max(a.grid_roughness.len().max(1) * a.grid_metallic.len().max(1));
     let limits = super::limits(a.max_pixels, a.max_memory);
     // The picture (every cell of a grid) against the pixel limit, before anything is read.
     let pixels = (a.size as u64).saturating_mul(a.size as u64) * cells as u64;
@@ -268,6 +300,45 @@ fn check(a: &Args, output: &Path) -> Result<Plan> {
         opts,
         limits,
     })
+}
+
+/// The pbr options: sweeps of a pbr material with values in [0, 1], a --target that applies.
+fn check_pbr(a: &Args, materials: &[Material]) -> Result<()> {
+    let sweeps = [
+        ("--grid-roughness", &a.grid_roughness),
+        ("--grid-metallic", &a.grid_metallic),
+    ];
+    for (name, values) in sweeps {
+        if values.is_empty() {
+            continue;
+        }
+        if materials[0].model != Model::Pbr {
+            return Err(Error::usage(format!(
+                "{name} needs a pbr material (pbr, gold, copper, plastic-glossy, plastic-rough or a file with model = \"pbr\"); \"{}\" has model \"{}\"",
+                materials[0].name,
+                materials[0].model.name()
+            )));
+        }
+        if let Some(v) = values.iter().find(|v| !(0.0..=1.0).contains(*v)) {
+            return Err(Error::usage(format!(
+                "{name} values must be between 0 and 1 (got {v})"
+            )));
+        }
+    }
+    if let Some(e) = a.target {
+        if !materials.iter().any(|m| m.model == Model::Pbr) {
+            return Err(Error::usage(
+                "--target picks the roughness mapping a pbr material reads the chain with; the material is not pbr",
+            ));
+        }
+        if ibl::engines::filters_itself(e) {
+            return Err(Error::usage(format!(
+                "--target {}: that engine prefilters the panorama itself, with a mapping of its own; use bevy, gltf, babylon, filament or generic",
+                e.name()
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Reads the environment, warning about values replaced on read.
@@ -352,7 +423,17 @@ fn load_textures(
 
 /// Blur (a LOD bias, or a control map's) asked of an environment without a chain does nothing:
 /// say so rather than render a sharp picture silently.
-fn warn_without_chain(a: &Args, env_path: &Path, env: &LoadedEnv, textures: &Textures) {
+/// (pbr materials always sample a chain, made in memory when ENV has none.)
+fn warn_without_chain(
+    a: &Args,
+    env_path: &Path,
+    env: &LoadedEnv,
+    materials: &[Material],
+    textures: &Textures,
+) {
+    if materials.iter().all(|m| m.model == Model::Pbr) {
+        return;
+    }
     let wants_blur = a.lod_bias != 0.0
         || a.grid_bias.iter().any(|b| *b != 0.0)
         || textures
@@ -367,11 +448,53 @@ fn warn_without_chain(a: &Args, env_path: &Path, env: &LoadedEnv, textures: &Tex
     }
 }
 
-/// One render per cell (materials, or biases of the one material), tone-mapped when the
-/// output is; a grid becomes a contact sheet.
-fn render_cells(a: &Args, plan: &Plan, env: &LoadedEnv, textures: &Textures) -> Result<Image> {
+/// The cells of a roughness / metallic sweep of `m`, row by row (one row per metallic value),
+/// and the row's length.
+fn sweep(a: &Args, m: &Material) -> (Vec<(Material, f32, String)>, usize) {
+    let opt = |v: &[f32]| -> Vec<Option<f32>> {
+        if v.is_empty() {
+            vec![None]
+        } else {
+            v.iter().copied().map(Some).collect()
+        }
+    };
+    let (metals, roughs) = (opt(&a.grid_metallic), opt(&a.grid_roughness));
+    let mut jobs = Vec::new();
+    for metal in &metals {
+        for rough in &roughs {
+            let mut cell = m.clone();
+            let mut label = Vec::new();
+            if let Some(v) = metal {
+                cell.metallic = *v;
+                label.push(format!("m {v}"));
+            }
+            if let Some(v) = rough {
+                cell.roughness = *v;
+                label.push(format!("r {v}"));
+            }
+            jobs.push((cell, a.lod_bias, label.join("  ")));
+        }
+    }
+    (jobs, roughs.len())
+}
+
+/// One render per cell (materials, biases of the one material, or its roughness and metallic
+/// values), tone-mapped when the output is; a grid becomes a contact sheet.
+fn render_cells(
+    a: &Args,
+    plan: &Plan,
+    env: &LoadedEnv,
+    pbr_setup: Option<&PbrSetup>,
+    textures: &Textures,
+) -> Result<Image> {
     let materials = &plan.materials;
-    let jobs: Vec<(Material, f32, String)> = if !a.grid_bias.is_empty() {
+    let swept = !a.grid_roughness.is_empty() || !a.grid_metallic.is_empty();
+    let mut columns = None;
+    let jobs: Vec<(Material, f32, String)> = if swept {
+        let (jobs, cols) = sweep(a, &materials[0]);
+        columns = Some(cols);
+        jobs
+    } else if !a.grid_bias.is_empty() {
         a.grid_bias
             .iter()
             .map(|b| (materials[0].clone(), *b, format!("bias {b}")))
@@ -405,7 +528,12 @@ fn render_cells(a: &Args, plan: &Plan, env: &LoadedEnv, textures: &Textures) -> 
             ..plan.opts
         };
         let bar = super::progress(o.size as u64, format!("preview {label}"));
-        let mut img = preview::render_with_progress(&env.sampler, &m, &surface, &o, &|n| {
+        // pbr materials sample the GGX chain (perhaps made in memory), the others the map.
+        let (sampler, split_sum) = match pbr_setup {
+            Some(p) if m.model == Model::Pbr => (p.sampler(env), Some(&p.split_sum)),
+            _ => (&env.sampler, None),
+        };
+        let mut img = preview::render_lit(sampler, split_sum, &m, &surface, &o, &|n| {
             if let Some(b) = &bar {
                 b.inc(n);
             }
@@ -418,7 +546,9 @@ fn render_cells(a: &Args, plan: &Plan, env: &LoadedEnv, textures: &Textures) -> 
         }
         rendered.push((img, label));
     }
-    Ok(if a.grid.is_empty() && a.grid_bias.is_empty() {
+    Ok(if let Some(cols) = columns {
+        grid::contact_sheet_columns(&rendered, cols)
+    } else if a.grid.is_empty() && a.grid_bias.is_empty() {
         rendered.swap_remove(0).0
     } else {
         grid::contact_sheet(&rendered)

@@ -92,6 +92,24 @@ impl RoughnessMapping {
             }
         }
     }
+
+    /// The fractional level an engine's shader samples for perceptual `roughness` (the
+    /// inverse of [`RoughnessMapping::roughness`], continuous between levels as the shaders
+    /// compute it), clamped to the chain.
+    pub fn lod(self, roughness: f32, count: usize, size: usize) -> f32 {
+        let top = count.saturating_sub(1) as f32;
+        let r = roughness.clamp(0.0, 1.0);
+        let lod = match self {
+            RoughnessMapping::Linear => r * top,
+            // lod / top = 1 - (1 - r)^2 = r (2 - r).
+            RoughnessMapping::Filament => r * (2.0 - r) * top,
+            RoughnessMapping::Babylon => {
+                let scale = crate::io::babylon_env::DEFAULT_LOD_GENERATION_SCALE as f32;
+                (size as f32 * r * r).max(1e-30).log2() * scale
+            }
+        };
+        lod.clamp(0.0, top)
+    }
 }
 
 /// What a caller may change; None takes the engine's default.
@@ -269,27 +287,8 @@ fn compute(
     let resampler = ctx.resampler();
     let base = convert::to_cube(loaded, specular_size, &resampler);
     progress("resample");
-    let chain = |filter: FilterKind| {
-        let chain_opts = ChainOptions {
-            filter,
-            min_size: Some(min_size),
-            samples: opts.samples.unwrap_or(filter::DEFAULT_SAMPLES),
-            ..ChainOptions::default()
-        };
-        let count = chain_opts.level_count(specular_size);
-        let mut plan = filter::plan(&chain_opts, specular_size);
-        for (info, lobe) in &mut plan {
-            let r = d.mapping.roughness(info.level, count, specular_size);
-            let alpha = r * r;
-            info.roughness = Some(r);
-            info.alpha = Some(alpha);
-            *lobe = lobe.map(|l| match l {
-                Lobe::Charlie { .. } => Lobe::Charlie { alpha },
-                _ => Lobe::Ggx { alpha },
-            });
-        }
-        filter::prefilter_planned(&base, &chain_opts, plan, &|_| {})
-    };
+    let samples = opts.samples.unwrap_or(filter::DEFAULT_SAMPLES);
+    let chain = |filter: FilterKind| mapped_chain(&base, filter, d.mapping, min_size, samples);
     let (specular, levels) = chain(FilterKind::Ggx);
     let sheen = opts.sheen.then(|| chain(FilterKind::Charlie));
     progress("specular");
@@ -308,6 +307,38 @@ fn compute(
         diffuse,
         sh,
     }
+}
+
+/// A GGX or Charlie chain from `base` whose level m holds the roughness `mapping` gives it,
+/// stopped at faces of `min_size`, with `samples` importance samples at the first filtered
+/// level.
+pub(crate) fn mapped_chain(
+    base: &CubeMap,
+    filter: FilterKind,
+    mapping: RoughnessMapping,
+    min_size: usize,
+    samples: u32,
+) -> (CubeMap, Vec<LevelInfo>) {
+    let size = base.size();
+    let chain_opts = ChainOptions {
+        filter,
+        min_size: Some(min_size),
+        samples,
+        ..ChainOptions::default()
+    };
+    let count = chain_opts.level_count(size);
+    let mut plan = filter::plan(&chain_opts, size);
+    for (info, lobe) in &mut plan {
+        let r = mapping.roughness(info.level, count, size);
+        let alpha = r * r;
+        info.roughness = Some(r);
+        info.alpha = Some(alpha);
+        *lobe = lobe.map(|l| match l {
+            Lobe::Charlie { .. } => Lobe::Charlie { alpha },
+            _ => Lobe::Ggx { alpha },
+        });
+    }
+    filter::prefilter_planned(base, &chain_opts, plan, &|_| {})
 }
 
 /// The caller's turn about +Y first, then the engine's view (a turn about +Y and perhaps a

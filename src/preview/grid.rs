@@ -112,15 +112,22 @@ const SHEET: Vec4 = Vec4::new(0.06, 0.06, 0.06, 1.0);
 /// with its label centred in a strip below it.
 pub fn contact_sheet(cells: &[(Image, String)]) -> Image {
     let count = cells.len().max(1);
-    let (w, h) = cells
-        .first()
-        .map(|(img, _)| (img.width, img.height))
-        .unwrap_or((1, 1));
     let cols = if count <= 4 {
         count
     } else {
         (count as f32).sqrt().ceil() as usize
     };
+    contact_sheet_columns(cells, cols)
+}
+
+/// [`contact_sheet`] with `cols` cells in a row (a sweep of one parameter per row).
+pub fn contact_sheet_columns(cells: &[(Image, String)], cols: usize) -> Image {
+    let count = cells.len().max(1);
+    let (w, h) = cells
+        .first()
+        .map(|(img, _)| (img.width, img.height))
+        .unwrap_or((1, 1));
+    let cols = cols.clamp(1, count);
     let rows = count.div_ceil(cols);
     let scale = (w / 160).max(1);
     let gap = scale * 2;

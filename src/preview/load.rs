@@ -22,6 +22,9 @@ pub struct LoadedEnv {
     pub hdr: bool,
     /// NaN, infinite or negative values replaced by 0 on read (values above 1e28 by 1e28).
     pub replaced_values: usize,
+    /// The chain's description (levels.json, the KTX2 key, the DDS sidecar), when it has one
+    /// that parses: how each level was made.
+    pub levels: Option<crate::chain::LevelsFile>,
 }
 
 impl LoadedEnv {
@@ -41,11 +44,16 @@ pub fn load_environment(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> 
         return load_chain_dir(path, opts);
     }
     let loaded = convert::load(&[path.to_path_buf()], from, opts)?;
-    let cube = match &loaded.source {
-        Source::Cube(c) => CubeSampler::new(c),
+    let (cube, levels) = match &loaded.source {
+        Source::Cube(c) => {
+            let levels = io::FileFormat::from_extension(path)
+                .and_then(|f| crate::chain::container_levels(path, f));
+            (CubeSampler::new(c), levels)
+        }
         Source::Projection(..) => {
             let size = loaded.face_size().max(1);
-            CubeSampler::new(&convert::to_cube(&loaded, size, &Resampler::default()))
+            let cube = convert::to_cube(&loaded, size, &Resampler::default());
+            (CubeSampler::new(&cube), None)
         }
     };
     Ok(LoadedEnv {
@@ -53,6 +61,7 @@ pub fn load_environment(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> 
         files: loaded.files.clone(),
         hdr: loaded.hdr,
         replaced_values: loaded.meta.replaced_values,
+        levels,
     })
 }
 
@@ -65,6 +74,7 @@ fn load_chain_dir(dir: &Path, opts: &ReadOptions) -> Result<LoadedEnv> {
         files: c.files,
         hdr: c.meta.hdr,
         replaced_values: c.meta.replaced_values,
+        levels: c.levels,
     })
 }
 

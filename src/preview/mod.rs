@@ -11,6 +11,9 @@
 //! tessellated sphere and interpolates its outputs perspective-correctly across each
 //! triangle, as a rasterizer does, so section 7.2.5's artefacts appear.
 //!
+//! The `pbr` material is not the texts': glTF's metallic-roughness parameters shaded with the
+//! split-sum approximation engines use ([`pbr`]), its level chosen by roughness.
+//!
 //! Level of detail: with a prefiltered chain, each lookup picks the level a GPU would, from
 //! the derivatives of its lookup vector across neighbouring pixels projected on the selected
 //! cube face (the OpenGL scale factor rho in texels, lod = log2 rho), plus `--lod-bias` and
@@ -21,6 +24,7 @@
 pub mod camera;
 pub mod grid;
 pub mod material;
+pub mod pbr;
 pub mod sphere;
 pub mod tonemap;
 
@@ -35,5 +39,5 @@ mod shader;
 
 pub use load::{load_environment, read_control, read_texture, LoadedEnv};
 pub use options::{Background, Options, Parallax, ParallaxMode, Shading};
-pub use render::{render, render_with_progress};
+pub use render::{render, render_lit, render_with_progress};
 pub use shader::{Control, Shader, Surface, Varyings};

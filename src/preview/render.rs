@@ -6,11 +6,12 @@
 use super::camera::{sample_offsets, Camera};
 use super::material::{self, Material};
 use super::options::{Background, Options, Shading};
+use super::pbr::SplitSum;
 use super::raster::{setup_raster, Frag, NO_TRI};
 use super::shader::{Shader, Surface};
 use super::sphere;
 use crate::cube::Environment;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::image::Image;
 use glam::{Vec2, Vec3, Vec4};
 
@@ -34,12 +35,31 @@ pub fn render_with_progress<E: Environment + ?Sized>(
     opts: &Options,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Image> {
+    render_lit(env, None, material, surface, opts, progress)
+}
+
+/// [`render_with_progress`] with the split-sum lighting a `pbr` material needs (see
+/// [`super::pbr::prepare`] and [`SplitSum`]); the texts' materials ignore it.
+pub fn render_lit<E: Environment + ?Sized>(
+    env: &E,
+    split_sum: Option<&SplitSum>,
+    material: &Material,
+    surface: &Surface<'_>,
+    opts: &Options,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Image> {
     use rayon::prelude::*;
     opts.validate()?;
     material::validate(material)?;
+    if material.model == material::Model::Pbr && split_sum.is_none() {
+        return Err(Error::usage(format!(
+            "material \"{}\" is pbr: it needs split-sum lighting (preview::render_lit with a preview::pbr::SplitSum)",
+            material.name
+        )));
+    }
     let n = opts.size;
     let cam = Camera::new(opts.distance, opts.fov, opts.yaw, opts.pitch, n, n);
-    let shader = Shader::new(
+    let mut shader = Shader::new(
         env,
         material,
         *surface,
@@ -47,6 +67,9 @@ pub fn render_with_progress<E: Environment + ?Sized>(
         opts.parallax,
         opts.lod_bias,
     );
+    if let Some(s) = split_sum {
+        shader = shader.with_split_sum(s);
+    }
     let offsets = sample_offsets(opts.samples);
     let s = offsets.len();
     let inv_s = 1.0 / s as f32;

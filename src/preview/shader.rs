@@ -5,6 +5,7 @@
 
 use super::material::{fresnel, reflect, refract, Material, Model};
 use super::options::Parallax;
+use super::pbr::SplitSum;
 use crate::cube::Environment;
 use crate::image::Image;
 use glam::{Vec2, Vec3, Vec4};
@@ -34,7 +35,8 @@ pub struct Varyings {
     /// The sphere's texture coordinates at the point, for the decal and control map.
     pub uv: Vec2,
     /// Lookup vectors: R (reflect), T (refract), or R, TRed, TGreen, TBlue (dispersion),
-    /// after any parallax correction.
+    /// after any parallax correction; for `pbr` R, the normal N and the unit vector V towards
+    /// the eye.
     pub v: [Vec3; 4],
     /// The clamped reflection factor (dispersion).
     pub factor: f32,
@@ -71,6 +73,8 @@ pub struct Shader<'a, E: Environment + ?Sized> {
     lookups: usize,
     /// A decal texture or control map is read: texture coordinates are needed.
     pub(super) uses_uv: bool,
+    /// What a `pbr` material reads besides the chain.
+    split_sum: Option<&'a SplitSum>,
 }
 
 impl<'a, E: Environment + ?Sized> Shader<'a, E> {
@@ -90,12 +94,21 @@ impl<'a, E: Environment + ?Sized> Shader<'a, E> {
             surface,
             eye,
             parallax,
-            lod_on: env.levels() > 1,
+            // A pbr material's level comes from its roughness, not from derivatives.
+            lod_on: env.levels() > 1 && mat.model != Model::Pbr,
             half_size: env.face_size() as f32 * 0.5,
             lod_bias,
             lookups: if mat.model == Model::Dispersion { 4 } else { 1 },
             uses_uv: surface.decal.is_some() || surface.control.is_some(),
+            split_sum: None,
         }
+    }
+
+    /// Binds the split-sum lighting a `pbr` material needs (its level mapping, irradiance and
+    /// DFG table); without it a `pbr` material renders black.
+    pub fn with_split_sum(mut self, split_sum: &'a SplitSum) -> Self {
+        self.split_sum = Some(split_sum);
+        self
     }
 
     #[inline]
@@ -127,6 +140,11 @@ impl<'a, E: Environment + ?Sized> Shader<'a, E> {
                 out.v[2] = self.correct(refract(iu, n, m.eta_ratio.y), p);
                 out.v[3] = self.correct(refract(iu, n, m.eta_ratio.z), p);
                 out.factor = fresnel(iu, n, m.fresnel_bias, m.fresnel_scale, m.fresnel_power);
+            }
+            Model::Pbr => {
+                out.v[0] = self.correct(reflect(i, n), p);
+                out.v[1] = n;
+                out.v[2] = -i.normalize();
             }
         }
         out
@@ -172,6 +190,25 @@ impl<'a, E: Environment + ?Sized> Shader<'a, E> {
             Some(img) => tex2d(img, var.uv),
             None => m.decal_color.extend(1.0),
         };
+        if m.model == Model::Pbr {
+            // The decal is glTF's baseColorTexture: it multiplies the base colour.
+            let base = match self.surface.decal {
+                Some(img) => m.base_color * tex2d(img, var.uv).truncate(),
+                None => m.base_color,
+            };
+            let c = self.split_sum.map_or(Vec3::ZERO, |s| {
+                s.shade(
+                    self.env,
+                    m,
+                    base,
+                    var.v[1],
+                    var.v[2],
+                    var.v[0],
+                    self.lod_bias + blur,
+                )
+            });
+            return c.extend(1.0);
+        }
         let c = match m.model {
             Model::Reflect => decal().lerp(self.tex_cube(var.v[0], lods[0]), reflectivity),
             Model::Refract => decal().lerp(self.tex_cube(var.v[0], lods[0]), transmittance),
@@ -187,6 +224,7 @@ impl<'a, E: Environment + ?Sized> Shader<'a, E> {
                 let factor = mask * var.factor + (1.0 - mask) * reflectivity;
                 refracted.lerp(reflected, factor)
             }
+            Model::Pbr => Vec4::ZERO,
         };
         c.truncate().extend(1.0)
     }

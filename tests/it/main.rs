@@ -25,6 +25,7 @@ mod man_pages;
 mod octahedral;
 mod prefilter;
 mod preview;
+mod preview_pbr;
 mod readme;
 mod real_images;
 mod rgbe;

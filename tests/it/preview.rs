@@ -113,6 +113,7 @@ fn expected(m: &Material, x: usize, y: usize, n: usize) -> Option<DVec3> {
             .clamp(0.0, 1.0);
             lerp(refr, refl, f)
         }
+        Model::Pbr => unreachable!("pbr is checked in preview_pbr.rs"),
     })
 }
 
@@ -981,7 +982,12 @@ fn presets_follow_table_7_2() {
             "water",
             "diamond",
             "plastic",
-            "crystal"
+            "crystal",
+            "pbr",
+            "gold",
+            "copper",
+            "plastic-glossy",
+            "plastic-rough"
         ]
     );
 }

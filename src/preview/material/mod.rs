@@ -9,13 +9,20 @@
 //!   color = lerp(refracted, reflected, factor)
 //!
 //! with I = P - eye (not normalised where the texts do not normalise it) and N the unit normal.
+//!
+//! And one model that is not the texts': `pbr`, the metallic-roughness material of glTF 2.0
+//! shaded with the split-sum approximation engines use (see [`super::pbr`]).
 
 #![warn(missing_docs)]
+
+mod file;
+
+pub use file::{parse_toml, resolve, to_toml};
 
 use crate::error::{Error, Result};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Which of the texts' program pairs a material runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -27,15 +34,18 @@ pub enum Model {
     Refract,
     /// C7E5v/C7E6f: Fresnel-weighted reflection over per-channel refraction.
     Dispersion,
+    /// glTF's metallic-roughness material, split-sum GGX specular plus Lambert diffuse.
+    Pbr,
 }
 
 impl Model {
     /// The name material files and labels use.
-    pub(crate) fn name(self) -> &'static str {
+    pub fn name(self) -> &'static str {
         match self {
             Model::Reflect => "reflect",
             Model::Refract => "refract",
             Model::Dispersion => "dispersion",
+            Model::Pbr => "pbr",
         }
     }
 }
@@ -63,8 +73,27 @@ pub struct Material {
     pub fresnel_power: f32,
     /// The decal colour (linear RGB) where no decal texture is given.
     pub decal_color: Vec3,
-    /// A decal texture named by a material file (relative to the file).
+    /// A decal texture named by a material file (relative to the file); for `pbr` the base
+    /// colour texture, multiplied by `base_color` as glTF's baseColorTexture.
     pub decal: Option<PathBuf>,
+    /// `pbr`: glTF `baseColorFactor` (linear RGB, each in [0, 1]): the diffuse albedo of a
+    /// dielectric, F0 of a metal.
+    pub base_color: Vec3,
+    /// `pbr`: glTF `metallicFactor`, 0 dielectric to 1 metal.
+    pub metallic: f32,
+    /// `pbr`: glTF `roughnessFactor`, perceptual roughness (GGX alpha = roughness^2).
+    pub roughness: f32,
+    /// `pbr`: index of refraction of the dielectric (KHR_materials_ior; 1.5 gives glTF's
+    /// F0 = 0.04): F0 = ((ior - 1) / (ior + 1))^2.
+    pub ior: f32,
+}
+
+impl Material {
+    /// `pbr`: the dielectric's reflectance at normal incidence, ((ior - 1) / (ior + 1))^2.
+    pub fn dielectric_f0(&self) -> f32 {
+        let r = (self.ior - 1.0) / (self.ior + 1.0);
+        r * r
+    }
 }
 
 impl Default for Material {
@@ -80,6 +109,10 @@ impl Default for Material {
             fresnel_power: 5.0,
             decal_color: Vec3::splat(0.5),
             decal: None,
+            base_color: Vec3::splat(0.5),
+            metallic: 0.0,
+            roughness: 0.5,
+            ior: 1.5,
         }
     }
 }
@@ -194,9 +227,59 @@ pub fn presets() -> Vec<(Material, &'static str)> {
                 fresnel_bias: 0.1,
                 fresnel_scale: 1.0,
                 fresnel_power: 2.0,
-                ..base
+                ..base.clone()
             },
             "Fresnel and chromatic dispersion (C7E5v/C7E6f): glass with indices 1.44, 1.5, 1.56 for red, green, blue",
+        ),
+        (
+            Material {
+                name: "pbr".into(),
+                model: Model::Pbr,
+                ..base.clone()
+            },
+            "glTF metallic-roughness, split-sum GGX + Lambert: grey dielectric, roughness 0.5",
+        ),
+        (
+            Material {
+                name: "gold".into(),
+                model: Model::Pbr,
+                base_color: Vec3::new(1.0, 0.766, 0.336),
+                metallic: 1.0,
+                roughness: 0.3,
+                ..base.clone()
+            },
+            "pbr metal, gold's F0 as Filament lists it (linear 1.0, 0.766, 0.336), roughness 0.3",
+        ),
+        (
+            Material {
+                name: "copper".into(),
+                model: Model::Pbr,
+                base_color: Vec3::new(0.955, 0.638, 0.538),
+                metallic: 1.0,
+                roughness: 0.45,
+                ..base.clone()
+            },
+            "pbr metal, copper's F0 as Filament lists it (linear 0.955, 0.638, 0.538), roughness 0.45",
+        ),
+        (
+            Material {
+                name: "plastic-glossy".into(),
+                model: Model::Pbr,
+                base_color: Vec3::new(0.05, 0.2, 0.7),
+                roughness: 0.15,
+                ..base.clone()
+            },
+            "pbr dielectric (F0 0.04), blue, roughness 0.15",
+        ),
+        (
+            Material {
+                name: "plastic-rough".into(),
+                model: Model::Pbr,
+                base_color: Vec3::new(0.7, 0.08, 0.05),
+                roughness: 0.7,
+                ..base
+            },
+            "pbr dielectric (F0 0.04), red, roughness 0.7",
         ),
     ]
 }
@@ -213,154 +296,42 @@ pub fn preset(name: &str) -> Option<Material> {
 pub fn list() -> String {
     let mut s = String::new();
     for (m, what) in presets() {
-        s.push_str(&format!("{:<13} {}\n", m.name, what));
+        s.push_str(&format!("{:<15} {}\n", m.name, what));
         for line in to_toml(&m).lines() {
-            s.push_str(&format!("{:<13}   {line}\n", ""));
+            s.push_str(&format!("{:<15}   {line}\n", ""));
         }
     }
     s
 }
 
-/// A material as the TOML a file would hold (only the parameters its model uses).
-pub fn to_toml(m: &Material) -> String {
-    let f = |v: f32| {
-        let s = format!("{v:.4}");
-        let s = s.trim_end_matches('0');
-        if s.ends_with('.') {
-            format!("{s}0")
-        } else {
-            s.to_string()
-        }
-    };
-    let rgb = |v: Vec3| format!("[{}, {}, {}]", f(v.x), f(v.y), f(v.z));
-    let mut s = format!("model = \"{}\"\n", m.model.name());
-    match m.model {
-        Model::Reflect => {
-            s.push_str(&format!("reflectivity = {}\n", f(m.reflectivity)));
-            s.push_str(&format!("decal_color = {}\n", rgb(m.decal_color)));
-        }
-        Model::Refract => {
-            s.push_str(&format!("eta_ratio = {}\n", f(m.eta_ratio.x)));
-            s.push_str(&format!("transmittance = {}\n", f(m.transmittance)));
-            s.push_str(&format!("decal_color = {}\n", rgb(m.decal_color)));
-        }
-        Model::Dispersion => {
-            s.push_str(&format!("eta_ratio = {}\n", rgb(m.eta_ratio)));
-            s.push_str(&format!(
-                "fresnel_bias = {}\nfresnel_scale = {}\nfresnel_power = {}\n",
-                f(m.fresnel_bias),
-                f(m.fresnel_scale),
-                f(m.fresnel_power)
-            ));
-        }
-    }
-    s
-}
-
-/// `eta_ratio` in a file: one ratio for all channels, or red, green, blue.
-#[derive(Deserialize)]
-#[serde(untagged)]
-enum Eta {
-    One(f32),
-    Rgb([f32; 3]),
-}
-
-/// A material file as written. Unknown keys are errors, so a typo is not silently ignored.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct MaterialFile {
-    model: Model,
-    reflectivity: Option<f32>,
-    transmittance: Option<f32>,
-    eta_ratio: Option<Eta>,
-    fresnel_bias: Option<f32>,
-    fresnel_scale: Option<f32>,
-    fresnel_power: Option<f32>,
-    decal_color: Option<[f32; 3]>,
-    decal: Option<PathBuf>,
-}
-
-/// Parses a material file's text; `path` names it in errors and anchors a relative `decal`.
-pub fn parse_toml(text: &str, path: &Path) -> Result<Material> {
-    let file: MaterialFile = toml::from_str(text).map_err(|e| {
-        let line = e
-            .span()
-            .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
-        let msg = e.message().replace('\n', " ");
-        Error::recipe(path, line, msg.trim())
-    })?;
-    let bad = |msg: String| Error::file(path, msg);
-    let d = Material::default();
-    let eta_ratio = match file.eta_ratio {
-        Some(Eta::One(e)) => Vec3::splat(e),
-        Some(Eta::Rgb(e)) => Vec3::from_array(e),
-        None if file.model == Model::Reflect => d.eta_ratio,
-        None => {
-            return Err(bad(format!(
-                "model \"{}\" needs eta_ratio (e.g. 0.6667 for air into glass)",
-                file.model.name()
-            )))
-        }
-    };
-    if file.model == Model::Refract && matches!(file.eta_ratio, Some(Eta::Rgb(_))) {
-        return Err(bad(
-            "model \"refract\" takes one eta_ratio; per-channel ratios need model \"dispersion\""
-                .into(),
-        ));
-    }
-    let m = Material {
-        name: path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "material".into()),
-        model: file.model,
-        reflectivity: file.reflectivity.unwrap_or(d.reflectivity),
-        transmittance: file.transmittance.unwrap_or(d.transmittance),
-        eta_ratio,
-        fresnel_bias: file.fresnel_bias.unwrap_or(d.fresnel_bias),
-        fresnel_scale: file.fresnel_scale.unwrap_or(d.fresnel_scale),
-        fresnel_power: file.fresnel_power.unwrap_or(d.fresnel_power),
-        decal_color: file
-            .decal_color
-            .map(Vec3::from_array)
-            .unwrap_or(d.decal_color),
-        decal: file.decal.map(|p| {
-            if p.is_relative() {
-                path.parent().unwrap_or(Path::new("")).join(p)
-            } else {
-                p
-            }
-        }),
-    };
-    check(&m).map_err(bad)?;
-    Ok(m)
-}
-
-/// Checks that parameters are usable: finite, blend weights in [0, 1], ratios positive.
+/// Checks that parameters are usable: finite, blend weights and glTF factors in [0, 1], ratios
+/// positive, an index of refraction at least 1.
 pub fn validate(m: &Material) -> Result<()> {
-    check(m).map_err(Error::usage)
+    check(m).map_err(|(_, msg)| Error::usage(msg))
 }
 
-fn check(m: &Material) -> std::result::Result<(), String> {
-    let unit = |name: &str, v: f32| {
+/// The first unusable parameter: its key in a material file and what is wrong.
+pub(crate) fn check(m: &Material) -> std::result::Result<(), (&'static str, String)> {
+    let unit = |name: &'static str, v: f32| {
         if v.is_finite() && (0.0..=1.0).contains(&v) {
             Ok(())
         } else {
-            Err(format!("{name} must be between 0 and 1 (got {v})"))
+            Err((name, format!("{name} must be between 0 and 1 (got {v})")))
         }
     };
     unit("reflectivity", m.reflectivity)?;
     unit("transmittance", m.transmittance)?;
     for c in m.decal_color.to_array() {
         if !c.is_finite() || c < 0.0 {
-            return Err(format!(
-                "decal_color values must be finite and not negative (got {c})"
+            return Err((
+                "decal_color",
+                format!("decal_color values must be finite and not negative (got {c})"),
             ));
         }
     }
     for e in m.eta_ratio.to_array() {
         if !e.is_finite() || e <= 0.0 {
-            return Err(format!("eta_ratio must be positive (got {e})"));
+            return Err(("eta_ratio", format!("eta_ratio must be positive (got {e})")));
         }
     }
     for (name, v) in [
@@ -369,39 +340,36 @@ fn check(m: &Material) -> std::result::Result<(), String> {
         ("fresnel_power", m.fresnel_power),
     ] {
         if !v.is_finite() {
-            return Err(format!("{name} must be a finite number (got {v})"));
+            return Err((name, format!("{name} must be a finite number (got {v})")));
         }
     }
     if m.fresnel_power < 0.0 {
-        return Err(format!(
-            "fresnel_power must not be negative (got {})",
-            m.fresnel_power
+        return Err((
+            "fresnel_power",
+            format!(
+                "fresnel_power must not be negative (got {})",
+                m.fresnel_power
+            ),
+        ));
+    }
+    for c in m.base_color.to_array() {
+        if !(c.is_finite() && (0.0..=1.0).contains(&c)) {
+            return Err((
+                "base_color",
+                format!("base_color values must be between 0 and 1, linear RGB (got {c})"),
+            ));
+        }
+    }
+    unit("metallic", m.metallic)?;
+    unit("roughness", m.roughness)?;
+    if !(m.ior.is_finite() && m.ior >= 1.0) {
+        return Err((
+            "ior",
+            format!(
+                "ior must be a number of at least 1 (got {}; 1.5 gives F0 = 0.04)",
+                m.ior
+            ),
         ));
     }
     Ok(())
-}
-
-/// A material named on the command line: a preset, or a `.toml` file.
-pub fn resolve(spec: &str) -> Result<Material> {
-    if let Some(m) = preset(spec) {
-        return Ok(m);
-    }
-    let path = Path::new(spec);
-    let is_file_like = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
-        || spec.contains('/')
-        || spec.contains('\\');
-    if !is_file_like {
-        let names: Vec<String> = presets().into_iter().map(|(m, _)| m.name).collect();
-        return Err(Error::usage(format!(
-            "unknown material \"{spec}\": use one of {} or a .toml file ({} list shows them)",
-            names.join(", "),
-            crate::error::param("material")
-        )));
-    }
-    let text = crate::io::read_file(path)?;
-    let text = String::from_utf8(text)
-        .map_err(|_| Error::file(path, "a material file must be UTF-8 text (TOML)"))?;
-    parse_toml(&text, path)
 }
