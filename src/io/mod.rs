@@ -400,15 +400,15 @@ pub struct ReadOptions {
 /// Reads any supported file and replaces NaN, infinite and negative values by 0, counting
 /// them in `Meta::replaced_values`.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
-    let (decoded, mut meta) = read_raw(path, opts)?;
+    let (decoded, mut meta) = read_with(path, opts, !opts.as_stored)?;
     if opts.as_stored {
         return Ok((decoded, meta));
     }
     // Integer and shared-exponent encodings hold only finite values >= 0: no pass needed
-    // (it cost a quarter of a 4K panorama's decode).
+    // (it cost a quarter of a 4K panorama's decode). OpenEXR sanitizes as it decodes.
     if matches!(
         meta.file_format,
-        FileFormat::Png | FileFormat::Jpeg | FileFormat::Tga | FileFormat::Hdr
+        FileFormat::Png | FileFormat::Jpeg | FileFormat::Tga | FileFormat::Hdr | FileFormat::Exr
     ) {
         return Ok((decoded, meta));
     }
@@ -483,6 +483,12 @@ fn read_input<'a>(path: &'a Path, limits: &Limits) -> Result<(Vec<u8>, &'a Path)
 /// Reads any supported file as stored, by content, with the size limit checked from the
 /// header before pixels are allocated.
 pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
+    read_with(path, opts, false)
+}
+
+/// `read_raw`, but an OpenEXR file is sanitized (as `read` does) while it decodes when
+/// `sanitize` is set.
+fn read_with(path: &Path, opts: &ReadOptions, sanitize: bool) -> Result<(Decoded, Meta)> {
     let (bytes, path) = read_input(path, &opts.limits)?;
     if bytes.is_empty() {
         return Err(Error::file(path, "file is empty"));
@@ -513,7 +519,7 @@ pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
         )),
     };
     match format {
-        FileFormat::Exr => exr::decode(&bytes, path, &opts.limits),
+        FileFormat::Exr => exr::decode_with(&bytes, path, &opts.limits, sanitize),
         FileFormat::Ktx2 => ktx2::decode(&bytes, path, &opts.limits),
         FileFormat::Dds => dds::decode(&bytes, path, &opts.limits),
         FileFormat::Ktx1 => ktx1::decode(&bytes, path, &opts.limits),
