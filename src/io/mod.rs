@@ -10,6 +10,7 @@ pub mod dds;
 pub mod exr;
 pub mod gpu;
 mod guard;
+mod input;
 pub mod ktx1;
 pub mod ktx2;
 pub mod raster;
@@ -22,6 +23,8 @@ use std::path::Path;
 
 pub use atomic::{remove_temporaries, stage, write_all_atomic, Staged};
 pub use gpu::{finite, unorm8, GpuFormat, HALF_MAX};
+use input::read_input;
+pub(crate) use input::{read_file, regular_file};
 
 /// Refuses images larger than this before any pixel memory is allocated.
 #[derive(Clone, Copy, Debug)]
@@ -429,55 +432,6 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     };
     meta.replaced_values = replaced;
     Ok((decoded, meta))
-}
-
-/// Reads a whole file, refusing anything that is not a regular file first: a FIFO would block
-/// forever and a device (`/dev/zero`) read without end.
-pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
-    regular_file(path)?;
-    std::fs::read(path).map_err(|e| Error::io(path, e))
-}
-
-/// Fails unless `path` names a regular file (links followed), without opening it.
-pub(crate) fn regular_file(path: &Path) -> Result<()> {
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    if meta.is_file() {
-        Ok(())
-    } else if meta.is_dir() {
-        Err(Error::file(path, "is a folder, not a file"))
-    } else {
-        Err(Error::file(
-            path,
-            "not a regular file (a pipe, socket or device): give a file",
-        ))
-    }
-}
-
-/// The bytes of a file, or of standard input for the path `-` (up to the memory budget),
-/// with the name errors should give.
-fn read_input<'a>(path: &'a Path, limits: &Limits) -> Result<(Vec<u8>, &'a Path)> {
-    if path != Path::new("-") {
-        return Ok((read_file(path)?, path));
-    }
-    use std::io::Read;
-    let name = Path::new("standard input");
-    let mut bytes = Vec::new();
-    std::io::stdin()
-        .lock()
-        .take(limits.max_memory.saturating_add(1))
-        .read_to_end(&mut bytes)
-        .map_err(|e| Error::io(name, e))?;
-    if bytes.len() as u64 > limits.max_memory {
-        return Err(Error::limit(
-            Some(name),
-            LimitKind::Memory,
-            format!(
-                "more than the memory budget of {}",
-                human_bytes(limits.max_memory)
-            ),
-        ));
-    }
-    Ok((bytes, name))
 }
 
 /// Reads any supported file as stored, by content, with the size limit checked from the
