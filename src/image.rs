@@ -281,23 +281,7 @@ impl Image {
     /// and returns how many were replaced.
     pub(crate) fn sanitize(&mut self) -> usize {
         use rayon::prelude::*;
-        self.pixels
-            .par_iter_mut()
-            .map(|p| {
-                let mut count = 0;
-                for c in 0..4 {
-                    let v = p[c];
-                    if !v.is_finite() || v < 0.0 {
-                        p[c] = 0.0;
-                        count += 1;
-                    } else if v > MAX_RADIANCE {
-                        p[c] = MAX_RADIANCE;
-                        count += 1;
-                    }
-                }
-                count
-            })
-            .sum()
+        self.pixels.par_iter_mut().map(sanitize_texel).sum()
     }
 
     /// Bilinear sample at continuous pixel coordinates (pixel centres at i + 0.5).
@@ -550,6 +534,28 @@ pub fn linear_to_srgb(v: f32) -> f32 {
 #[inline]
 pub fn luminance(p: Vec4) -> f32 {
     0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z
+}
+
+/// [`Image::sanitize`] of one texel: its NaN, infinite and negative values by 0, values above
+/// [`MAX_RADIANCE`] by that; how many were replaced.
+#[inline]
+pub(crate) fn sanitize_texel(p: &mut Vec4) -> usize {
+    // Almost every texel is in range (NaN compares false): one vector test for those.
+    if (p.cmpge(Vec4::ZERO) & p.cmple(Vec4::splat(MAX_RADIANCE))).all() {
+        return 0;
+    }
+    let mut count = 0;
+    for c in 0..4 {
+        let v = p[c];
+        if !v.is_finite() || v < 0.0 {
+            p[c] = 0.0;
+            count += 1;
+        } else if v > MAX_RADIANCE {
+            p[c] = MAX_RADIANCE;
+            count += 1;
+        }
+    }
+    count
 }
 
 /// A zeroed vector of `n` texels. Large ones ask the kernel for 2 MiB pages before their first

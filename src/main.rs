@@ -5,6 +5,7 @@ mod cli;
 fn main() {
     // Messages name parameters by their flags (--size), not the library's field names.
     cubeforge::error::name_parameters_as_flags();
+    keep_freed_memory();
     // A bug or an exhausted machine still ends with one line, not a backtrace.
     std::panic::set_hook(Box::new(|info| {
         let msg = info
@@ -21,4 +22,18 @@ fn main() {
         cli::tell(format_args!("cubeforge: error: internal error: {msg}{at}"));
     }));
     std::process::exit(cli::run());
+}
+
+/// Keeps memory the command frees for its later allocations, rather than giving it back to
+/// the system and asking again: fresh pages cost a fault and the kernel's zeroing each, and
+/// big buffers (a 4K panorama's file, 100 MB, freed once decoded) were unmapped and mapped
+/// again. Measured on the 2-core VM converting a float ZIP EXR to faces: 0.26 to 0.15 s of
+/// system time. A command runs once and exits, so nothing is lost by holding on to it.
+fn keep_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets glibc's allocator parameters, before any thread starts.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_MAX, 0);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, i32::MAX);
+    }
 }

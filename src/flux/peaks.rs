@@ -274,14 +274,18 @@ impl Peaks {
             .collect();
         let mut shares: Vec<(u64, [f64; 3])> = shares.into_iter().flatten().collect();
         shares.par_sort_by_key(|s| s.0);
-        for (k, sum) in merge(shares.into_iter()) {
-            let k = k as usize;
-            let (face, y, x) = (k / (ow * oh), (k / ow) % oh, k % ow);
-            let omega = out.solid_angle(x, y);
-            if omega <= 0.0 {
-                continue;
-            }
-            let add = Vec3::from_array(sum.map(|s| (s / omega) as f32));
+        // Each texel once: their solid angles (atan2s) in parallel, then the additions.
+        let adds: Vec<(usize, usize, usize, Vec3)> = merge(shares.into_iter())
+            .into_par_iter()
+            .filter_map(|(k, sum)| {
+                let k = k as usize;
+                let (face, y, x) = (k / (ow * oh), (k / ow) % oh, k % ow);
+                let omega = out.solid_angle(x, y);
+                let add = Vec3::from_array(sum.map(|s| (s / omega) as f32));
+                (omega > 0.0).then_some((face, x, y, add))
+            })
+            .collect();
+        for (face, x, y, add) in adds {
             let img = &mut images[face];
             let p = img.get(x, y);
             img.set(x, y, (p.truncate() + add).extend(p.w));

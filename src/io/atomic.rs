@@ -94,7 +94,8 @@ pub fn stage(files: &[(PathBuf, Vec<u8>)]) -> Result<Staged> {
         trees: Vec::new(),
         files: Vec::new(),
     };
-    for (path, bytes) in files {
+    let mut tmps = Vec::with_capacity(files.len());
+    for (path, _) in files {
         let tmp = match missing_top(path) {
             Some(top) => {
                 let root = match staged.trees.iter().find(|(_, t)| *t == top) {
@@ -125,8 +126,17 @@ pub fn stage(files: &[(PathBuf, Vec<u8>)]) -> Result<Staged> {
                 tmp
             }
         };
-        std::fs::write(&tmp, bytes).map_err(|e| Error::io(path, e))?;
+        tmps.push(tmp);
     }
+    // The writes in parallel (six faces of 3 MB each, say); the first failure in file order
+    // is the one reported.
+    use rayon::prelude::*;
+    let written: Vec<Result<()>> = files
+        .par_iter()
+        .zip(&tmps)
+        .map(|((path, bytes), tmp)| std::fs::write(tmp, bytes).map_err(|e| Error::io(path, e)))
+        .collect();
+    written.into_iter().collect::<Result<()>>()?;
     Ok(staged)
 }
 

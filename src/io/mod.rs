@@ -10,6 +10,7 @@ pub mod dds;
 pub mod exr;
 pub mod gpu;
 mod guard;
+mod input;
 pub mod ktx1;
 pub mod ktx2;
 mod limits;
@@ -17,12 +18,14 @@ pub mod raster;
 pub mod rgbe;
 
 use crate::cube::CubeMap;
-use crate::error::{Error, LimitKind, Result};
+use crate::error::{Error, Result};
 use crate::image::{ColorSpace, Image};
 use std::path::Path;
 
 pub use atomic::{remove_temporaries, stage, write_all_atomic, Staged};
 pub use gpu::{finite, unorm8, GpuFormat, HALF_MAX};
+use input::read_input;
+pub(crate) use input::{read_file, regular_file};
 pub(crate) use limits::human_bytes;
 pub use limits::Limits;
 
@@ -296,15 +299,15 @@ pub struct ReadOptions {
 /// Reads any supported file and replaces NaN, infinite and negative values by 0, counting
 /// them in `Meta::replaced_values`.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
-    let (decoded, mut meta) = read_raw(path, opts)?;
+    let (decoded, mut meta) = read_with(path, opts, !opts.as_stored)?;
     if opts.as_stored {
         return Ok((decoded, meta));
     }
     // Integer and shared-exponent encodings hold only finite values >= 0: no pass needed
-    // (it cost a quarter of a 4K panorama's decode).
+    // (it cost a quarter of a 4K panorama's decode). OpenEXR sanitizes as it decodes.
     if matches!(
         meta.file_format,
-        FileFormat::Png | FileFormat::Jpeg | FileFormat::Tga | FileFormat::Hdr
+        FileFormat::Png | FileFormat::Jpeg | FileFormat::Tga | FileFormat::Hdr | FileFormat::Exr
     ) {
         return Ok((decoded, meta));
     }
@@ -327,58 +330,15 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     Ok((decoded, meta))
 }
 
-/// Reads a whole file, refusing anything that is not a regular file first: a FIFO would block
-/// forever and a device (`/dev/zero`) read without end.
-pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
-    regular_file(path)?;
-    std::fs::read(path).map_err(|e| Error::io(path, e))
-}
-
-/// Fails unless `path` names a regular file (links followed), without opening it.
-pub(crate) fn regular_file(path: &Path) -> Result<()> {
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    if meta.is_file() {
-        Ok(())
-    } else if meta.is_dir() {
-        Err(Error::file(path, "is a folder, not a file"))
-    } else {
-        Err(Error::file(
-            path,
-            "not a regular file (a pipe, socket or device): give a file",
-        ))
-    }
-}
-
-/// The bytes of a file, or of standard input for the path `-` (up to the memory budget),
-/// with the name errors should give.
-fn read_input<'a>(path: &'a Path, limits: &Limits) -> Result<(Vec<u8>, &'a Path)> {
-    if path != Path::new("-") {
-        return Ok((read_file(path)?, path));
-    }
-    use std::io::Read;
-    let name = Path::new("standard input");
-    let mut bytes = Vec::new();
-    std::io::stdin()
-        .lock()
-        .take(limits.max_memory.saturating_add(1))
-        .read_to_end(&mut bytes)
-        .map_err(|e| Error::io(name, e))?;
-    if bytes.len() as u64 > limits.max_memory {
-        return Err(Error::limit(
-            Some(name),
-            LimitKind::Memory,
-            format!(
-                "more than the memory budget of {}",
-                human_bytes(limits.max_memory)
-            ),
-        ));
-    }
-    Ok((bytes, name))
-}
-
 /// Reads any supported file as stored, by content, with the size limit checked from the
 /// header before pixels are allocated.
 pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
+    read_with(path, opts, false)
+}
+
+/// `read_raw`, but an OpenEXR file is sanitized (as `read` does) while it decodes when
+/// `sanitize` is set.
+fn read_with(path: &Path, opts: &ReadOptions, sanitize: bool) -> Result<(Decoded, Meta)> {
     let (bytes, path) = read_input(path, &opts.limits)?;
     if bytes.is_empty() {
         return Err(Error::file(path, "file is empty"));
@@ -409,7 +369,7 @@ pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
         )),
     };
     match format {
-        FileFormat::Exr => exr::decode(&bytes, path, &opts.limits),
+        FileFormat::Exr => exr::decode_with(&bytes, path, &opts.limits, sanitize),
         FileFormat::Ktx2 => ktx2::decode(&bytes, path, &opts.limits),
         FileFormat::Dds => dds::decode(&bytes, path, &opts.limits),
         FileFormat::Ktx1 => ktx1::decode(&bytes, path, &opts.limits),

@@ -298,8 +298,8 @@ fn mutate(bytes: &[u8], seed: u64, count: usize, dir: &Path, what: &str) -> (usi
     (ok, err)
 }
 
-/// (b) Seeded byte mutations of a real DWAB and a real ZIP panorama and of a small tiled
-/// PIZ file the crate writes.
+/// (b) Seeded byte mutations of a real DWAB and a real ZIP panorama and of small files the
+/// crate writes: tiled PIZ, two mip-mapped parts, DWAA, scan-line RLE and ZIP.
 #[test]
 fn mutated_files_never_panic() {
     let dir = tempfile::tempdir().unwrap();
@@ -312,6 +312,16 @@ fn mutated_files_never_panic() {
     let dwaa = written(Blocks::ScanLines, Compression::DWAA(None));
     let (ok, err) = mutate(&dwaa, 0x2545_f491_4f6c_dd1d, 200, dir.path(), "DWAA");
     println!("DWAA: {ok} read, {err} refused");
+    // Scan-line RLE and ZIP, which cubeforge unpacks itself.
+    for (compression, seed) in [
+        (Compression::RLE, 0x6a09_e667_f3bc_c909),
+        (Compression::ZIP1, 0xbb67_ae85_84ca_a73b),
+    ] {
+        let bytes = written(Blocks::ScanLines, compression);
+        let what = format!("{compression:?}");
+        let (ok, err) = mutate(&bytes, seed, 200, dir.path(), &what);
+        println!("{what}: {ok} read, {err} refused");
+    }
     for (sub, seed) in [
         ("dwab", 0x1234_5678_9abc_def1),
         ("zip", 0x0fed_cba9_8765_4321),

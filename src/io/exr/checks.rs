@@ -4,7 +4,10 @@
 //! allow) before any of it reaches the crate.
 
 use super::guarded;
-use exr::block::chunk::{Chunk, CompressedBlock};
+use exr::block::chunk::{
+    Chunk, CompressedBlock, CompressedScanLineBlock, CompressedTileBlock, TileCoordinates,
+};
+use exr::meta::attribute::IntegerBounds;
 use exr::meta::header::Header;
 use exr::meta::{BlockDescription, MetaData};
 use exr::prelude::*;
@@ -68,15 +71,57 @@ pub(super) fn read_meta(bytes: &[u8]) -> std::result::Result<(MetaData, usize), 
     Ok((meta, at))
 }
 
-/// Every chunk of the file, read where the chunk table points, after checking that each
-/// lies inside the file, that every block of every part is there exactly once (two chunks
+/// A checked chunk, its bytes left in the file (a 4K float panorama's are 70 MB, copied
+/// once more for nothing before): its part, its block's place, its compressed bytes.
+pub(super) struct RawChunk<'a> {
+    /// The part (layer) it belongs to.
+    pub part: usize,
+    /// The block as the crate describes it, with no bytes.
+    block: CompressedBlock,
+    /// The block's pixels, in the layer's absolute coordinates.
+    pub bounds: IntegerBounds,
+    /// The compressed bytes.
+    pub data: &'a [u8],
+}
+
+impl RawChunk<'_> {
+    /// The chunk as the exr crate reads it, its bytes copied.
+    pub fn to_chunk(&self) -> Chunk {
+        let data = self.data.to_vec();
+        let compressed_block = match &self.block {
+            CompressedBlock::ScanLine(b) => CompressedBlock::ScanLine(CompressedScanLineBlock {
+                y_coordinate: b.y_coordinate,
+                compressed_pixels_le: data,
+            }),
+            CompressedBlock::Tile(b) => CompressedBlock::Tile(CompressedTileBlock {
+                coordinates: b.coordinates,
+                compressed_pixels_le: data,
+            }),
+            _ => unreachable!("read_chunks makes flat blocks only"),
+        };
+        Chunk {
+            layer_index: self.part,
+            compressed_block,
+        }
+    }
+
+    /// The block's coordinates (tile and level indices) as the crate computes them.
+    pub fn tile(&self, header: &Header) -> std::result::Result<TileCoordinates, String> {
+        guarded(|| header.get_block_data_indices(&self.block))
+    }
+}
+
+/// Every chunk of the file, where the chunk table points, after checking that each lies
+/// inside the file, that every block of every part is there exactly once (two chunks
 /// claiming one position made the image depend on which thread finished last), and that a
-/// DWA chunk's section sizes fit the chunk and its block. In table order.
-pub(super) fn read_chunks(
-    bytes: &[u8],
+/// DWA chunk's section sizes fit the chunk and its block. In table order; the chunks' fields
+/// are read here (what the crate's `Chunk::read` checks, checked likewise), their bytes are
+/// not copied.
+pub(super) fn read_chunks<'a>(
+    bytes: &'a [u8],
     meta: &MetaData,
     table_start: usize,
-) -> std::result::Result<Vec<Chunk>, String> {
+) -> std::result::Result<Vec<RawChunk<'a>>, String> {
     let counts: Vec<usize> = meta.headers.iter().map(|h| h.chunk_count).collect();
     let total = counts
         .iter()
@@ -89,6 +134,10 @@ pub(super) fn read_chunks(
     let mut ranges = Vec::with_capacity(total);
     let mut entry = table_start;
     for (part, header) in meta.headers.iter().enumerate() {
+        if header.deep {
+            return Err("deep data is not supported".into());
+        }
+        let largest = guarded(|| Ok(header.max_block_byte_size()))?;
         // Each block position of the part, and whether a chunk has claimed it yet.
         let mut unclaimed: HashMap<(usize, usize, usize, usize), bool> = guarded(|| {
             Ok(header
@@ -140,13 +189,42 @@ pub(super) fn read_chunks(
                     "chunk at offset {at} claims {declared} bytes, more than the file holds"
                 ));
             }
+            if declared as usize > largest {
+                return Err(format!(
+                    "chunk at offset {at} claims {declared} bytes, more than a block of part \
+                     {part} holds ({largest})"
+                ));
+            }
+            let data = &bytes[field..field + declared as usize];
             ranges.push((at, field + declared as usize));
-            let chunk = guarded(|| Chunk::read(&mut &bytes[at..], meta))?;
+            // The fields before the byte count: the tile's four coordinates or the first line.
+            let head = at + if multipart { 4 } else { 0 };
+            let int = |i: usize| u32_at(bytes, head + 4 * i).map_or(-1, |v| v as i32);
+            let block = if tiled {
+                let [x, y, lx, ly] = [0, 1, 2, 3].map(int);
+                if x < 0 || y < 0 || !(0..=31).contains(&lx) || !(0..=31).contains(&ly) {
+                    return Err(format!(
+                        "tile at offset {at} claims tile ({x}, {y}) at level ({lx}, {ly})"
+                    ));
+                }
+                CompressedBlock::Tile(CompressedTileBlock {
+                    coordinates: TileCoordinates {
+                        tile_index: Vec2(x as usize, y as usize),
+                        level_index: Vec2(lx as usize, ly as usize),
+                    },
+                    compressed_pixels_le: Vec::new(),
+                })
+            } else {
+                CompressedBlock::ScanLine(CompressedScanLineBlock {
+                    y_coordinate: int(0),
+                    compressed_pixels_le: Vec::new(),
+                })
+            };
             let (tile, bounds) = guarded(|| {
-                let tile = header.get_block_data_indices(&chunk.compressed_block)?;
+                let tile = header.get_block_data_indices(&block)?;
                 Ok((tile, header.get_absolute_block_pixel_coordinates(tile)?))
             })?;
-            if let CompressedBlock::ScanLine(block) = &chunk.compressed_block {
+            if let CompressedBlock::ScanLine(block) = &block {
                 let lines = header.compression.scan_lines_per_block() as i64;
                 let y = block.y_coordinate as i64 - header.own_attributes.layer_position.1 as i64;
                 if y % lines != 0 {
@@ -178,15 +256,15 @@ pub(super) fn read_chunks(
                 header.compression,
                 Compression::DWAA(_) | Compression::DWAB(_)
             ) {
-                let data = match &chunk.compressed_block {
-                    CompressedBlock::ScanLine(b) => &b.compressed_pixels_le,
-                    CompressedBlock::Tile(b) => &b.compressed_pixels_le,
-                    _ => return Err("deep data is not supported".into()),
-                };
                 check_dwa(data, header, bounds.size)
                     .map_err(|e| format!("DWA chunk at offset {at}: {e}"))?;
             }
-            chunks.push(chunk);
+            chunks.push(RawChunk {
+                part,
+                block,
+                bounds,
+                data,
+            });
         }
     }
     // Chunks follow one another: none reaches into the next.

@@ -4,25 +4,39 @@
 //! table and every chunk are checked (each attribute and chunk inside the file, every block
 //! of every part present exactly once, DWA section sizes within what the chunk and its block
 //! allow), and every call into the crate runs behind `catch_unwind`, so a corrupt file is a
-//! one-line error, never a panic or an abort on a huge allocation.
+//! one-line error, never a panic or an abort on a huge allocation. The common layout (one
+//! scan-line part of half or full floats) decodes a block per task straight into the image,
+//! its ZIP and RLE blocks unpacked here (see `blocks`).
 
 #![warn(missing_docs)]
 
 use super::{Decoded, FileFormat, Limits, Meta};
 use crate::error::{Error, Result};
 use crate::image::{ColorSpace, Image};
-use exr::block::chunk::Chunk;
 use exr::meta::{BlockDescription, MetaData};
 use exr::prelude::*;
 use glam::Vec4;
 use std::io::Cursor;
 use std::path::Path;
 
+mod blocks;
 mod checks;
-use checks::{read_chunks, read_meta};
+use checks::{read_chunks, read_meta, RawChunk};
 
 /// Decodes an OpenEXR file's first RGB(A) layer; `path` names it in errors, `limits` are checked before any pixel is allocated.
 pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
+    decode_with(bytes, path, limits, false)
+}
+
+/// `decode`, and with `sanitize` the texels sanitized as [`crate::image::Image::sanitize`]
+/// does, counted in `Meta::replaced_values`: the common layout does it a line at a time as
+/// it decodes, rather than in another pass over a 128 MB panorama.
+pub(crate) fn decode_with(
+    bytes: &[u8],
+    path: &Path,
+    limits: &Limits,
+    sanitize: bool,
+) -> Result<(Decoded, Meta)> {
     let fail = |msg: String| Error::file(path, format!("cannot decode OpenEXR: {msg}"));
     let (meta, table_start) = read_meta(bytes).map_err(fail)?;
     let header = meta
@@ -78,9 +92,12 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         header.compression
     );
     let chunks = read_chunks(bytes, &meta, table_start).map_err(fail)?;
-    let image = match fast_layout(&meta) {
-        Some(layout) => decode_blocks(&meta, &layout, chunks),
-        None => read_layer(&meta, chunks),
+    let (image, replaced_values) = match fast_layout(&meta) {
+        Some(layout) => blocks::decode_blocks(&meta, &layout, chunks, sanitize),
+        None => read_layer(&meta, chunks).map(|mut img| {
+            let n = if sanitize { img.sanitize() } else { 0 };
+            (img, n)
+        }),
     }
     .map_err(fail)?;
     let meta = Meta {
@@ -88,7 +105,7 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         pixel_format,
         color_space: ColorSpace::Linear,
         hdr: true,
-        replaced_values: 0,
+        replaced_values,
         stored_levels: 1,
     };
     Ok((Decoded::Image(image), meta))
@@ -102,8 +119,9 @@ fn guarded<T>(f: impl FnOnce() -> exr::error::Result<T>) -> std::result::Result<
 }
 
 /// Where each channel's samples go in a texel (None: skipped) and their type, and whether
-/// there is alpha: for the common case that `decode_blocks` takes (one scan-line layer, R G
-/// B and maybe A as half or full floats, no subsampling). None: leave it to `read_layer`.
+/// there is alpha: for the common case that `blocks::decode_blocks` takes (one scan-line
+/// layer, R G B and maybe A as half or full floats, no subsampling). None: leave it to
+/// `read_layer`.
 type Layout = (Vec<(Option<usize>, SampleType)>, bool);
 
 fn fast_layout(meta: &MetaData) -> Option<Layout> {
@@ -131,61 +149,6 @@ fn fast_layout(meta: &MetaData) -> Option<Layout> {
     (found[0] && found[1] && found[2]).then_some((slots, found[3]))
 }
 
-/// The common case (see `Layout`), a block per task: each block is decompressed and
-/// converted straight into its rows, in parallel. The crate's reader decompresses in
-/// parallel too but places texels one by one on one thread, most of the time a 4K EXR took
-/// to read. The chunks are those `read_chunks` checked: each block of the layer once.
-fn decode_blocks(
-    meta: &MetaData,
-    (slots, alpha): &Layout,
-    chunks: Vec<Chunk>,
-) -> std::result::Result<Image, String> {
-    use exr::block::UncompressedBlock;
-    use rayon::prelude::*;
-
-    let header = &meta.headers[0];
-    let (w, h) = (header.layer_size.0, header.layer_size.1);
-    // Blocks in row order, each with its rows.
-    let mut blocks: Vec<(usize, usize, Chunk)> = Vec::with_capacity(chunks.len());
-    for chunk in chunks {
-        let bounds = guarded(|| {
-            let index = header.get_block_data_indices(&chunk.compressed_block)?;
-            header.get_absolute_block_pixel_coordinates(index)
-        })?;
-        blocks.push((bounds.position.1 as usize, bounds.size.1, chunk));
-    }
-    blocks.sort_by_key(|b| b.0);
-    let mut next = 0;
-    for (y, lines, _) in &blocks {
-        if *y != next {
-            return Err(format!("scan lines {next} to {y} are missing"));
-        }
-        next += lines;
-    }
-    if next != h {
-        return Err(format!("scan lines {next} to {h} are missing"));
-    }
-    let mut img = Image::new(w, h);
-    let mut rest = img.pixels.as_mut_slice();
-    let mut jobs = Vec::with_capacity(blocks.len());
-    for (y, lines, chunk) in blocks {
-        let (rows, tail) = rest.split_at_mut(lines * w);
-        rest = tail;
-        jobs.push((y, chunk, rows));
-    }
-    jobs.into_par_iter().try_for_each(|(y, chunk, rows)| {
-        let block = guarded(|| UncompressedBlock::decompress_chunk(chunk, meta, false))?;
-        if fill_rows(&block.data, slots, *alpha, w, rows) {
-            Ok(())
-        } else {
-            Err(format!(
-                "the block at line {y} decompresses to the wrong size"
-            ))
-        }
-    })?;
-    Ok(img)
-}
-
 /// The exr crate's own reader, start to end, unguarded: the reference the tests compare the
 /// checked decoder with (never for untrusted files: it can abort on them).
 #[doc(hidden)]
@@ -209,7 +172,7 @@ pub fn crate_reader(bytes: &[u8]) -> exr::error::Result<Image> {
 /// layout: tiles, mip levels, subsampling, integer samples), texel by texel on one thread.
 /// The chunks are those `read_chunks` checked, decompressed here in parallel batches with
 /// rayon, rather than by the crate's own thread pool, where a panic would abort the process.
-fn read_layer(meta: &MetaData, chunks: Vec<Chunk>) -> std::result::Result<Image, String> {
+fn read_layer(meta: &MetaData, chunks: Vec<RawChunk>) -> std::result::Result<Image, String> {
     use exr::block::{BlockIndex, UncompressedBlock};
     use exr::image::read::image::{LayersReader, ReadLayers};
     use rayon::prelude::*;
@@ -229,14 +192,13 @@ fn read_layer(meta: &MetaData, chunks: Vec<Chunk>) -> std::result::Result<Image,
     let header = &headers[0];
     let mut layer = guarded(|| spec.create_layers_reader(headers))?;
     let mut wanted = Vec::new();
-    for chunk in chunks.into_iter().filter(|c| c.layer_index == 0) {
+    for chunk in chunks.into_iter().filter(|c| c.part == 0) {
+        let tile = chunk.tile(header)?;
         let keep = guarded(|| {
-            let tile = header.get_block_data_indices(&chunk.compressed_block)?;
-            let bounds = header.get_absolute_block_pixel_coordinates(tile)?;
             let index = BlockIndex {
                 layer: 0,
-                pixel_position: bounds.position.to_usize("block position")?,
-                pixel_size: bounds.size,
+                pixel_position: chunk.bounds.position.to_usize("block position")?,
+                pixel_size: chunk.bounds.size,
                 level: tile.level_index,
             };
             Ok(layer.filter_block(meta, tile, index))
@@ -249,13 +211,16 @@ fn read_layer(meta: &MetaData, chunks: Vec<Chunk>) -> std::result::Result<Image,
     let batch = 4 * rayon::current_num_threads();
     let mut wanted = wanted.into_iter();
     loop {
-        let some: Vec<Chunk> = wanted.by_ref().take(batch).collect();
+        let some: Vec<RawChunk> = wanted.by_ref().take(batch).collect();
         if some.is_empty() {
             break;
         }
         let blocks: Vec<UncompressedBlock> = some
             .into_par_iter()
-            .map(|chunk| guarded(|| UncompressedBlock::decompress_chunk(chunk, meta, false)))
+            .map(|raw| {
+                let chunk = raw.to_chunk();
+                guarded(|| UncompressedBlock::decompress_chunk(chunk, meta, false))
+            })
             .collect::<std::result::Result<_, _>>()?;
         for block in blocks {
             guarded(|| layer.read_block(headers, block))?;
@@ -263,52 +228,6 @@ fn read_layer(meta: &MetaData, chunks: Vec<Chunk>) -> std::result::Result<Image,
     }
     let layer = guarded(|| Ok(layer.into_layers()))?;
     Ok(layer.channel_data.pixels)
-}
-
-/// Converts one decompressed block (per line, each channel's samples in native byte order)
-/// into texels; false if its size is not what the header promised.
-fn fill_rows(
-    data: &[u8],
-    slots: &[(Option<usize>, SampleType)],
-    alpha: bool,
-    w: usize,
-    rows: &mut [Vec4],
-) -> bool {
-    use half::slice::HalfFloatSliceExt;
-    let line_bytes: usize = slots.iter().map(|(_, t)| t.bytes_per_sample() * w).sum();
-    if data.len() != line_bytes * (rows.len() / w) {
-        return false;
-    }
-    let mut halves = vec![f16::ZERO; w];
-    let mut floats = vec![0.0f32; w];
-    for (line, row) in data.chunks_exact(line_bytes).zip(rows.chunks_exact_mut(w)) {
-        let mut at = 0;
-        for &(slot, kind) in slots {
-            let size = kind.bytes_per_sample() * w;
-            let samples = &line[at..at + size];
-            at += size;
-            let Some(k) = slot else { continue };
-            if kind == SampleType::F16 {
-                for (h, b) in halves.iter_mut().zip(samples.chunks_exact(2)) {
-                    *h = f16::from_ne_bytes([b[0], b[1]]);
-                }
-                halves.convert_to_f32_slice(&mut floats);
-            } else {
-                for (f, b) in floats.iter_mut().zip(samples.chunks_exact(4)) {
-                    *f = f32::from_ne_bytes([b[0], b[1], b[2], b[3]]);
-                }
-            }
-            for (t, &v) in row.iter_mut().zip(&floats) {
-                t[k] = v;
-            }
-        }
-        if !alpha {
-            for t in row.iter_mut() {
-                t.w = 1.0;
-            }
-        }
-    }
-    true
 }
 
 /// Scan lines per ZIP block (OpenEXR's ZIP16).
@@ -381,7 +300,8 @@ pub fn encode(img: &Image) -> std::result::Result<Vec<u8>, String> {
 /// One ZIP block as OpenEXR stores it: for each line, each channel's half-float samples
 /// (little-endian); then the bytes split into even and odd halves, each byte replaced by its
 /// difference from the previous one, and zlib-compressed. A block that does not shrink is
-/// stored as it is, which readers recognise by its size.
+/// stored as it is, which readers recognise by its size. The halves and their differences
+/// are made in one pass over the samples (vectorised), not byte by byte.
 fn zip_block(
     img: &Image,
     y0: usize,
@@ -391,7 +311,7 @@ fn zip_block(
     use half::slice::HalfFloatSliceExt;
     let w = img.width;
     let lines = ZIP_LINES.min(img.height - y0);
-    let mut raw = Vec::with_capacity(lines * order.len() * w * 2);
+    let mut samples: Vec<u16> = Vec::with_capacity(lines * order.len() * w);
     let mut floats = vec![0.0f32; w];
     let mut halves = vec![f16::ZERO; w];
     for y in y0..y0 + lines {
@@ -402,25 +322,31 @@ fn zip_block(
             }
             // Slice conversion uses the CPU's F16C instructions where present.
             halves.convert_from_f32_slice(&floats);
-            for h in &halves {
-                raw.extend_from_slice(&h.to_le_bytes());
-            }
+            samples.extend(halves.iter().map(|h| h.to_bits()));
         }
     }
-    let n = raw.len();
+    // Byte i of the stored form is the low byte of sample i / 2 (even i) or its high byte.
+    let m = samples.len();
+    let n = 2 * m;
     let mut split = vec![0u8; n];
-    let (even, odd) = split.split_at_mut(n.div_ceil(2));
-    for (i, pair) in raw.chunks(2).enumerate() {
-        even[i] = pair[0];
-        if let Some(&b) = pair.get(1) {
-            odd[i] = b;
-        }
+    let (even, odd) = split.split_at_mut(m);
+    let (lo, hi) = (|h: u16| h as u8, |h: u16| (h >> 8) as u8);
+    let delta = |a: u8, b: u8| a.wrapping_sub(b).wrapping_add(128);
+    even[0] = lo(samples[0]);
+    for ((e, &a), &b) in even[1..]
+        .iter_mut()
+        .zip(&samples[1..])
+        .zip(&samples[..m - 1])
+    {
+        *e = delta(lo(a), lo(b));
     }
-    let mut prev = split[0];
-    for v in &mut split[1..] {
-        let cur = *v;
-        *v = cur.wrapping_sub(prev).wrapping_add(128);
-        prev = cur;
+    odd[0] = delta(hi(samples[0]), lo(samples[m - 1]));
+    for ((o, &a), &b) in odd[1..]
+        .iter_mut()
+        .zip(&samples[1..])
+        .zip(&samples[..m - 1])
+    {
+        *o = delta(hi(a), hi(b));
     }
     let mut packed = vec![0u8; deflate.zlib_compress_bound(n)];
     match deflate.zlib_compress(&split, &mut packed) {
@@ -428,7 +354,7 @@ fn zip_block(
             packed.truncate(len);
             packed
         }
-        _ => raw,
+        _ => samples.iter().flat_map(|h| h.to_le_bytes()).collect(),
     }
 }
 
@@ -441,7 +367,11 @@ mod tests {
         let (meta, start) = read_meta(bytes).unwrap();
         let layout = fast_layout(&meta)?;
         let chunks = read_chunks(bytes, &meta, start).unwrap();
-        Some(decode_blocks(&meta, &layout, chunks).unwrap())
+        Some(
+            blocks::decode_blocks(&meta, &layout, chunks, false)
+                .unwrap()
+                .0,
+        )
     }
 
     /// The crate's pixel reader on the checked chunks.
@@ -461,6 +391,52 @@ mod tests {
         assert_eq!(slow, crate_reader(bytes), "{what}");
     }
 
+    /// A `w` x `h` file the crate writes with `compression`, channels R G B (A) of the sample
+    /// types `types` names (h half, f float; "+zu" adds a float Z and an integer id channel),
+    /// holding negative, small, large and fractional values.
+    fn written(size: (usize, usize), compression: Compression, types: &str) -> Vec<u8> {
+        let (w, h) = size;
+        let value = |i: usize, c: usize| {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            match c {
+                0 => x * 0.37 - 3.0,
+                1 => (y * 0.61).sin() * 1000.0,
+                2 => (x * y + 1.0).recip(),
+                _ => 0.25 + x / 64.0,
+            }
+        };
+        let samples = |c: usize, t: u8| match t {
+            b'h' => FlatSamples::F16((0..w * h).map(|i| f16::from_f32(value(i, c))).collect()),
+            b'f' => FlatSamples::F32((0..w * h).map(|i| value(i, c)).collect()),
+            _ => FlatSamples::U32((0..w * h).map(|i| i as u32 * 7919).collect()),
+        };
+        let (colours, extra) = types.split_once('+').unwrap_or((types, ""));
+        let mut list: Vec<AnyChannel<FlatSamples>> = colours
+            .bytes()
+            .enumerate()
+            .map(|(c, t)| AnyChannel::new(["R", "G", "B", "A"][c], samples(c, t)))
+            .collect();
+        if !extra.is_empty() {
+            list.push(AnyChannel::new("Z", samples(0, b'f')));
+            list.push(AnyChannel::new("id", samples(0, b'u')));
+        }
+        let layer = Layer::new(
+            size,
+            LayerAttributes::default(),
+            Encoding {
+                compression,
+                ..Encoding::SMALL_LOSSLESS
+            },
+            AnyChannels::sort(SmallVec::from_vec(list)),
+        );
+        let mut out = Vec::new();
+        exr::image::Image::from_layer(layer)
+            .write()
+            .to_buffered(Cursor::new(&mut out))
+            .unwrap();
+        out
+    }
+
     /// The block-parallel reader gives the crate reader's texels bit for bit.
     #[test]
     fn blocks_match_the_crate_reader() {
@@ -475,31 +451,46 @@ mod tests {
         both(&encode(&img).unwrap(), "ours, RGBA half");
         let opaque = Image::from_fn(37, 41, |x, y| img.get(x, y).truncate().extend(1.0));
         both(&encode(&opaque).unwrap(), "ours, RGB half");
-        // Full floats, another compression, written by the crate itself.
-        let channels = SpecificChannels::rgba(|Vec2(x, y)| {
-            let p = img.get(x, y);
-            (p.x, p.y, p.z, p.w)
+        // Noise that does not shrink: its blocks are stored as they are.
+        let noisy = |x: usize, y: usize, c: usize| {
+            let mut h = ((x * 131 + y) * 4 + c) as u64 * 0x9e37_79b9_7f4a_7c15;
+            h ^= h >> 29;
+            h = h.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            h ^= h >> 32;
+            f16::from_bits(h as u16 & 0x7bff).to_f32()
+        };
+        let noise = Image::from_fn(33, 17, |x, y| {
+            Vec4::new(
+                noisy(x, y, 0),
+                noisy(x, y, 1),
+                noisy(x, y, 2),
+                noisy(x, y, 3),
+            )
         });
-        for compression in [
-            Compression::PIZ,
-            Compression::Uncompressed,
-            Compression::RLE,
-        ] {
-            let layer = Layer::new(
-                (37, 41),
-                LayerAttributes::default(),
-                Encoding {
-                    compression,
-                    ..Encoding::SMALL_LOSSLESS
-                },
-                channels.clone(),
-            );
-            let mut out = Vec::new();
-            exr::image::Image::from_layer(layer)
-                .write()
-                .to_buffered(Cursor::new(&mut out))
-                .unwrap();
-            both(&out, &format!("f32 {compression:?}"));
+        let bytes = encode(&noise).unwrap();
+        assert!(bytes.len() > 33 * 17 * 8, "stored, not compressed");
+        both(&bytes, "ours, noise");
+        assert_eq!(crate_reader(&bytes), noise);
+        // Every compression the crate writes, of half and full floats (and both in one file,
+        // with channels that are skipped), in sizes whose last block is partial.
+        for (w, h) in [(37, 41), (1, 19), (300, 5)] {
+            for compression in [
+                Compression::Uncompressed,
+                Compression::RLE,
+                Compression::ZIP1,
+                Compression::ZIP16,
+                Compression::PIZ,
+                Compression::PXR24,
+                Compression::B44,
+                Compression::B44A,
+                Compression::DWAA(None),
+                Compression::DWAB(None),
+            ] {
+                for types in ["hhhh", "fff", "hfhf", "hhh+zu"] {
+                    let out = written((w, h), compression, types);
+                    both(&out, &format!("{w}x{h} {types} {compression:?}"));
+                }
+            }
         }
         let real = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/fixtures/real");
         for sub in ["zip", "dwab", "ball", "faces/city"] {
@@ -514,6 +505,64 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// Sanitizing while decoding replaces what `Image::sanitize` replaces, and counts as many.
+    #[test]
+    fn sanitized_as_it_decodes() {
+        let odd = [
+            f32::NAN,
+            f32::INFINITY,
+            -2.0,
+            3e30,
+            -0.0,
+            1e28,
+            0.5,
+            f32::NEG_INFINITY,
+        ];
+        let channels = SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
+            let at = |c: usize| odd[(x * 3 + y * 5 + c) % odd.len()];
+            (at(0), at(1), at(2), at(3))
+        });
+        for (blocks, compression) in [
+            (Blocks::ScanLines, Compression::ZIP16),
+            (Blocks::ScanLines, Compression::RLE),
+            (Blocks::ScanLines, Compression::PIZ),
+            (Blocks::Tiles(Vec2(16, 16)), Compression::ZIP16),
+        ] {
+            let layer = Layer::new(
+                (37, 21),
+                LayerAttributes::default(),
+                Encoding {
+                    compression,
+                    blocks,
+                    ..Encoding::SMALL_LOSSLESS
+                },
+                channels.clone(),
+            );
+            let mut out = Vec::new();
+            exr::image::Image::from_layer(layer)
+                .write()
+                .to_buffered(Cursor::new(&mut out))
+                .unwrap();
+            let mut want = crate_reader(&out);
+            let count = want.sanitize();
+            let (Decoded::Image(got), meta) =
+                decode_with(&out, Path::new("t.exr"), &Limits::default(), true).unwrap()
+            else {
+                unreachable!()
+            };
+            let what = format!("{blocks:?} {compression:?}");
+            assert!(count > 0, "{what}");
+            assert_eq!(meta.replaced_values, count, "{what}");
+            let bits = |img: &Image| -> Vec<[u32; 4]> {
+                img.pixels
+                    .iter()
+                    .map(|p| p.to_array().map(f32::to_bits))
+                    .collect()
+            };
+            assert_eq!(bits(&got), bits(&want), "{what}");
         }
     }
 

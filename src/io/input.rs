@@ -1,0 +1,106 @@
+//! Reading input files: regular files only (never a FIFO or a device), large ones in
+//! parallel pieces; standard input up to the memory budget.
+
+use super::{human_bytes, Limits};
+use crate::error::{Error, LimitKind, Result};
+use std::path::Path;
+
+/// Reads a whole file, refusing anything that is not a regular file first: a FIFO would block
+/// forever and a device (`/dev/zero`) read without end. A large file is read in pieces in
+/// parallel, each byte once: copying a 100 MB panorama into fresh memory, a page fault every
+/// 4 KiB, took a tenth of a second on one thread.
+pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
+    regular_file(path)?;
+    let fail = |e| Error::io(path, e);
+    #[cfg(unix)]
+    {
+        use rayon::prelude::*;
+        use std::io::{Read, Seek};
+        use std::os::unix::fs::FileExt;
+        const PIECE: usize = 4 << 20;
+        let mut file = std::fs::File::open(path).map_err(fail)?;
+        let len = file.metadata().map_err(fail)?.len();
+        if len >= 4 * PIECE as u64 && rayon::current_num_threads() > 1 {
+            let len = usize::try_from(len).map_err(|_| {
+                Error::file(path, "is too large to read into memory on this machine")
+            })?;
+            // Zeroed by the allocator: fresh pages, first touched by the reads.
+            let mut bytes = vec![0u8; len];
+            bytes
+                .par_chunks_mut(PIECE)
+                .enumerate()
+                .try_for_each(|(i, piece)| file.read_exact_at(piece, (i * PIECE) as u64))
+                .map_err(fail)?;
+            // What a file still being written gained since.
+            file.seek(std::io::SeekFrom::Start(len as u64))
+                .and_then(|_| file.read_to_end(&mut bytes))
+                .map_err(fail)?;
+            return Ok(bytes);
+        }
+    }
+    std::fs::read(path).map_err(fail)
+}
+
+/// Fails unless `path` names a regular file (links followed), without opening it.
+pub(crate) fn regular_file(path: &Path) -> Result<()> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if meta.is_file() {
+        Ok(())
+    } else if meta.is_dir() {
+        Err(Error::file(path, "is a folder, not a file"))
+    } else {
+        Err(Error::file(
+            path,
+            "not a regular file (a pipe, socket or device): give a file",
+        ))
+    }
+}
+
+/// The bytes of a file, or of standard input for the path `-` (up to the memory budget),
+/// with the name errors should give.
+pub(super) fn read_input<'a>(path: &'a Path, limits: &Limits) -> Result<(Vec<u8>, &'a Path)> {
+    if path != Path::new("-") {
+        return Ok((read_file(path)?, path));
+    }
+    use std::io::Read;
+    let name = Path::new("standard input");
+    let mut bytes = Vec::new();
+    std::io::stdin()
+        .lock()
+        .take(limits.max_memory.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(name, e))?;
+    if bytes.len() as u64 > limits.max_memory {
+        return Err(Error::limit(
+            Some(name),
+            LimitKind::Memory,
+            format!(
+                "more than the memory budget of {}",
+                human_bytes(limits.max_memory)
+            ),
+        ));
+    }
+    Ok((bytes, name))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A file large enough to be read in parallel pieces comes back byte for byte, its
+    /// last piece partial.
+    #[test]
+    fn large_files_read_whole() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("big.bin");
+        let n = (17 << 20) + 12345;
+        let bytes: Vec<u8> = (0..n).map(|i| (i * 7 + i / 4099) as u8).collect();
+        std::fs::write(&path, &bytes).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        assert!(pool.install(|| read_file(&path).unwrap()) == bytes);
+        assert!(read_file(dir.path()).is_err());
+    }
+}
