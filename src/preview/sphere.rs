@@ -2,9 +2,11 @@
 //! shading, and the tessellated mesh (latitude bands x longitude segments) for per-vertex
 //! shading.
 //!
-//! Texture coordinates: u goes around +Y starting at +Z (u = 0) towards +X (u = 0.25), so
-//! u = atan2(x, z) / 2pi wrapped to [0, 1); v runs from the north pole (+Y, v = 0) to the
-//! south pole (v = 1), v = acos(y) / pi. Row 0 of a decal or control map is v = 0.
+//! Texture coordinates are the equirect layout's ([`crate::layout::equirect`]), so a decal or
+//! control map painted as a panorama wraps the sphere as that panorama wraps the environment:
+//! u = 0.5 + atan2(x, z) / 2pi goes around +Y, +Z (the default camera's side) at u = 0.5, +X at
+//! 0.75, the seam (u = 0 / 1) at the back, -Z; v = acos(y) / pi runs from the north pole (+Y,
+//! v = 0) to the south pole (v = 1). Row 0 of a decal or control map is v = 0.
 
 #![warn(missing_docs)]
 
@@ -38,18 +40,19 @@ pub fn hit(origin: Vec3, dir: Vec3) -> Option<Vec3> {
     Some(w - dn * (1.0 - h2).sqrt())
 }
 
-/// Texture coordinates of a point on (or radially projected onto) the sphere.
+/// Texture coordinates of a point on (or radially projected onto) the sphere: those of its
+/// direction in an equirect panorama (libm's atan2 and acos, for the reference renderer).
 #[inline]
 pub fn uv(p: Vec3) -> Vec2 {
-    let u = p.x.atan2(p.z) / (2.0 * PI);
-    let u = if u < 0.0 { u + 1.0 } else { u };
+    let u = 0.5 + p.x.atan2(p.z) / (2.0 * PI);
     let r = p.length();
     let v = (p.y / r).clamp(-1.0, 1.0).acos() / PI;
     Vec2::new(u.min(1.0 - f32::EPSILON * 0.5), v)
 }
 
 /// A triangle mesh approximating the sphere, vertices on the sphere (so its normal there is
-/// the position), with texture coordinates seamed at u = 0 / 1 like a real mesh.
+/// the position), with texture coordinates seamed at u = 0 / 1 (at -Z, where atan2 jumps) like
+/// a real mesh.
 #[derive(Clone, Debug)]
 pub(crate) struct Mesh {
     /// Vertex positions, which are also the normals.
@@ -61,7 +64,8 @@ pub(crate) struct Mesh {
 }
 
 /// `bands` latitude bands and 2 x `bands` longitude segments: each band-segment cell is two
-/// triangles, one at the poles (where the cell's top or bottom edge is a point).
+/// triangles, one at the poles (where the cell's top or bottom edge is a point). Column j is
+/// at longitude 2pi j / 2n - pi from +Z (u = j / 2n): columns 0 and 2n both lie on the seam.
 pub(crate) fn tessellate(bands: usize) -> Mesh {
     let n = bands.max(2);
     let m = 2 * n;
@@ -72,7 +76,7 @@ pub(crate) fn tessellate(bands: usize) -> Mesh {
         let theta = PI * i as f32 / n as f32;
         let (st, ct) = theta.sin_cos();
         for j in 0..=m {
-            let phi = 2.0 * PI * j as f32 / m as f32;
+            let phi = 2.0 * PI * j as f32 / m as f32 - PI;
             let (sp, cp) = phi.sin_cos();
             let p = if i == 0 {
                 Vec3::Y
@@ -110,5 +114,47 @@ pub(crate) fn tessellate(bands: usize) -> Mesh {
         positions,
         uvs,
         triangles,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uv_is_the_panoramas() {
+        assert!((uv(Vec3::Z) - Vec2::new(0.5, 0.5)).length() < 1e-6);
+        assert!((uv(Vec3::X).x - 0.75).abs() < 1e-6);
+        assert!((uv(Vec3::NEG_X).x - 0.25).abs() < 1e-6);
+        for i in 0..40 {
+            for j in 1..20 {
+                let (lon, lat) = (i as f32 / 40.0 * 6.2, j as f32 / 20.0 * 3.0 - 1.5);
+                let p = Vec3::new(lat.cos() * lon.sin(), lat.sin(), lat.cos() * lon.cos());
+                let want = crate::layout::equirect::dir_to_uv(p);
+                assert!((uv(p) - want).length() < 1e-5, "{p}: {} vs {want}", uv(p));
+            }
+        }
+    }
+
+    #[test]
+    fn the_mesh_agrees_with_uv_and_seams_at_the_back() {
+        let n = 6;
+        let mesh = tessellate(n);
+        let cols = 2 * n + 1;
+        for (k, (&p, &t)) in mesh.positions.iter().zip(&mesh.uvs).enumerate() {
+            let (i, j) = (k / cols, k % cols);
+            assert!((p.length() - 1.0).abs() < 1e-6);
+            assert!((t.y - i as f32 / n as f32).abs() < 1e-6);
+            if i == 0 || i == n {
+                continue; // a pole: u of its cell
+            }
+            if j == 0 || j == cols - 1 {
+                // The seam: -Z's meridian, u = 0 on one side, 1 on the other.
+                assert!(p.x.abs() < 1e-6 && p.z < 0.0, "{p}");
+                assert_eq!(t.x, if j == 0 { 0.0 } else { 1.0 });
+            } else {
+                assert!((uv(p).x - t.x).abs() < 1e-5, "{p}: {} vs {}", uv(p).x, t.x);
+            }
+        }
     }
 }

@@ -406,7 +406,7 @@ fn per_vertex_converges_to_per_fragment() {
 fn per_vertex_interpolates_the_vertex_outputs_perspective_correctly() {
     // A mesh vertex pixel shows exactly the vertex program's output there, and every
     // pixel's colour is the environment along a vector inside the triangle's cone of vertex
-    // vectors. Simplest exact check: the vertex at the sphere's front (+Z, u = 0 seam) is on
+    // vectors. Simplest exact check: the vertex at the sphere's front (+Z, u = 0.5) is on
     // the mesh for an even number of longitude segments and reflects straight back.
     let m = material::preset("chrome").unwrap();
     let env = FnEnv(synthetic::smooth);
@@ -646,7 +646,8 @@ fn lod_bias_selects_blurrier_levels() {
 
 #[test]
 fn control_map_changes_reflectivity_where_it_says() {
-    // R = 1 (mirror) for u < 0.5, R = 0 (decal only) for u >= 0.5; G = 1, B = 0, A = 1.
+    // R = 1 (mirror) for u < 0.5, R = 0 (decal only) for u >= 0.5; G = 1, B = 0, A = 1. The
+    // default camera sees u = 0.25 to 0.75, the split (u = 0.5, +Z) down its middle.
     let (w, h) = (64, 32);
     let map = Image::from_fn(w, h, |x, _| {
         let r = if x < w / 2 { 1.0 } else { 0.0 };
@@ -673,24 +674,21 @@ fn control_map_changes_reflectivity_where_it_says() {
             let Some(p) = hit_sphere(eye, dir) else {
                 continue;
             };
-            // u around +Y from +Z towards +X; v from the north pole.
-            let mut u = p.x.atan2(p.z) / std::f64::consts::TAU;
-            if u < 0.0 {
-                u += 1.0;
-            }
+            // The equirect layout's u (around +Y, +Z at 0.5, +X at 0.75); v from the north pole.
+            let u = 0.5 + p.x.atan2(p.z) / std::f64::consts::TAU;
             let v = p.y.clamp(-1.0, 1.0).acos() / std::f64::consts::PI;
             if !(0.1..0.9).contains(&v) {
                 continue;
             }
             let got = rgb(img.get(x, y));
             let refl = env(reflect(p - eye, p.normalize()));
-            if (0.05..0.45).contains(&u) {
+            if (0.26..0.49).contains(&u) {
                 assert!(
                     (got - refl).abs().max_element() < 2e-5,
                     "mirror at ({x}, {y})"
                 );
                 mirror += 1;
-            } else if (0.55..0.95).contains(&u) {
+            } else if (0.51..0.74).contains(&u) {
                 assert!(
                     (got - DVec3::new(1.0, 0.0, 0.0)).abs().max_element() < 2e-5,
                     "decal at ({x}, {y})"
@@ -701,9 +699,57 @@ fn control_map_changes_reflectivity_where_it_says() {
     }
     println!("{mirror} mirror pixels, {decal} decal pixels");
     assert!(mirror > 500 && decal > 500);
-    // The camera looks at -Z from +Z: image left is +X (u = 0.25), image right -X (u = 0.75).
-    assert!(rgb(img.get(20, 48)).distance(DVec3::new(1.0, 0.0, 0.0)) > 0.1);
-    assert!(rgb(img.get(76, 48)).distance(DVec3::new(1.0, 0.0, 0.0)) < 1e-4);
+    // The camera looks at -Z from +Z: image left is +X (u = 0.75), image right -X (u = 0.25).
+    assert!(rgb(img.get(20, 48)).distance(DVec3::new(1.0, 0.0, 0.0)) < 1e-4);
+    assert!(rgb(img.get(76, 48)).distance(DVec3::new(1.0, 0.0, 0.0)) > 0.1);
+}
+
+/// A decal painted as a panorama wraps the sphere as that panorama wraps the environment: the
+/// sphere's (u, v) are the equirect layout's, so each point shows the decal's texel of its own
+/// direction, the seam (at the back, -Z) included. Measured on a 256 x 128 panorama of the
+/// smooth environment, decal only: largest error 6.0e-5 from the front and from the back
+/// (bilinear between texels; the u of before, half a turn off, errs by 0.5). Bound: 5e-4.
+#[test]
+fn a_panorama_decal_wraps_like_the_environment() {
+    let (w, h) = (256, 128);
+    let pano = Image::from_fn(w, h, |x, y| {
+        let u = (x as f32 + 0.5) / w as f32;
+        let v = (y as f32 + 0.5) / h as f32;
+        synthetic::smooth(cubeforge::layout::equirect::uv_to_dir(u, v))
+    });
+    let m = Material {
+        reflectivity: 0.0,
+        ..material::preset("mirror-decal").unwrap()
+    };
+    let surface = Surface {
+        decal: Some(&pano),
+        control: None,
+    };
+    let n = 96;
+    for yaw in [0.0f32, 180.0] {
+        let o = Options { yaw, ..opts(n) };
+        let img = preview::render(&smooth_env(), &m, &surface, &o).unwrap();
+        let (mut worst, mut count) = (0.0f64, 0);
+        for y in 0..n {
+            for x in 0..n {
+                let (eye, dir) = pixel_ray(x, y, n, 30.0, 4.0);
+                let Some(p) = hit_sphere(eye, dir) else {
+                    continue;
+                };
+                // The orbit turns the hit point with the camera.
+                let p = if yaw == 0.0 {
+                    p
+                } else {
+                    DVec3::new(-p.x, p.y, -p.z)
+                };
+                let want = synthetic::smooth(p.normalize().as_vec3());
+                worst = worst.max((rgb(img.get(x, y)) - rgb(want)).abs().max_element());
+                count += 1;
+            }
+        }
+        println!("yaw {yaw}: largest error {worst:.2e} over {count} pixels");
+        assert!(count > 3000 && worst < 5e-4, "yaw {yaw}: {worst}");
+    }
 }
 
 #[test]
