@@ -4,7 +4,7 @@
 
 #![warn(missing_docs)]
 
-use crate::cube::{face_dir, CubeMap, CubeSampler, Dirs, BATCH};
+use crate::cube::{face_dir, solid_angle_table, CubeMap, CubeSampler, Dirs, Faces, BATCH};
 use crate::image::Image;
 use glam::{Mat3, Vec3, Vec4};
 use std::f32::consts::{PI, TAU};
@@ -325,48 +325,84 @@ pub(crate) const MAX_BRIGHT: usize = 4096;
 /// Splits `base` into a residual whose luminance is at most `ratio` times its mean (what the
 /// sampled filters see) and the excess of the brighter texels.
 pub(crate) fn split_bright(base: &CubeMap, ratio: f32) -> (CubeMap, Bright) {
-    use crate::image::luminance;
-    let n = base.size();
-    let table = super::brute::texel_table(n);
-    let values: Vec<Vec4> = base.levels[0]
-        .iter()
-        .flat_map(|f| f.pixels.iter().copied())
-        .collect();
-    let mut total = 0.0f64;
-    let mut area = 0.0f64;
-    for ((_, sa), v) in table.iter().zip(&values) {
-        total += luminance(*v) as f64 * *sa as f64;
-        area += *sa as f64;
-    }
-    let mean = (total / area) as f32;
-    let mut lums: Vec<f32> = values.iter().map(|v| luminance(*v)).collect();
-    let mut threshold = (ratio * mean).max(1e-6);
-    if lums.iter().filter(|&&l| l > threshold).count() > MAX_BRIGHT {
-        lums.sort_by(|a, b| b.total_cmp(a));
-        threshold = lums[MAX_BRIGHT];
-    }
-    let mut texels = Vec::new();
-    let mut keys = Vec::new();
-    let mut residual = base.levels[0].clone();
-    for (face, img) in residual.iter_mut().enumerate() {
-        for (i, p) in img.pixels.iter_mut().enumerate() {
-            let l = luminance(*p);
-            if l > threshold {
-                let kept = (*p * (threshold / l)).truncate().extend(p.w);
-                let excess = (*p - kept).truncate().extend(0.0);
-                let (d, sa) = table[face * n * n + i];
-                texels.push((d, sa, excess));
-                keys.push((face, i % n, i / n));
-                *p = kept;
-            }
-        }
-    }
+    let (residual, bright) = split_bright_faces(&base.levels[0], ratio);
     (
         CubeMap {
             levels: vec![residual],
         },
-        Bright::with_patches(texels, &keys),
+        bright,
     )
+}
+
+/// [`split_bright`] for six faces. Rows in parallel, each row's sums in f64 and the rows'
+/// added in order, so the threshold, and the result, do not depend on the thread count.
+pub(crate) fn split_bright_faces(faces: &Faces, ratio: f32) -> (Faces, Bright) {
+    use crate::image::luminance;
+    use rayon::prelude::*;
+    let n = faces[0].width;
+    let angles = solid_angle_table(n);
+    let row = |fy: usize| &faces[fy / n].pixels[(fy % n) * n..(fy % n + 1) * n];
+    let sums: Vec<(f64, f64)> = (0..6 * n)
+        .into_par_iter()
+        .map(|fy| {
+            let y = fy % n;
+            let (mut total, mut area) = (0.0f64, 0.0f64);
+            for (p, &sa) in row(fy).iter().zip(&angles[y * n..(y + 1) * n]) {
+                total += luminance(*p) as f64 * sa as f64;
+                area += sa as f64;
+            }
+            (total, area)
+        })
+        .collect();
+    let (total, area) = sums
+        .iter()
+        .fold((0.0f64, 0.0f64), |(t, a), &(rt, ra)| (t + rt, a + ra));
+    let mean = (total / area) as f32;
+    let mut threshold = (ratio * mean).max(1e-6);
+    let above = |t: f32| {
+        (0..6 * n)
+            .into_par_iter()
+            .map(|fy| row(fy).iter().filter(|p| luminance(**p) > t).count())
+            .sum::<usize>()
+    };
+    if above(threshold) > MAX_BRIGHT {
+        // The (MAX_BRIGHT + 1)-th brightest: the same value whatever the selection's order.
+        let mut lums: Vec<f32> = faces
+            .iter()
+            .flat_map(|f| f.pixels.iter().map(|p| luminance(*p)))
+            .collect();
+        lums.select_nth_unstable_by(MAX_BRIGHT, |a, b| b.total_cmp(a));
+        threshold = lums[MAX_BRIGHT];
+    }
+    let inv = 1.0 / n as f32;
+    let mut residual = faces.clone();
+    let mut rows: Vec<(usize, usize, &mut [Vec4])> = Vec::with_capacity(6 * n);
+    for (face, img) in residual.iter_mut().enumerate() {
+        for (y, r) in img.pixels.chunks_mut(n).enumerate() {
+            rows.push((face, y, r));
+        }
+    }
+    type Found = ((Vec3, f32, Vec4), (usize, usize, usize));
+    let found: Vec<Vec<Found>> = rows
+        .into_par_iter()
+        .map(|(face, y, r)| {
+            let mut out = Vec::new();
+            for (x, p) in r.iter_mut().enumerate() {
+                let l = luminance(*p);
+                if l > threshold {
+                    let kept = (*p * (threshold / l)).truncate().extend(p.w);
+                    let excess = (*p - kept).truncate().extend(0.0);
+                    let d =
+                        face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                    out.push(((d, angles[y * n + x], excess), (face, x, y)));
+                    *p = kept;
+                }
+            }
+            out
+        })
+        .collect();
+    let (texels, keys): (Vec<_>, Vec<_>) = found.into_iter().flatten().unzip();
+    (residual, Bright::with_patches(texels, &keys))
 }
 
 /// Filters one level: every texel of six `size` faces is the weighted mean of the kernel's
