@@ -17,3 +17,4 @@ pub(crate) use face::{texel_angle, texel_solid_angle};
 pub(crate) use map::{box_reduce_face, faces_from_images};
 pub use map::{CubeMap, Faces};
 pub use sampler::CubeSampler;
+pub(crate) use sampler::{TapLevels, TapScratch};

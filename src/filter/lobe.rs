@@ -4,7 +4,9 @@
 
 #![warn(missing_docs)]
 
-use crate::cube::{face_dir, solid_angle_table, CubeMap, CubeSampler, Dirs, Faces, BATCH};
+use crate::cube::{
+    face_dir, solid_angle_table, CubeMap, CubeSampler, Dirs, Faces, TapLevels, TapScratch, BATCH,
+};
 use crate::image::Image;
 use glam::{Mat3, Vec3, Vec4};
 use std::f32::consts::{PI, TAU};
@@ -439,34 +441,33 @@ pub fn filter_level(
     // The kernel in batches of directions, turned into each texel's frame and looked up a
     // batch at a time (the face selection of a whole batch vectorises).
     let taps = &kernel.taps;
-    let batches: Vec<Dirs> = taps
+    let batches: Vec<(Dirs, TapLevels)> = taps
         .chunks(BATCH)
         .map(|chunk| {
             let mut d = Dirs::default();
+            let mut l = TapLevels::default();
             for tap in chunk {
                 d.push(tap.dir);
+                l.push(src, tap.level, tap.frac);
             }
-            d
+            (d, l)
         })
         .collect();
-    let levels: Vec<usize> = taps.iter().map(|t| t.level).collect();
-    let fracs: Vec<f32> = taps.iter().map(|t| t.frac).collect();
-    let filter_texel = |n: Vec3, dirs: &mut Dirs, values: &mut [Vec4; BATCH]| -> Vec4 {
+    let filter_texel = |n: Vec3, scratch: &mut Scratch| -> Vec4 {
         let (t, b) = frame(n);
         // The same arithmetic as t * x + b * y + n * z.
         let to_world = Mat3::from_cols(t, b, n);
         let mut acc = Vec4::ZERO;
-        for (batch, start) in batches.iter().zip((0..).step_by(BATCH)) {
+        for ((batch, levels), start) in batches.iter().zip((0..).step_by(BATCH)) {
             let end = start + batch.len;
-            dirs.clone_from(batch);
-            dirs.transform(&to_world);
-            src.trilinear_many(
-                dirs,
-                &levels[start..end],
-                &fracs[start..end],
-                &mut values[..batch.len],
+            scratch.dirs.transform_from(batch, &to_world);
+            src.trilinear_taps(
+                &scratch.dirs,
+                levels,
+                &mut scratch.taps,
+                &mut scratch.values[..batch.len],
             );
-            for (v, tap) in values.iter().zip(&taps[start..end]) {
+            for (v, tap) in scratch.values.iter().zip(&taps[start..end]) {
                 acc += *v * tap.weight;
             }
         }
@@ -487,14 +488,24 @@ pub fn filter_level(
     };
     std::array::from_fn(|face| {
         Image::from_rows(size, size, |y, row| {
-            let mut dirs = Dirs::default();
-            let mut values = [Vec4::ZERO; BATCH];
+            let mut scratch = Scratch {
+                dirs: Dirs::default(),
+                taps: TapScratch::new(),
+                values: [Vec4::ZERO; BATCH],
+            };
             for (x, texel) in row.iter_mut().enumerate() {
                 let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
-                *texel = filter_texel(n, &mut dirs, &mut values);
+                *texel = filter_texel(n, &mut scratch);
             }
         })
     })
+}
+
+/// One row's scratch space: a batch of turned directions, the lookups' and their values.
+struct Scratch {
+    dirs: Dirs,
+    taps: TapScratch,
+    values: [Vec4; BATCH],
 }
 
 /// The source prepared for filtering: its box mips, seamless.
