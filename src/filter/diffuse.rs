@@ -9,7 +9,7 @@
 
 #![warn(missing_docs)]
 
-use super::{lobe, sh, BRIGHT_RATIO};
+use super::{bright, sh, BRIGHT_RATIO};
 use crate::cube::{box_reduce_face, face_dir, solid_angle_table, CubeMap, Faces};
 use crate::image::Image;
 use glam::{Vec3, Vec4};
@@ -104,7 +104,7 @@ pub(crate) fn reduced(faces: &Faces, max: usize) -> Cow<'_, Faces> {
 /// fixed order (the same bytes on every thread count).
 fn brute_force(src: &Faces, size: usize, progress: &(dyn Fn(u64) + Sync)) -> Faces {
     use rayon::prelude::*;
-    let (residual, bright) = lobe::split_bright_faces(src, BRIGHT_RATIO);
+    let (residual, bright) = bright::split_bright_faces(src, BRIGHT_RATIO);
     let small = reduced(&residual, IRRADIANCE_SOURCE_SIZE);
     let texels = Lanes::of_faces(&small);
     let peaks = Lanes::of_bright(&bright);
@@ -189,7 +189,7 @@ impl Lanes {
     }
 
     /// The excess radiance of the bright texels, where they are.
-    fn of_bright(bright: &lobe::Bright) -> Lanes {
+    fn of_bright(bright: &bright::Bright) -> Lanes {
         let mut out = Lanes::default();
         for &(d, sa, excess) in &bright.texels {
             out.push(d, sa, excess.truncate());

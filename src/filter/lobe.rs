@@ -4,9 +4,9 @@
 
 #![warn(missing_docs)]
 
-use crate::cube::{
-    face_dir, solid_angle_table, CubeMap, CubeSampler, Dirs, Faces, TapLevels, TapScratch, BATCH,
-};
+use super::bright::BrightSum;
+pub use super::bright::{Bright, Patch};
+use crate::cube::{face_dir, CubeMap, CubeSampler, Dirs, TapLevels, TapScratch, BATCH};
 use crate::image::Image;
 use glam::{Mat3, Vec3, Vec4};
 use std::f32::consts::{PI, TAU};
@@ -270,143 +270,6 @@ impl Lobe {
     }
 }
 
-/// Texels too bright to importance-sample without fireflies (an HDR sun), split off the
-/// source: their excess over a threshold is convolved exactly, texel by texel.
-#[derive(Clone, Debug, Default)]
-pub struct Bright {
-    /// Direction, solid angle and excess radiance of each bright texel.
-    pub texels: Vec<(Vec3, f32, Vec4)>,
-    /// The texels in patches (8 x 8 source texels of one face), each with a bounding cone, so
-    /// an output texel skips whole patches beyond its lobe's reach.
-    pub patches: Vec<Patch>,
-}
-
-/// Bright texels close together: indices into `Bright::texels` and the cone around them.
-#[derive(Clone, Debug)]
-pub struct Patch {
-    /// Unit direction at the centre of the patch's cone.
-    pub axis: Vec3,
-    /// Angle from the axis to the furthest member.
-    pub radius: f32,
-    /// Indices into `Bright::texels`.
-    pub members: Vec<usize>,
-}
-
-impl Bright {
-    /// Groups the texels (found at `keys`: face and texel position) into patches.
-    fn with_patches(texels: Vec<(Vec3, f32, Vec4)>, keys: &[(usize, usize, usize)]) -> Bright {
-        let mut groups: std::collections::BTreeMap<(usize, usize, usize), Vec<usize>> =
-            Default::default();
-        for (i, &(face, x, y)) in keys.iter().enumerate() {
-            groups.entry((face, x / 8, y / 8)).or_default().push(i);
-        }
-        let patches = groups
-            .into_values()
-            .map(|members| {
-                let sum: Vec3 = members.iter().map(|&i| texels[i].0).sum();
-                let axis = sum.normalize_or(texels[members[0]].0);
-                let radius = members
-                    .iter()
-                    .map(|&i| axis.dot(texels[i].0).clamp(-1.0, 1.0).acos())
-                    .fold(0.0f32, f32::max);
-                Patch {
-                    axis,
-                    // A little margin for the rounding of the cosines.
-                    radius: radius + 1e-4,
-                    members,
-                }
-            })
-            .collect();
-        Bright { texels, patches }
-    }
-}
-
-/// Most texels handled exactly; beyond that the threshold rises.
-pub(crate) const MAX_BRIGHT: usize = 4096;
-
-/// Splits `base` into a residual whose luminance is at most `ratio` times its mean (what the
-/// sampled filters see) and the excess of the brighter texels.
-pub(crate) fn split_bright(base: &CubeMap, ratio: f32) -> (CubeMap, Bright) {
-    let (residual, bright) = split_bright_faces(&base.levels[0], ratio);
-    (
-        CubeMap {
-            levels: vec![residual],
-        },
-        bright,
-    )
-}
-
-/// [`split_bright`] for six faces. Rows in parallel, each row's sums in f64 and the rows'
-/// added in order, so the threshold, and the result, do not depend on the thread count.
-pub(crate) fn split_bright_faces(faces: &Faces, ratio: f32) -> (Faces, Bright) {
-    use crate::image::luminance;
-    use rayon::prelude::*;
-    let n = faces[0].width;
-    let angles = solid_angle_table(n);
-    let row = |fy: usize| &faces[fy / n].pixels[(fy % n) * n..(fy % n + 1) * n];
-    let sums: Vec<(f64, f64)> = (0..6 * n)
-        .into_par_iter()
-        .map(|fy| {
-            let y = fy % n;
-            let (mut total, mut area) = (0.0f64, 0.0f64);
-            for (p, &sa) in row(fy).iter().zip(&angles[y * n..(y + 1) * n]) {
-                total += luminance(*p) as f64 * sa as f64;
-                area += sa as f64;
-            }
-            (total, area)
-        })
-        .collect();
-    let (total, area) = sums
-        .iter()
-        .fold((0.0f64, 0.0f64), |(t, a), &(rt, ra)| (t + rt, a + ra));
-    let mean = (total / area) as f32;
-    let mut threshold = (ratio * mean).max(1e-6);
-    let above = |t: f32| {
-        (0..6 * n)
-            .into_par_iter()
-            .map(|fy| row(fy).iter().filter(|p| luminance(**p) > t).count())
-            .sum::<usize>()
-    };
-    if above(threshold) > MAX_BRIGHT {
-        // The (MAX_BRIGHT + 1)-th brightest: the same value whatever the selection's order.
-        let mut lums: Vec<f32> = faces
-            .iter()
-            .flat_map(|f| f.pixels.iter().map(|p| luminance(*p)))
-            .collect();
-        lums.select_nth_unstable_by(MAX_BRIGHT, |a, b| b.total_cmp(a));
-        threshold = lums[MAX_BRIGHT];
-    }
-    let inv = 1.0 / n as f32;
-    let mut residual = faces.clone();
-    let mut rows: Vec<(usize, usize, &mut [Vec4])> = Vec::with_capacity(6 * n);
-    for (face, img) in residual.iter_mut().enumerate() {
-        for (y, r) in img.pixels.chunks_mut(n).enumerate() {
-            rows.push((face, y, r));
-        }
-    }
-    type Found = ((Vec3, f32, Vec4), (usize, usize, usize));
-    let found: Vec<Vec<Found>> = rows
-        .into_par_iter()
-        .map(|(face, y, r)| {
-            let mut out = Vec::new();
-            for (x, p) in r.iter_mut().enumerate() {
-                let l = luminance(*p);
-                if l > threshold {
-                    let kept = (*p * (threshold / l)).truncate().extend(p.w);
-                    let excess = (*p - kept).truncate().extend(0.0);
-                    let d =
-                        face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
-                    out.push(((d, angles[y * n + x], excess), (face, x, y)));
-                    *p = kept;
-                }
-            }
-            out
-        })
-        .collect();
-    let (texels, keys): (Vec<_>, Vec<_>) = found.into_iter().flatten().unzip();
-    (residual, Bright::with_patches(texels, &keys))
-}
-
 /// Filters one level: every texel of six `size` faces is the weighted mean of the kernel's
 /// taps around its direction, plus the exact convolution of the bright texels with `lobe`.
 /// Rows in parallel; sums in a fixed order (deterministic).
@@ -419,25 +282,7 @@ pub fn filter_level(
 ) -> [Image; 6] {
     let inv = 1.0 / size as f32;
     let wsum: f32 = kernel.taps.iter().map(|t| t.weight).sum();
-    let norm = if bright.texels.is_empty() {
-        0.0
-    } else {
-        (1.0 / lobe.integral()) as f32
-    };
-    // A patch can reach an output texel only within its radius plus the lobe's cutoff.
-    let reach = lobe.cutoff_cos().clamp(-1.0, 1.0).acos();
-    let limits: Vec<f32> = bright
-        .patches
-        .iter()
-        .map(|p| {
-            let a = p.radius + reach;
-            if a >= PI {
-                -2.0
-            } else {
-                a.cos()
-            }
-        })
-        .collect();
+    let bright = BrightSum::new(bright, lobe);
     // The kernel in batches of directions, turned into each texel's frame and looked up a
     // batch at a time (the face selection of a whole batch vectorises).
     let taps = &kernel.taps;
@@ -471,20 +316,7 @@ pub fn filter_level(
                 acc += *v * tap.weight;
             }
         }
-        let mut out = acc / wsum;
-        for (patch, &limit) in bright.patches.iter().zip(&limits) {
-            if n.dot(patch.axis) <= limit {
-                continue;
-            }
-            for &i in &patch.members {
-                let (d, sa, excess) = &bright.texels[i];
-                let w = lobe.weight(n.dot(*d));
-                if w > 0.0 {
-                    out += *excess * (w * sa * norm);
-                }
-            }
-        }
-        out
+        acc / wsum + bright.at(n).extend(0.0)
     };
     std::array::from_fn(|face| {
         Image::from_rows(size, size, |y, row| {
@@ -515,6 +347,7 @@ pub fn source_sampler(base: &CubeMap) -> CubeSampler {
 
 #[cfg(test)]
 mod tests {
+    use super::super::bright::split_bright;
     use super::*;
 
     /// The cutoff holds for lobes that peak on the axis and for Charlie's ring alike: every

@@ -3,6 +3,7 @@
 
 #![warn(missing_docs)]
 
+mod bright;
 pub mod brute;
 mod diffuse;
 pub mod lobe;
@@ -273,7 +274,7 @@ pub fn prefilter_planned(
     }
     // An HDR sun is convolved exactly; the sampled filters see the rest, at most
     // BRIGHT_RATIO times the mean luminance, so no tap can turn into a firefly.
-    let (residual, bright) = lobe::split_bright(base, BRIGHT_RATIO);
+    let (residual, bright) = bright::split_bright(base, BRIGHT_RATIO);
     let src = lobe::source_sampler(&residual);
     let levels: Vec<Faces> = {
         use rayon::prelude::*;
