@@ -119,6 +119,19 @@ impl Dirs {
         }
     }
 
+    /// `src`'s directions turned by `m` (the same arithmetic as `transform`).
+    pub(crate) fn transform_from(&mut self, src: &Dirs, m: &glam::Mat3) {
+        let n = src.len;
+        let (c0, c1, c2) = (m.x_axis, m.y_axis, m.z_axis);
+        for i in 0..n {
+            let (a, b, c) = (src.x[i], src.y[i], src.z[i]);
+            self.x[i] = c0.x * a + c1.x * b + c2.x * c;
+            self.y[i] = c0.y * a + c1.y * b + c2.y * c;
+            self.z[i] = c0.z * a + c1.z * b + c2.z * c;
+        }
+        self.len = n;
+    }
+
     /// Scales every direction to unit length (same arithmetic as `Vec3::normalize`).
     pub fn normalize(&mut self) {
         let n = self.len;

@@ -68,21 +68,11 @@ impl CubeMap {
         }
         self
     }
-
-    /// Applies `f` to every texel of every level.
-    pub(crate) fn map_texels(&mut self, f: impl Fn(Vec4) -> Vec4 + Sync) {
-        use rayon::prelude::*;
-        for level in &mut self.levels {
-            for face in level.iter_mut() {
-                face.pixels.par_iter_mut().for_each(|p| *p = f(*p));
-            }
-        }
-    }
 }
 
 /// Each texel the mean of the 2x2 above it (each first clamped to `ceiling`), weighted by
 /// their solid angles (`weights`, one face's table) so the mean radiance over the sphere is kept.
-pub(super) fn box_reduce_face(src: &Image, n: usize, weights: &[f32], ceiling: Vec4) -> Image {
+pub(crate) fn box_reduce_face(src: &Image, n: usize, weights: &[f32], ceiling: Vec4) -> Image {
     let m = (n / 2).max(1);
     if n == 1 {
         return src.clone();

@@ -14,6 +14,7 @@ mod sampler;
 pub use environment::{Dirs, Environment, Interp, BATCH};
 pub use face::{dir_face, face_dir, solid_angle_table, FACE_LONG_NAMES, FACE_NAMES};
 pub(crate) use face::{texel_angle, texel_solid_angle};
-pub(crate) use map::faces_from_images;
+pub(crate) use map::{box_reduce_face, faces_from_images};
 pub use map::{CubeMap, Faces};
 pub use sampler::CubeSampler;
+pub(crate) use sampler::{TapLevels, TapScratch};

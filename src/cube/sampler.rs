@@ -143,37 +143,170 @@ impl CubeSampler {
     /// `sample_split(dirs[i], level[i], frac[i])` for a batch: the face selection and both
     /// levels' texel coordinates in vector lanes, then the reads. Bit for bit `sample_split`.
     pub fn trilinear_many(&self, dirs: &Dirs, level: &[usize], frac: &[f32], out: &mut [Vec4]) {
-        let count = dirs.len;
-        let top = self.levels.len() - 1;
-        let mut face = [0u8; BATCH];
-        let mut fs = [0.0f32; BATCH];
-        let mut ft = [0.0f32; BATCH];
-        for i in 0..count {
-            (face[i], fs[i], ft[i]) = dir_face_lanes(dirs.x[i], dirs.y[i], dirs.z[i]);
+        let mut taps = TapLevels::default();
+        for i in 0..dirs.len {
+            taps.push(self, level[i], frac[i]);
         }
-        // Each tap reads two levels (the second only when it blends): their face edges.
-        let mut edge = [[0.0f32; BATCH]; 2];
-        for i in 0..count {
-            edge[0][i] = self.levels[level[i]].0 as f32;
-            edge[1][i] = self.levels[(level[i] + 1).min(top)].0 as f32;
-        }
-        let mut at = [[TexelAt::default(); BATCH]; 2];
-        for k in 0..2 {
-            for i in 0..count {
-                at[k][i] = texel_at(fs[i], ft[i], edge[k][i]);
+        self.trilinear_taps(dirs, &taps, &mut TapScratch::new(), out);
+    }
+
+    /// `trilinear_many` with the levels prepared once (a filter kernel's taps keep theirs for
+    /// every texel) and scratch space the caller keeps: nothing per call but the lookups.
+    #[inline]
+    pub(crate) fn trilinear_taps(
+        &self,
+        dirs: &Dirs,
+        taps: &TapLevels,
+        scratch: &mut TapScratch,
+        out: &mut [Vec4],
+    ) {
+        let count = dirs.len.min(taps.len);
+        let TapScratch {
+            face,
+            col,
+            row,
+            fx,
+            fy,
+        } = scratch;
+        // Face selection and both levels' texel coordinates four lanes at a time (BATCH is a
+        // multiple of 4; lanes past `count` compute harmless values that are never read).
+        for j in (0..count).step_by(4) {
+            let lanes = |a: &[f32; BATCH]| Vec4::from_slice(&a[j..j + 4]);
+            let (f, s, t) = dir_face_vec4(lanes(&dirs.x), lanes(&dirs.y), lanes(&dirs.z));
+            f.write_to_slice(&mut face[j..j + 4]);
+            for k in 0..2 {
+                let (c, r, x, y) = texel_at_vec4(s, t, lanes(&taps.edge[k]));
+                c.write_to_slice(&mut col[k][j..j + 4]);
+                r.write_to_slice(&mut row[k][j..j + 4]);
+                x.write_to_slice(&mut fx[k][j..j + 4]);
+                y.write_to_slice(&mut fy[k][j..j + 4]);
             }
         }
-        let read = |k: usize, i: usize, l: usize| {
-            read_bilinear(&self.levels[l].1[face[i] as usize], at[k][i])
+        // The reads, tap by tap.
+        // SAFETY (the conversions): faces are 0..=5, columns and rows whole floats in
+        // 0..=width-2 (`texel_at_vec4`): all exactly representable as integers.
+        let at = |k: usize, i: usize| TexelAt {
+            col: unsafe { col[k][i].to_int_unchecked::<u32>() },
+            row: unsafe { row[k][i].to_int_unchecked::<u32>() },
+            fx: fx[k][i],
+            fy: fy[k][i],
         };
-        for i in 0..count {
-            let l = level[i];
-            let a = read(0, i, l);
-            out[i] = if frac[i] <= 0.0 || l >= top {
-                a
+        for (i, o) in out.iter_mut().enumerate().take(count) {
+            let l = taps.level[i] as usize;
+            let f = unsafe { face[i].to_int_unchecked::<usize>() };
+            let a = read_bilinear(&self.levels[l].1[f], at(0, i));
+            *o = if taps.blend[i] {
+                a.lerp(
+                    read_bilinear(&self.levels[l + 1].1[f], at(1, i)),
+                    taps.frac[i],
+                )
             } else {
-                a.lerp(read(1, i, l + 1), frac[i])
+                a
             };
+        }
+    }
+}
+
+/// `dir_face_lanes` for four directions in vector registers: the face (as a float) and
+/// (s, t), bit for bit (the same operations, selects for branches).
+#[inline(always)]
+fn dir_face_vec4(x: Vec4, y: Vec4, z: Vec4) -> (Vec4, Vec4, Vec4) {
+    let zero = Vec4::ZERO;
+    let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
+    let xmaj = ax.cmpge(ay) & ax.cmpge(az);
+    let ymaj = !xmaj & ay.cmpge(az);
+    let (xpos, ypos, zpos) = (x.cmpge(zero), y.cmpge(zero), z.cmpge(zero));
+    let c = Vec4::splat;
+    let face = Vec4::select(
+        xmaj,
+        Vec4::select(xpos, c(0.0), c(1.0)),
+        Vec4::select(
+            ymaj,
+            Vec4::select(ypos, c(2.0), c(3.0)),
+            Vec4::select(zpos, c(4.0), c(5.0)),
+        ),
+    );
+    let sc = Vec4::select(
+        xmaj,
+        Vec4::select(xpos, -z, z),
+        Vec4::select(ymaj | zpos, x, -x),
+    );
+    let tc = Vec4::select(ymaj, Vec4::select(ypos, z, -z), -y);
+    let ma = Vec4::select(xmaj, ax, Vec4::select(ymaj, ay, az));
+    let inv = Vec4::select(ma.cmpgt(zero), c(0.5) / ma, zero);
+    (face, sc * inv + c(0.5), tc * inv + c(0.5))
+}
+
+/// `texel_at` for four lanes: column, row (whole floats), and the two weights.
+#[inline(always)]
+fn texel_at_vec4(s: Vec4, t: Vec4, n: Vec4) -> (Vec4, Vec4, Vec4, Vec4) {
+    let last = n + Vec4::splat((2 * BORDER - 2) as f32);
+    let half = Vec4::splat(BORDER as f32 - 0.5);
+    let x = (s * n + half).max(Vec4::ZERO);
+    let y = (t * n + half).max(Vec4::ZERO);
+    // Truncation of values in 0..2^23, as `trunc_small`.
+    let cap = Vec4::splat(8_388_608.0);
+    let (xi, yi) = (trunc_small_vec4(x.min(cap)), trunc_small_vec4(y.min(cap)));
+    (xi.min(last), yi.min(last), x - xi, y - yi)
+}
+
+/// The levels a batch of trilinear taps reads, prepared for one sampler: per tap the level,
+/// the fraction towards the next, whether it blends at all, and both levels' face edges.
+#[derive(Clone)]
+pub(crate) struct TapLevels {
+    level: [u32; BATCH],
+    frac: [f32; BATCH],
+    blend: [bool; BATCH],
+    edge: [[f32; BATCH]; 2],
+    len: usize,
+}
+
+impl Default for TapLevels {
+    fn default() -> Self {
+        TapLevels {
+            level: [0; BATCH],
+            frac: [0.0; BATCH],
+            blend: [false; BATCH],
+            edge: [[1.0; BATCH]; 2],
+            len: 0,
+        }
+    }
+}
+
+impl TapLevels {
+    /// Appends a tap reading `level` (clamped to the sampler's) blended by `frac` with the next.
+    pub(crate) fn push(&mut self, sampler: &CubeSampler, level: usize, frac: f32) {
+        let top = sampler.levels.len() - 1;
+        let level = level.min(top);
+        let i = self.len;
+        self.level[i] = level as u32;
+        self.frac[i] = frac;
+        // As `sample_split`: no second read at the top level or without a fraction.
+        self.blend[i] = frac > 0.0 && level < top;
+        self.edge[0][i] = sampler.levels[level].0 as f32;
+        self.edge[1][i] = sampler.levels[(level + 1).min(top)].0 as f32;
+        self.len = i + 1;
+    }
+}
+
+/// Scratch space for `trilinear_taps`, kept by the caller so no call zeroes it: per tap
+/// its face, and per level read the texel position (whole floats) and weights.
+pub(crate) struct TapScratch {
+    face: [f32; BATCH],
+    col: [[f32; BATCH]; 2],
+    row: [[f32; BATCH]; 2],
+    fx: [[f32; BATCH]; 2],
+    fy: [[f32; BATCH]; 2],
+}
+
+impl TapScratch {
+    pub(crate) fn new() -> TapScratch {
+        TapScratch {
+            face: [0.0; BATCH],
+            col: [[0.0; BATCH]; 2],
+            row: [[0.0; BATCH]; 2],
+            fx: [[0.0; BATCH]; 2],
+            fy: [[0.0; BATCH]; 2],
         }
     }
 }
@@ -205,14 +338,32 @@ fn texel_at(s: f32, t: f32, n: f32) -> TexelAt {
     }
 }
 
+/// `trunc_small` for four lanes (values in 0..=2^23, as `texel_at_vec4` makes them): one
+/// conversion each way.
+#[inline(always)]
+fn trunc_small_vec4(v: Vec4) -> Vec4 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvtepi32_ps, _mm_cvttps_epi32};
+        // SAFETY: SSE2 is part of x86_64; the lanes are in range, so the conversion is exact.
+        Vec4::from(unsafe { _mm_cvtepi32_ps(_mm_cvttps_epi32(v.into())) })
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    v.trunc()
+}
+
 /// Reads and blends the 2x2 texels of a tap.
 #[inline(always)]
 fn read_bilinear(img: &Image, at: TexelAt) -> Vec4 {
     let w = img.width;
     let k = at.row as usize * w + at.col as usize;
-    let p = &img.pixels;
-    let upper = p[k].lerp(p[k + 1], at.fx);
-    let lower = p[k + w].lerp(p[k + w + 1], at.fx);
+    // One bounds check for all four: the furthest, k + w + 1 (row and column come from u32s,
+    // so none of these sums wraps).
+    let p = &img.pixels[..k + w + 2];
+    // SAFETY: k < k + 1 < k + w < k + w + 1 < p.len().
+    let t = |i: usize| unsafe { *p.get_unchecked(i) };
+    let upper = t(k).lerp(t(k + 1), at.fx);
+    let lower = t(k + w).lerp(t(k + w + 1), at.fx);
     upper.lerp(lower, at.fy)
 }
 

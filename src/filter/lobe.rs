@@ -4,7 +4,9 @@
 
 #![warn(missing_docs)]
 
-use crate::cube::{face_dir, CubeMap, CubeSampler, Dirs, BATCH};
+use super::bright::BrightSum;
+pub use super::bright::{Bright, Patch};
+use crate::cube::{face_dir, CubeMap, CubeSampler, Dirs, TapLevels, TapScratch, BATCH};
 use crate::image::Image;
 use glam::{Mat3, Vec3, Vec4};
 use std::f32::consts::{PI, TAU};
@@ -268,107 +270,6 @@ impl Lobe {
     }
 }
 
-/// Texels too bright to importance-sample without fireflies (an HDR sun), split off the
-/// source: their excess over a threshold is convolved exactly, texel by texel.
-#[derive(Clone, Debug, Default)]
-pub struct Bright {
-    /// Direction, solid angle and excess radiance of each bright texel.
-    pub texels: Vec<(Vec3, f32, Vec4)>,
-    /// The texels in patches (8 x 8 source texels of one face), each with a bounding cone, so
-    /// an output texel skips whole patches beyond its lobe's reach.
-    pub patches: Vec<Patch>,
-}
-
-/// Bright texels close together: indices into `Bright::texels` and the cone around them.
-#[derive(Clone, Debug)]
-pub struct Patch {
-    /// Unit direction at the centre of the patch's cone.
-    pub axis: Vec3,
-    /// Angle from the axis to the furthest member.
-    pub radius: f32,
-    /// Indices into `Bright::texels`.
-    pub members: Vec<usize>,
-}
-
-impl Bright {
-    /// Groups the texels (found at `keys`: face and texel position) into patches.
-    fn with_patches(texels: Vec<(Vec3, f32, Vec4)>, keys: &[(usize, usize, usize)]) -> Bright {
-        let mut groups: std::collections::BTreeMap<(usize, usize, usize), Vec<usize>> =
-            Default::default();
-        for (i, &(face, x, y)) in keys.iter().enumerate() {
-            groups.entry((face, x / 8, y / 8)).or_default().push(i);
-        }
-        let patches = groups
-            .into_values()
-            .map(|members| {
-                let sum: Vec3 = members.iter().map(|&i| texels[i].0).sum();
-                let axis = sum.normalize_or(texels[members[0]].0);
-                let radius = members
-                    .iter()
-                    .map(|&i| axis.dot(texels[i].0).clamp(-1.0, 1.0).acos())
-                    .fold(0.0f32, f32::max);
-                Patch {
-                    axis,
-                    // A little margin for the rounding of the cosines.
-                    radius: radius + 1e-4,
-                    members,
-                }
-            })
-            .collect();
-        Bright { texels, patches }
-    }
-}
-
-/// Most texels handled exactly; beyond that the threshold rises.
-pub(crate) const MAX_BRIGHT: usize = 4096;
-
-/// Splits `base` into a residual whose luminance is at most `ratio` times its mean (what the
-/// sampled filters see) and the excess of the brighter texels.
-pub(crate) fn split_bright(base: &CubeMap, ratio: f32) -> (CubeMap, Bright) {
-    use crate::image::luminance;
-    let n = base.size();
-    let table = super::brute::texel_table(n);
-    let values: Vec<Vec4> = base.levels[0]
-        .iter()
-        .flat_map(|f| f.pixels.iter().copied())
-        .collect();
-    let mut total = 0.0f64;
-    let mut area = 0.0f64;
-    for ((_, sa), v) in table.iter().zip(&values) {
-        total += luminance(*v) as f64 * *sa as f64;
-        area += *sa as f64;
-    }
-    let mean = (total / area) as f32;
-    let mut lums: Vec<f32> = values.iter().map(|v| luminance(*v)).collect();
-    let mut threshold = (ratio * mean).max(1e-6);
-    if lums.iter().filter(|&&l| l > threshold).count() > MAX_BRIGHT {
-        lums.sort_by(|a, b| b.total_cmp(a));
-        threshold = lums[MAX_BRIGHT];
-    }
-    let mut texels = Vec::new();
-    let mut keys = Vec::new();
-    let mut residual = base.levels[0].clone();
-    for (face, img) in residual.iter_mut().enumerate() {
-        for (i, p) in img.pixels.iter_mut().enumerate() {
-            let l = luminance(*p);
-            if l > threshold {
-                let kept = (*p * (threshold / l)).truncate().extend(p.w);
-                let excess = (*p - kept).truncate().extend(0.0);
-                let (d, sa) = table[face * n * n + i];
-                texels.push((d, sa, excess));
-                keys.push((face, i % n, i / n));
-                *p = kept;
-            }
-        }
-    }
-    (
-        CubeMap {
-            levels: vec![residual],
-        },
-        Bright::with_patches(texels, &keys),
-    )
-}
-
 /// Filters one level: every texel of six `size` faces is the weighted mean of the kernel's
 /// taps around its direction, plus the exact convolution of the bright texels with `lobe`.
 /// Rows in parallel; sums in a fixed order (deterministic).
@@ -381,84 +282,62 @@ pub fn filter_level(
 ) -> [Image; 6] {
     let inv = 1.0 / size as f32;
     let wsum: f32 = kernel.taps.iter().map(|t| t.weight).sum();
-    let norm = if bright.texels.is_empty() {
-        0.0
-    } else {
-        (1.0 / lobe.integral()) as f32
-    };
-    // A patch can reach an output texel only within its radius plus the lobe's cutoff.
-    let reach = lobe.cutoff_cos().clamp(-1.0, 1.0).acos();
-    let limits: Vec<f32> = bright
-        .patches
-        .iter()
-        .map(|p| {
-            let a = p.radius + reach;
-            if a >= PI {
-                -2.0
-            } else {
-                a.cos()
-            }
-        })
-        .collect();
+    let bright = BrightSum::new(bright, lobe);
     // The kernel in batches of directions, turned into each texel's frame and looked up a
     // batch at a time (the face selection of a whole batch vectorises).
     let taps = &kernel.taps;
-    let batches: Vec<Dirs> = taps
+    let batches: Vec<(Dirs, TapLevels)> = taps
         .chunks(BATCH)
         .map(|chunk| {
             let mut d = Dirs::default();
+            let mut l = TapLevels::default();
             for tap in chunk {
                 d.push(tap.dir);
+                l.push(src, tap.level, tap.frac);
             }
-            d
+            (d, l)
         })
         .collect();
-    let levels: Vec<usize> = taps.iter().map(|t| t.level).collect();
-    let fracs: Vec<f32> = taps.iter().map(|t| t.frac).collect();
-    let filter_texel = |n: Vec3, dirs: &mut Dirs, values: &mut [Vec4; BATCH]| -> Vec4 {
+    let filter_texel = |n: Vec3, scratch: &mut Scratch| -> Vec4 {
         let (t, b) = frame(n);
         // The same arithmetic as t * x + b * y + n * z.
         let to_world = Mat3::from_cols(t, b, n);
         let mut acc = Vec4::ZERO;
-        for (batch, start) in batches.iter().zip((0..).step_by(BATCH)) {
+        for ((batch, levels), start) in batches.iter().zip((0..).step_by(BATCH)) {
             let end = start + batch.len;
-            dirs.clone_from(batch);
-            dirs.transform(&to_world);
-            src.trilinear_many(
-                dirs,
-                &levels[start..end],
-                &fracs[start..end],
-                &mut values[..batch.len],
+            scratch.dirs.transform_from(batch, &to_world);
+            src.trilinear_taps(
+                &scratch.dirs,
+                levels,
+                &mut scratch.taps,
+                &mut scratch.values[..batch.len],
             );
-            for (v, tap) in values.iter().zip(&taps[start..end]) {
+            for (v, tap) in scratch.values.iter().zip(&taps[start..end]) {
                 acc += *v * tap.weight;
             }
         }
-        let mut out = acc / wsum;
-        for (patch, &limit) in bright.patches.iter().zip(&limits) {
-            if n.dot(patch.axis) <= limit {
-                continue;
-            }
-            for &i in &patch.members {
-                let (d, sa, excess) = &bright.texels[i];
-                let w = lobe.weight(n.dot(*d));
-                if w > 0.0 {
-                    out += *excess * (w * sa * norm);
-                }
-            }
-        }
-        out
+        acc / wsum + bright.at(n).extend(0.0)
     };
     std::array::from_fn(|face| {
         Image::from_rows(size, size, |y, row| {
-            let mut dirs = Dirs::default();
-            let mut values = [Vec4::ZERO; BATCH];
+            let mut scratch = Scratch {
+                dirs: Dirs::default(),
+                taps: TapScratch::new(),
+                values: [Vec4::ZERO; BATCH],
+            };
             for (x, texel) in row.iter_mut().enumerate() {
                 let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
-                *texel = filter_texel(n, &mut dirs, &mut values);
+                *texel = filter_texel(n, &mut scratch);
             }
         })
     })
+}
+
+/// One row's scratch space: a batch of turned directions, the lookups' and their values.
+struct Scratch {
+    dirs: Dirs,
+    taps: TapScratch,
+    values: [Vec4; BATCH],
 }
 
 /// The source prepared for filtering: its box mips, seamless.
@@ -468,6 +347,7 @@ pub fn source_sampler(base: &CubeMap) -> CubeSampler {
 
 #[cfg(test)]
 mod tests {
+    use super::super::bright::split_bright;
     use super::*;
 
     /// The cutoff holds for lobes that peak on the axis and for Charlie's ring alike: every

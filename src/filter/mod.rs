@@ -3,9 +3,13 @@
 
 #![warn(missing_docs)]
 
+mod bright;
 pub mod brute;
+mod diffuse;
 pub mod lobe;
 pub mod sh;
+
+pub use diffuse::{irradiance, irradiance_with_progress, IrradianceMethod};
 
 use crate::cube::{CubeMap, Faces};
 use lobe::{Kernel, Lobe};
@@ -270,7 +274,7 @@ pub fn prefilter_planned(
     }
     // An HDR sun is convolved exactly; the sampled filters see the rest, at most
     // BRIGHT_RATIO times the mean luminance, so no tap can turn into a firefly.
-    let (residual, bright) = lobe::split_bright(base, BRIGHT_RATIO);
+    let (residual, bright) = bright::split_bright(base, BRIGHT_RATIO);
     let src = lobe::source_sampler(&residual);
     let levels: Vec<Faces> = {
         use rayon::prelude::*;
@@ -292,79 +296,4 @@ pub fn prefilter_planned(
         CubeMap { levels },
         plan.into_iter().map(|(i, _)| i).collect(),
     )
-}
-
-/// How the irradiance map is computed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
-#[serde(rename_all = "lowercase")]
-pub enum IrradianceMethod {
-    /// Exact cosine-weighted integral over every texel of a 64-face copy of the source:
-    /// right next to an HDR sun, where 9 SH coefficients ring (the default).
-    #[default]
-    Brute,
-    /// From the 9 SH coefficients: fast, smooth, up to ~10% off (and possibly negative)
-    /// opposite a strong sun.
-    Sh,
-}
-
-/// Face edge of the source copy the brute-force irradiance integrates.
-pub(crate) const IRRADIANCE_SOURCE_SIZE: usize = 64;
-
-/// The Lambertian irradiance map at face edge `size`, stored as (1/pi) times the
-/// cosine-weighted integral of radiance (a constant environment c gives c), and the order-2
-/// SH coefficients of the radiance.
-pub fn irradiance(
-    base: &CubeMap,
-    size: usize,
-    method: IrradianceMethod,
-) -> (CubeMap, [[f64; 3]; 9]) {
-    irradiance_with_progress(base, size, method, &|_| {})
-}
-
-/// [`irradiance`], calling `progress(1)` for each of the 6 x `size` output rows the brute
-/// integral finishes (nothing for the SH method, which is instant).
-pub fn irradiance_with_progress(
-    base: &CubeMap,
-    size: usize,
-    method: IrradianceMethod,
-    progress: &(dyn Fn(u64) + Sync),
-) -> (CubeMap, [[f64; 3]; 9]) {
-    // A box-reduced copy: exact for the integral, and the SH of it is what the map holds.
-    let chain = CubeMap {
-        levels: vec![base.levels[0].clone()],
-    }
-    .with_box_mips(None);
-    let pick = |max: usize| {
-        let i = chain
-            .levels
-            .iter()
-            .position(|l| l[0].width <= max)
-            .unwrap_or(chain.levels.len() - 1);
-        CubeMap {
-            levels: vec![chain.levels[i].clone()],
-        }
-    };
-    let coeffs = sh::project(&pick(256));
-    let faces = match method {
-        IrradianceMethod::Brute => brute::convolve_with_progress(
-            &pick(IRRADIANCE_SOURCE_SIZE),
-            Lobe::CosinePower { power: 1.0 },
-            size,
-            progress,
-        ),
-        IrradianceMethod::Sh => {
-            let e = sh::irradiance(&coeffs);
-            let over_pi: [[f64; 3]; 9] =
-                std::array::from_fn(|i| e[i].map(|v| v / std::f64::consts::PI));
-            CubeMap::from_fn(size, |d| sh::eval(&over_pi, d))
-                .levels
-                .remove(0)
-        }
-    };
-    let mut cube = CubeMap {
-        levels: vec![faces],
-    };
-    cube.map_texels(|p| p.truncate().extend(1.0));
-    (cube, coeffs)
 }

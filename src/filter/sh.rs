@@ -3,8 +3,7 @@
 
 #![warn(missing_docs)]
 
-use super::brute::texel_table;
-use crate::cube::CubeMap;
+use crate::cube::{face_dir, solid_angle_table, CubeMap, Faces};
 use glam::{Vec3, Vec4};
 use serde::Serialize;
 use std::f64::consts::PI;
@@ -55,17 +54,41 @@ pub fn basis(d: Vec3) -> [f64; 9] {
 /// Projects level 0 of the cube map (RGB) onto the basis with exact texel solid angles.
 /// Accumulates in f64 in a fixed order, so results do not depend on threads.
 pub fn project(cube: &CubeMap) -> [[f64; 3]; 9] {
-    let n = cube.size();
-    let table = texel_table(n);
+    project_faces(&cube.levels[0])
+}
+
+/// [`project`] for six faces: rows in parallel, each row's sums in f64 and the rows' added
+/// in order (the same result on any thread count).
+pub(crate) fn project_faces(faces: &Faces) -> [[f64; 3]; 9] {
+    use rayon::prelude::*;
+    let n = faces[0].width;
+    let inv = 1.0 / n as f32;
+    let angles = solid_angle_table(n);
+    let rows: Vec<[[f64; 3]; 9]> = (0..6 * n)
+        .into_par_iter()
+        .map(|fy| {
+            let (face, y) = (fy / n, fy % n);
+            let mut c = [[0.0f64; 3]; 9];
+            for x in 0..n {
+                let d = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                let v = faces[face].get(x, y);
+                let sa = angles[y * n + x] as f64;
+                for (i, yi) in basis(d).iter().enumerate() {
+                    let w = yi * sa;
+                    c[i][0] += v.x as f64 * w;
+                    c[i][1] += v.y as f64 * w;
+                    c[i][2] += v.z as f64 * w;
+                }
+            }
+            c
+        })
+        .collect();
     let mut c = [[0.0f64; 3]; 9];
-    let values = cube.levels[0].iter().flat_map(|f| f.pixels.iter());
-    for ((d, sa), v) in table.iter().zip(values) {
-        let y = basis(*d);
-        for (i, yi) in y.iter().enumerate() {
-            let w = yi * *sa as f64;
-            c[i][0] += v.x as f64 * w;
-            c[i][1] += v.y as f64 * w;
-            c[i][2] += v.z as f64 * w;
+    for r in &rows {
+        for (ci, ri) in c.iter_mut().zip(r) {
+            for (a, b) in ci.iter_mut().zip(ri) {
+                *a += b;
+            }
         }
     }
     c

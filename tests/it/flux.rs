@@ -293,8 +293,11 @@ fn sh_of_real_panoramas_match_a_direct_projection() {
 
 /// The whole chain from a panorama and from a 4x enlarged copy of it (2048 x 1024) agree:
 /// irradiance (brute force, every texel), SH and each GGX level's flux. Measured on
-/// esplanade (sun 30000) and park: irradiance within 0.27%, SH c0 0.09%, GGX levels 0.015%.
-/// Bound: 1%.
+/// esplanade (sun 30000) and park: irradiance within 0.25%, SH c0 0.09%, GGX levels 0.015%.
+/// Bound: 1%. Both irradiance maps integrate cube maps of one face size (the smaller
+/// input's, 128): the exact integrals over a 128- and a 256-face copy of park differ by 1.6%
+/// where an output texel's horizon grazes the sun (its texels land a little differently), and
+/// the irradiance integrates the sun where it is.
 #[test]
 fn chain_agrees_with_a_4x_enlarged_copy() {
     let Some(real) = common::real_dir() else {
@@ -311,7 +314,7 @@ fn chain_agrees_with_a_4x_enlarged_copy() {
         let big = panorama(big);
         let mut worst = [0.0f64; 3];
         let [a, b] = [&small, &big].map(|l| {
-            let base = base(l, l.face_size().min(256));
+            let base = base(l, small.face_size().min(256));
             filter::irradiance(&base, 16, IrradianceMethod::Brute)
         });
         for (fa, fb) in a.0.levels[0].iter().zip(&b.0.levels[0]) {

@@ -1,0 +1,254 @@
+//! HDR peaks (a sun, a lamp) for the filters: the texels too bright to sample split off the
+//! source, and their exact convolution with a lobe, patch by patch in vector lanes.
+
+#![warn(missing_docs)]
+
+use super::lobe::Lobe;
+use crate::cube::{face_dir, solid_angle_table, CubeMap, Faces};
+use glam::{Vec3, Vec4};
+use std::f32::consts::PI;
+
+/// Texels too bright to importance-sample without fireflies (an HDR sun), split off the
+/// source: their excess over a threshold is convolved exactly, texel by texel.
+#[derive(Clone, Debug, Default)]
+pub struct Bright {
+    /// Direction, solid angle and excess radiance of each bright texel.
+    pub texels: Vec<(Vec3, f32, Vec4)>,
+    /// The texels in patches (8 x 8 source texels of one face), each with a bounding cone, so
+    /// an output texel skips whole patches beyond its lobe's reach.
+    pub patches: Vec<Patch>,
+}
+
+/// Bright texels close together: indices into `Bright::texels` and the cone around them.
+#[derive(Clone, Debug)]
+pub struct Patch {
+    /// Unit direction at the centre of the patch's cone.
+    pub axis: Vec3,
+    /// Angle from the axis to the furthest member.
+    pub radius: f32,
+    /// Indices into `Bright::texels`.
+    pub members: Vec<usize>,
+}
+
+impl Bright {
+    /// Groups the texels (found at `keys`: face and texel position) into patches.
+    fn with_patches(texels: Vec<(Vec3, f32, Vec4)>, keys: &[(usize, usize, usize)]) -> Bright {
+        let mut groups: std::collections::BTreeMap<(usize, usize, usize), Vec<usize>> =
+            Default::default();
+        for (i, &(face, x, y)) in keys.iter().enumerate() {
+            groups.entry((face, x / 8, y / 8)).or_default().push(i);
+        }
+        let patches = groups
+            .into_values()
+            .map(|members| {
+                let sum: Vec3 = members.iter().map(|&i| texels[i].0).sum();
+                let axis = sum.normalize_or(texels[members[0]].0);
+                let radius = members
+                    .iter()
+                    .map(|&i| axis.dot(texels[i].0).clamp(-1.0, 1.0).acos())
+                    .fold(0.0f32, f32::max);
+                Patch {
+                    axis,
+                    // A little margin for the rounding of the cosines.
+                    radius: radius + 1e-4,
+                    members,
+                }
+            })
+            .collect();
+        Bright { texels, patches }
+    }
+}
+
+/// Most texels handled exactly; beyond that the threshold rises.
+pub(crate) const MAX_BRIGHT: usize = 4096;
+
+/// Splits `base` into a residual whose luminance is at most `ratio` times its mean (what the
+/// sampled filters see) and the excess of the brighter texels.
+pub(crate) fn split_bright(base: &CubeMap, ratio: f32) -> (CubeMap, Bright) {
+    let (residual, bright) = split_bright_faces(&base.levels[0], ratio);
+    (
+        CubeMap {
+            levels: vec![residual],
+        },
+        bright,
+    )
+}
+
+/// [`split_bright`] for six faces. Rows in parallel, each row's sums in f64 and the rows'
+/// added in order, so the threshold, and the result, do not depend on the thread count.
+pub(crate) fn split_bright_faces(faces: &Faces, ratio: f32) -> (Faces, Bright) {
+    use crate::image::luminance;
+    use rayon::prelude::*;
+    let n = faces[0].width;
+    let angles = solid_angle_table(n);
+    let row = |fy: usize| &faces[fy / n].pixels[(fy % n) * n..(fy % n + 1) * n];
+    let sums: Vec<(f64, f64)> = (0..6 * n)
+        .into_par_iter()
+        .map(|fy| {
+            let y = fy % n;
+            let (mut total, mut area) = (0.0f64, 0.0f64);
+            for (p, &sa) in row(fy).iter().zip(&angles[y * n..(y + 1) * n]) {
+                total += luminance(*p) as f64 * sa as f64;
+                area += sa as f64;
+            }
+            (total, area)
+        })
+        .collect();
+    let (total, area) = sums
+        .iter()
+        .fold((0.0f64, 0.0f64), |(t, a), &(rt, ra)| (t + rt, a + ra));
+    let mean = (total / area) as f32;
+    let mut threshold = (ratio * mean).max(1e-6);
+    let above = |t: f32| {
+        (0..6 * n)
+            .into_par_iter()
+            .map(|fy| row(fy).iter().filter(|p| luminance(**p) > t).count())
+            .sum::<usize>()
+    };
+    if above(threshold) > MAX_BRIGHT {
+        // The (MAX_BRIGHT + 1)-th brightest: the same value whatever the selection's order.
+        let mut lums: Vec<f32> = faces
+            .iter()
+            .flat_map(|f| f.pixels.iter().map(|p| luminance(*p)))
+            .collect();
+        lums.select_nth_unstable_by(MAX_BRIGHT, |a, b| b.total_cmp(a));
+        threshold = lums[MAX_BRIGHT];
+    }
+    let inv = 1.0 / n as f32;
+    let mut residual = faces.clone();
+    let mut rows: Vec<(usize, usize, &mut [Vec4])> = Vec::with_capacity(6 * n);
+    for (face, img) in residual.iter_mut().enumerate() {
+        for (y, r) in img.pixels.chunks_mut(n).enumerate() {
+            rows.push((face, y, r));
+        }
+    }
+    type Found = ((Vec3, f32, Vec4), (usize, usize, usize));
+    let found: Vec<Vec<Found>> = rows
+        .into_par_iter()
+        .map(|(face, y, r)| {
+            let mut out = Vec::new();
+            for (x, p) in r.iter_mut().enumerate() {
+                let l = luminance(*p);
+                if l > threshold {
+                    let kept = (*p * (threshold / l)).truncate().extend(p.w);
+                    let excess = (*p - kept).truncate().extend(0.0);
+                    let d =
+                        face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                    out.push(((d, angles[y * n + x], excess), (face, x, y)));
+                    *p = kept;
+                }
+            }
+            out
+        })
+        .collect();
+    let (texels, keys): (Vec<_>, Vec<_>) = found.into_iter().flatten().unzip();
+    (residual, Bright::with_patches(texels, &keys))
+}
+
+/// The bright texels prepared for one lobe: per patch the cosine to its axis beyond which it
+/// cannot reach an output texel, and its members in lanes of four, each member's excess
+/// radiance already times its solid angle and the lobe's normalisation.
+pub(crate) struct BrightSum {
+    lobe: Lobe,
+    patches: Vec<(Vec3, f32, Vec<Quad>)>,
+}
+
+/// Four members: directions and weighted excess radiance (zero in padding lanes).
+#[derive(Clone, Copy)]
+struct Quad {
+    x: Vec4,
+    y: Vec4,
+    z: Vec4,
+    r: Vec4,
+    g: Vec4,
+    b: Vec4,
+}
+
+impl BrightSum {
+    pub(crate) fn new(bright: &Bright, lobe: Lobe) -> BrightSum {
+        if bright.texels.is_empty() {
+            return BrightSum {
+                lobe,
+                patches: Vec::new(),
+            };
+        }
+        let norm = (1.0 / lobe.integral()) as f32;
+        // A patch can reach an output texel only within its radius plus the lobe's cutoff.
+        let reach = lobe.cutoff_cos().clamp(-1.0, 1.0).acos();
+        let patches = bright
+            .patches
+            .iter()
+            .map(|p| {
+                let a = p.radius + reach;
+                let limit = if a >= PI { -2.0 } else { a.cos() };
+                let quads = p
+                    .members
+                    .chunks(4)
+                    .map(|chunk| {
+                        // Padding repeats the first member's direction (a finite weight) with
+                        // no radiance.
+                        let at = |l: usize| chunk.get(l).copied();
+                        let dir = |l: usize| bright.texels[at(l).unwrap_or(chunk[0])].0;
+                        let excess = |l: usize| {
+                            at(l).map_or(Vec4::ZERO, |i| {
+                                let (_, sa, e) = bright.texels[i];
+                                e * (sa * norm)
+                            })
+                        };
+                        let lanes = |f: &dyn Fn(usize) -> f32| Vec4::new(f(0), f(1), f(2), f(3));
+                        Quad {
+                            x: lanes(&|l| dir(l).x),
+                            y: lanes(&|l| dir(l).y),
+                            z: lanes(&|l| dir(l).z),
+                            r: lanes(&|l| excess(l).x),
+                            g: lanes(&|l| excess(l).y),
+                            b: lanes(&|l| excess(l).z),
+                        }
+                    })
+                    .collect();
+                (p.axis, limit, quads)
+            })
+            .collect();
+        BrightSum { lobe, patches }
+    }
+
+    /// The lobe's weight at four cosines; 0 where it is not positive (NaN included).
+    #[inline]
+    fn weights(&self, c: Vec4) -> Vec4 {
+        let w = match self.lobe {
+            Lobe::Ggx { alpha } => {
+                // ggx_d(n.h) * c with (n.h)^2 = (1 + c) / 2.
+                let a2 = alpha * alpha;
+                let nh2 = (c + 1.0) * 0.5;
+                let d = nh2 * (a2 - 1.0) + 1.0;
+                Vec4::splat(a2) / (d * d * PI) * c
+            }
+            lobe => Vec4::from_array(c.to_array().map(|c| lobe.weight(c))),
+        };
+        Vec4::select(w.cmpgt(Vec4::ZERO), w, Vec4::ZERO)
+    }
+
+    /// The bright texels' part of the convolution at unit direction `n`: patches in order,
+    /// each member's share summed in its lane, the lanes added in a fixed order.
+    #[inline]
+    pub(crate) fn at(&self, n: Vec3) -> Vec3 {
+        if self.patches.is_empty() {
+            return Vec3::ZERO;
+        }
+        let (nx, ny, nz) = (Vec4::splat(n.x), Vec4::splat(n.y), Vec4::splat(n.z));
+        let mut acc = [Vec4::ZERO; 3];
+        for (axis, limit, quads) in &self.patches {
+            if n.dot(*axis) <= *limit {
+                continue;
+            }
+            for q in quads {
+                let w = self.weights(nx * q.x + ny * q.y + nz * q.z);
+                acc[0] += w * q.r;
+                acc[1] += w * q.g;
+                acc[2] += w * q.b;
+            }
+        }
+        let total = |v: Vec4| (v.x + v.z) + (v.y + v.w);
+        Vec3::new(total(acc[0]), total(acc[1]), total(acc[2]))
+    }
+}

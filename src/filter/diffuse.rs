@@ -1,0 +1,222 @@
+//! The diffuse side: the irradiance map, by an exact sum over the source's texels (the
+//! default) or from its 9 SH coefficients.
+//!
+//! The clamped cosine is the smoothest lobe there is, so the sum runs over a small copy of the
+//! source (`IRRADIANCE_SOURCE_SIZE` faces) once its HDR peaks are split off: those are added
+//! texel by texel at the base's own resolution, where they are, not where a reduced texel's
+//! centre is. The sum itself is a dot product, a clamp and four multiply-adds per texel pair
+//! in vector lanes, over arrays of directions, solid angles and radiance made once.
+
+#![warn(missing_docs)]
+
+use super::{bright, sh, BRIGHT_RATIO};
+use crate::cube::{box_reduce_face, face_dir, solid_angle_table, CubeMap, Faces};
+use crate::image::Image;
+use glam::{Vec3, Vec4};
+use serde::Serialize;
+use std::borrow::Cow;
+
+/// How the irradiance map is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum IrradianceMethod {
+    /// Exact cosine-weighted sum over every texel of a 64-face copy of the source, its HDR
+    /// peaks at full resolution: right next to an HDR sun, where 9 SH coefficients ring (the
+    /// default).
+    #[default]
+    Brute,
+    /// From the 9 SH coefficients: fast, smooth, up to ~10% off (and possibly negative)
+    /// opposite a strong sun.
+    Sh,
+}
+
+/// Face edge of the copy of the source (below the bright threshold) the brute-force sum runs
+/// over. On the real panoramas, against the sum over every texel of a 128-face source: 0.02%
+/// mean and 1.1% largest relative error at 64 (32 faces: 0.05% and 4.1%).
+pub(crate) const IRRADIANCE_SOURCE_SIZE: usize = 64;
+
+/// The SH projection reads at most this face size (a box-reduced copy of larger bases).
+const SH_SOURCE_SIZE: usize = 256;
+
+/// The Lambertian irradiance map at face edge `size`, stored as (1/pi) times the
+/// cosine-weighted integral of radiance (a constant environment c gives c), and the order-2
+/// SH coefficients of the radiance.
+pub fn irradiance(
+    base: &CubeMap,
+    size: usize,
+    method: IrradianceMethod,
+) -> (CubeMap, [[f64; 3]; 9]) {
+    irradiance_with_progress(base, size, method, &|_| {})
+}
+
+/// [`irradiance`], calling `progress(1)` for each of the 6 x `size` output rows the brute
+/// integral finishes (nothing for the SH method, which is instant).
+pub fn irradiance_with_progress(
+    base: &CubeMap,
+    size: usize,
+    method: IrradianceMethod,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (CubeMap, [[f64; 3]; 9]) {
+    // A box-reduced copy keeps the integral, and the SH of it is what the map holds.
+    let src = reduced(&base.levels[0], SH_SOURCE_SIZE);
+    let coeffs = sh::project_faces(&src);
+    let mut faces = match method {
+        IrradianceMethod::Brute => brute_force(&src, size, progress),
+        IrradianceMethod::Sh => {
+            let e = sh::irradiance(&coeffs);
+            let over_pi: [[f64; 3]; 9] =
+                std::array::from_fn(|i| e[i].map(|v| v / std::f64::consts::PI));
+            CubeMap::from_fn(size, |d| sh::eval(&over_pi, d))
+                .levels
+                .remove(0)
+        }
+    };
+    for face in &mut faces {
+        for p in &mut face.pixels {
+            p.w = 1.0;
+        }
+    }
+    (
+        CubeMap {
+            levels: vec![faces],
+        },
+        coeffs,
+    )
+}
+
+/// `faces` box-reduced (solid-angle weighted, as [`CubeMap::with_box_mips`]) until their edge
+/// is at most `max`; borrowed when it already is.
+pub(crate) fn reduced(faces: &Faces, max: usize) -> Cow<'_, Faces> {
+    let mut out = Cow::Borrowed(faces);
+    while out[0].width > max.max(1) {
+        let n = out[0].width;
+        let weights = solid_angle_table(n);
+        out = Cow::Owned(std::array::from_fn(|f| {
+            box_reduce_face(&out[f], n, &weights, Vec4::INFINITY)
+        }));
+    }
+    out
+}
+
+/// The cosine-weighted mean of `src` around each texel of six `size` faces: the bounded part
+/// over a reduced copy, the HDR peaks over their own texels, one sum per output texel in a
+/// fixed order (the same bytes on every thread count).
+fn brute_force(src: &Faces, size: usize, progress: &(dyn Fn(u64) + Sync)) -> Faces {
+    use rayon::prelude::*;
+    let (residual, bright) = bright::split_bright_faces(src, BRIGHT_RATIO);
+    let small = reduced(&residual, IRRADIANCE_SOURCE_SIZE);
+    let texels = Lanes::of_faces(&small);
+    let peaks = Lanes::of_bright(&bright);
+    let inv = 1.0 / size as f32;
+    let mut out: Faces = std::array::from_fn(|_| Image::new(size, size));
+    let mut rows: Vec<(usize, usize, &mut [Vec4])> = Vec::with_capacity(6 * size);
+    for (face, img) in out.iter_mut().enumerate() {
+        for (y, row) in img.pixels.chunks_mut(size).enumerate() {
+            rows.push((face, y, row));
+        }
+    }
+    rows.into_par_iter().for_each(|(face, y, row)| {
+        for (x, texel) in row.iter_mut().enumerate() {
+            let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+            let sum = texels.cosine_sum(n);
+            // Normalised by the discrete integral of the cosine, so a constant stays exact.
+            let wsum = sum.w;
+            *texel = if wsum > 0.0 {
+                let lit = sum.truncate() + peaks.cosine_sum(n).truncate();
+                (lit / wsum).extend(1.0)
+            } else {
+                Vec4::W
+            };
+        }
+        progress(1);
+    });
+    out
+}
+
+/// Vectors per block: eight lanes, two independent chains of sums per quantity.
+const VECS: usize = 2;
+
+/// Four texels, field by field, so the sum over them runs in vector lanes.
+#[derive(Clone, Copy, Default)]
+struct Quad {
+    x: Vec4,
+    y: Vec4,
+    z: Vec4,
+    /// Solid angle (0 for padding).
+    w: Vec4,
+    r: Vec4,
+    g: Vec4,
+    b: Vec4,
+}
+
+/// Texels as blocks of lanes: unit direction, solid angle, radiance.
+#[derive(Default)]
+struct Lanes {
+    blocks: Vec<[Quad; VECS]>,
+    len: usize,
+}
+
+impl Lanes {
+    fn push(&mut self, d: Vec3, solid_angle: f32, v: Vec3) {
+        let lane = self.len % (4 * VECS);
+        if lane == 0 {
+            self.blocks.push([Quad::default(); VECS]);
+        }
+        let q = &mut self.blocks.last_mut().expect("a block")[lane / 4];
+        let l = lane % 4;
+        (q.x[l], q.y[l], q.z[l], q.w[l]) = (d.x, d.y, d.z, solid_angle);
+        (q.r[l], q.g[l], q.b[l]) = (v.x, v.y, v.z);
+        self.len += 1;
+    }
+
+    /// Every texel of six faces, face by face, row by row.
+    fn of_faces(faces: &Faces) -> Lanes {
+        let n = faces[0].width;
+        let inv = 1.0 / n as f32;
+        let angles = solid_angle_table(n);
+        let mut out = Lanes::default();
+        for (face, img) in faces.iter().enumerate() {
+            for y in 0..n {
+                for x in 0..n {
+                    let d =
+                        face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                    out.push(d, angles[y * n + x], img.get(x, y).truncate());
+                }
+            }
+        }
+        out
+    }
+
+    /// The excess radiance of the bright texels, where they are.
+    fn of_bright(bright: &bright::Bright) -> Lanes {
+        let mut out = Lanes::default();
+        for &(d, sa, excess) in &bright.texels {
+            out.push(d, sa, excess.truncate());
+        }
+        out
+    }
+
+    /// Sum over the texels of max(0, n.d) times (solid angle x radiance, solid angle): each
+    /// lane in texel order, the lanes then added in a fixed order.
+    #[inline]
+    fn cosine_sum(&self, n: Vec3) -> Vec4 {
+        let (nx, ny, nz) = (Vec4::splat(n.x), Vec4::splat(n.y), Vec4::splat(n.z));
+        let mut acc = [[Vec4::ZERO; 4]; VECS];
+        for block in &self.blocks {
+            for (q, a) in block.iter().zip(acc.iter_mut()) {
+                let c = nx * q.x + ny * q.y + nz * q.z;
+                let w = c.max(Vec4::ZERO) * q.w;
+                a[0] += w * q.r;
+                a[1] += w * q.g;
+                a[2] += w * q.b;
+                a[3] += w;
+            }
+        }
+        let total = |k: usize| {
+            let v = acc[1..].iter().fold(acc[0][k], |s, a| s + a[k]);
+            (v.x + v.z) + (v.y + v.w)
+        };
+        Vec4::new(total(0), total(1), total(2), total(3))
+    }
+}
