@@ -2,9 +2,10 @@
 //! (and stays the reader of anything this path does not take, for its error messages), but it
 //! works one scanline at a time through an RGB f32 copy, with a log2 and divisions per texel
 //! when writing: at 4K, half of a conversion's decode time and 100 MB of memory, and the
-//! slowest encoder of all. Here one pass finds where each scanline starts, then rows decode in
-//! parallel, to the crate's values bit for bit; rows encode in parallel to the same run-length
-//! scanlines any Radiance reader takes.
+//! slowest encoder of all. Here the scanlines' starts are found first (a large file walked in
+//! pieces in parallel, see `line_starts`), then rows decode in parallel, to the crate's values
+//! bit for bit; rows encode in parallel to the same run-length scanlines any Radiance reader
+//! takes.
 
 #![warn(missing_docs)]
 
@@ -31,25 +32,20 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(I
         return Some(Err(e));
     }
     // The header reader stops right after the dimensions line: the pixels start there.
-    let mut starts = Vec::with_capacity(h);
-    let mut p = cursor.position() as usize;
-    for y in 0..h {
-        starts.push(p);
-        match scanline(bytes, p, w, None) {
-            Some(next) => p = next,
-            // Said here, before any pixel memory: the crate's reader would allocate the whole
-            // image first.
-            None => {
-                return Some(Err(Error::file(
-                    path,
-                    format!(
-                        "cannot decode Radiance HDR: scanline {} of {h} is truncated or malformed",
-                        y + 1
-                    ),
-                )))
-            }
+    let starts = match line_starts(bytes, cursor.position() as usize, w, h) {
+        Ok(starts) => starts,
+        // Said here, before any pixel memory: the crate's reader would allocate the whole
+        // image first.
+        Err(y) => {
+            return Some(Err(Error::file(
+                path,
+                format!(
+                    "cannot decode Radiance HDR: scanline {} of {h} is truncated or malformed",
+                    y + 1
+                ),
+            )))
         }
-    }
+    };
     let mut img = Image::new(w, h);
     img.pixels
         .par_chunks_mut(w)
@@ -73,6 +69,89 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(I
         stored_levels: 1,
     };
     Some(Ok((img, meta)))
+}
+
+/// Where each of the `h` scanlines of `w` texels starts, the first at `first`; Err(y) when
+/// line y is truncated or malformed. Run-length lines have no index, so each start is found
+/// by walking the line before: a large file is walked in pieces in parallel, each piece
+/// from the first place in it that starts a line of this width (2, 2, width) and parses.
+/// Walks are deterministic, so once the true walk reaches a start a piece's walk found, the
+/// rest of that piece is the same; a piece whose walk it misses (a false start) is walked
+/// again from the true start. The result is the one-piece walk's, always.
+fn line_starts(
+    data: &[u8],
+    first: usize,
+    w: usize,
+    h: usize,
+) -> std::result::Result<Vec<usize>, usize> {
+    /// Candidate starts tried per piece before leaving the piece to the true walk: a file
+    /// full of false starts costs at most this many line walks a piece.
+    const TRIES: usize = 8;
+    let key = [2, 2, (w >> 8) as u8, (w & 0xff) as u8];
+    let rle = (8..0x8000).contains(&w) && data.get(first..first + 4) == Some(&key[..]);
+    let len = data.len().saturating_sub(first);
+    let pieces = if rle && len >= 1 << 20 {
+        (4 * rayon::current_num_threads()).min(len >> 16)
+    } else {
+        1
+    };
+    let bound = |i: usize| first + len * i / pieces;
+    // Each piece's walk: the starts it found (each line parsed), and where it left off.
+    let walks: Vec<(Vec<usize>, usize)> = (1..pieces)
+        .into_par_iter()
+        .map(|i| {
+            let (lo, hi) = (bound(i), bound(i + 1));
+            let mut from = lo;
+            for _ in 0..TRIES {
+                let Some(at) = data[from..hi].windows(4).position(|k| k == key) else {
+                    break;
+                };
+                let mut p = from + at;
+                let mut found = Vec::new();
+                while p < hi {
+                    match scanline(data, p, w, None) {
+                        Some(next) => {
+                            found.push(p);
+                            p = next;
+                        }
+                        None => break,
+                    }
+                }
+                if !found.is_empty() {
+                    return (found, p);
+                }
+                from += at + 1;
+            }
+            (Vec::new(), hi)
+        })
+        .collect();
+    let mut starts = Vec::with_capacity(h);
+    let mut p = first;
+    // The true walk through piece `i`, from `p`, until it leaves the piece or has every line.
+    let walk = |starts: &mut Vec<usize>, p: &mut usize, end: usize| {
+        while *p < end && starts.len() < h {
+            let next = scanline(data, *p, w, None).ok_or(starts.len())?;
+            starts.push(*p);
+            *p = next;
+        }
+        Ok::<(), usize>(())
+    };
+    walk(&mut starts, &mut p, bound(1))?;
+    for (i, (found, left_off)) in walks.iter().enumerate() {
+        if starts.len() == h {
+            break;
+        }
+        match found.binary_search(&p) {
+            Ok(k) => {
+                let take = (found.len() - k).min(h - starts.len());
+                starts.extend_from_slice(&found[k..k + take]);
+                p = found.get(k + take).copied().unwrap_or(*left_off);
+            }
+            Err(_) => walk(&mut starts, &mut p, bound(i + 2))?,
+        }
+    }
+    walk(&mut starts, &mut p, usize::MAX)?;
+    Ok(starts)
 }
 
 /// An RGBE texel in linear light: the mantissas times 2^(e - 136), e = 0 for black.
@@ -261,6 +340,96 @@ fn run_length(data: &[u8], out: &mut Vec<u8>) {
             out.push(128 + run_len as u8);
             out.push(data[run_start]);
             i = run_start + run_len;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The starts one walk from the first line finds, or the line it fails at.
+    fn serial(
+        data: &[u8],
+        first: usize,
+        w: usize,
+        h: usize,
+    ) -> std::result::Result<Vec<usize>, usize> {
+        let mut starts = Vec::with_capacity(h);
+        let mut p = first;
+        for y in 0..h {
+            starts.push(p);
+            p = scanline(data, p, w, None).ok_or(y)?;
+        }
+        Ok(starts)
+    }
+
+    /// The walk in pieces finds the one walk's starts, or fails at its line: for a file,
+    /// the file with false starts planted in every piece, and cut short or corrupted.
+    #[test]
+    fn pieces_find_the_starts_of_one_walk() {
+        let (w, h) = (700, 600);
+        let img = Image::from_fn(w, h, |x, y| {
+            let n = ((x * 7919 + y * 104_729) % 1009) as f32;
+            Vec4::new(
+                n / 100.0,
+                (x % 13) as f32,
+                if y % 50 < 5 { 3.0 } else { n },
+                1.0,
+            )
+        });
+        let file = encode(&img);
+        let first = file.iter().position(|&b| b == b'\n').unwrap();
+        let first = first + file[first..].windows(2).position(|p| p == b"\n-").unwrap();
+        let first = first + 1 + file[first + 1..].iter().position(|&b| b == b'\n').unwrap() + 1;
+        assert!(file.len() - first > 1 << 20);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(5)
+            .build()
+            .unwrap();
+        let both = |data: &[u8], what: &str| {
+            let want = serial(data, first, w, h);
+            assert_eq!(
+                pool.install(|| line_starts(data, first, w, h)),
+                want,
+                "{what}"
+            );
+            want
+        };
+        assert!(both(&file, "file").is_ok());
+        // False starts planted in literal runs (any bytes go there: the file stays valid)
+        // all through the file: a whole line of runs (so a piece's walk takes it for a
+        // start, and the true walk must walk that piece again), or just the line's key.
+        let line = serial(&file, first, w, h).unwrap();
+        let mut fake = vec![2, 2, (w >> 8) as u8, w as u8];
+        for _ in 0..4 {
+            for n in [127; 5].into_iter().chain([w - 5 * 127]) {
+                fake.extend([128 + n as u8, 9]);
+            }
+        }
+        for plant in [&fake[..], &fake[..4]] {
+            let mut planted = file.clone();
+            for &s in line.iter().step_by(5) {
+                // The first literal run long enough in the line.
+                let mut q = s + 4;
+                while file[q] > 128 || (file[q] as usize) < plant.len() {
+                    q += if file[q] > 128 {
+                        2
+                    } else {
+                        1 + file[q] as usize
+                    };
+                }
+                planted[q + 1..q + 1 + plant.len()].copy_from_slice(plant);
+            }
+            assert_eq!(both(&planted, "planted"), Ok(line.clone()));
+        }
+        for cut in [first + 5, file.len() / 2, file.len() - 1] {
+            assert!(both(&file[..cut], &format!("cut at {cut}")).is_err());
+        }
+        for at in [first + 4, file.len() / 3, file.len() - 200] {
+            let mut bad = file.clone();
+            bad[at] = 0;
+            let _ = both(&bad, &format!("zero at {at}"));
         }
     }
 }
