@@ -443,20 +443,33 @@ impl Image {
         let wx = catmull_rom(fx - x0);
         let wy = catmull_rom(fy - y0);
         let w = self.width as isize;
+        let (xs, ys) = (x0 as isize - 1, y0 as isize - 1);
+        // The 4 x 4 texels' indices, edges resolved once (not per tap).
+        let idx: [[usize; 4]; 4] = if edges == Edges::Octahedral {
+            std::array::from_fn(|j| {
+                std::array::from_fn(|i| self.folded(xs + i as isize, ys + j as isize))
+            })
+        } else {
+            let cols: [usize; 4] = std::array::from_fn(|i| {
+                let xi = xs + i as isize;
+                if edges == Edges::WrapX {
+                    xi.rem_euclid(w) as usize
+                } else {
+                    clampi(xi, self.width)
+                }
+            });
+            std::array::from_fn(|j| {
+                let row = clampi(ys + j as isize, self.height) * self.width;
+                cols.map(|c| row + c)
+            })
+        };
         let mut acc = Vec4::ZERO;
         let mut lo = Vec4::splat(f32::INFINITY);
         let mut hi = Vec4::splat(f32::NEG_INFINITY);
         for (j, wyj) in wy.iter().enumerate() {
-            let yy = clampi(y0 as isize - 1 + j as isize, self.height);
             let mut row = Vec4::ZERO;
             for (i, wxi) in wx.iter().enumerate() {
-                let xi = x0 as isize - 1 + i as isize;
-                let k = match edges {
-                    Edges::WrapX => yy * self.width + xi.rem_euclid(w) as usize,
-                    Edges::Clamp => yy * self.width + clampi(xi, self.width),
-                    Edges::Octahedral => self.folded(xi, y0 as isize - 1 + j as isize),
-                };
-                let p = self.pixels[k].min(ceiling);
+                let p = self.pixels[idx[j][i]].min(ceiling);
                 if (1..=2).contains(&i) && (1..=2).contains(&j) {
                     lo = lo.min(p);
                     hi = hi.max(p);
