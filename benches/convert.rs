@@ -82,13 +82,18 @@ fn wanted(name: &str) -> bool {
 }
 
 /// The whole command, start to exit (`cubeforge convert INPUT -o DIR --to faces --format
-/// EXT`), best of RUNS: what the figures measure.
+/// EXT`), best of RUNS: what the figures measure. CUBEFORGE_BIN=PATH times another
+/// build of the command (an older one, to compare in the same run).
 fn command(input: &Path, dir: &Path, ext: &str) {
     let out = dir.join(format!("command-{ext}"));
+    let bin = std::env::var_os("CUBEFORGE_BIN").map_or_else(
+        || PathBuf::from(env!("CARGO_BIN_EXE_cubeforge")),
+        PathBuf::from,
+    );
     let mut best = f64::MAX;
     for _ in 0..RUNS {
         let t = Instant::now();
-        let status = std::process::Command::new(env!("CARGO_BIN_EXE_cubeforge"))
+        let status = std::process::Command::new(&bin)
             .arg("convert")
             .arg(input)
             .arg("-o")
