@@ -263,7 +263,8 @@ pub fn prepare(env: &LoadedEnv, name: &Path, target: Option<Engine>) -> Result<P
     let engine_mapping = match target {
         Some(e) if ibl::engines::filters_itself(e) => {
             return Err(Error::usage(format!(
-                "--target {}: that engine prefilters the panorama itself, with a mapping of its own; use bevy, gltf, babylon, filament or generic",
+                "{} {}: that engine prefilters the panorama itself, with a mapping of its own; use bevy, gltf, babylon, filament or generic",
+                crate::error::param("target"),
                 e.name()
             )))
         }
@@ -321,8 +322,9 @@ pub fn prepare(env: &LoadedEnv, name: &Path, target: Option<Engine>) -> Result<P
                 }
             }
             None => format!(
-                "has {count} levels but does not say their roughness (levels.json, KTX2 key {}; --target ENGINE reads an engine's chain as it is)",
-                crate::io::ktx2::LEVELS_KEY
+                "has {count} levels but does not say their roughness (levels.json, KTX2 key {}; {} ENGINE reads an engine's chain as it is)",
+                crate::io::ktx2::LEVELS_KEY,
+                crate::error::param("target")
             ),
         };
         let (setup, made) = prefiltered(level0, engine_mapping, size);
