@@ -73,6 +73,24 @@ impl CubeSampler {
         self.levels[level].1[face].get(x + BORDER, y + BORDER)
     }
 
+    /// Number of levels (level 0 and its box mips).
+    pub(crate) fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// Face edge of `level`.
+    pub(crate) fn level_size(&self, level: usize) -> usize {
+        self.levels[level].0
+    }
+
+    /// Row `y` of a level's face, without the border.
+    pub(crate) fn row(&self, level: usize, face: usize, y: usize) -> &[Vec4] {
+        let (n, faces) = &self.levels[level];
+        let img = &faces[face];
+        let start = (y + BORDER) * img.width + BORDER;
+        &img.pixels[start..start + n]
+    }
+
     /// Trilinear lookup: bilinear in the two levels around fractional `lod`, blended.
     #[inline]
     pub(crate) fn sample_lod(&self, d: Vec3, lod: f32) -> Vec4 {

@@ -8,10 +8,12 @@ pub mod brute;
 mod diffuse;
 pub mod lobe;
 pub mod sh;
+mod window;
 
 pub use diffuse::{irradiance, irradiance_with_progress, IrradianceMethod};
 
 use crate::cube::{CubeMap, Faces};
+use bright::BrightSum;
 use lobe::{Kernel, Lobe};
 use serde::{Deserialize, Serialize};
 
@@ -139,7 +141,8 @@ pub struct LevelInfo {
     /// Gaussian standard deviation, radians.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub sigma: Option<f32>,
-    /// Importance samples per texel (None: the level was copied or box-reduced).
+    /// Importance samples per texel (None: the level was copied or box-reduced, or its narrow
+    /// cosine or Gaussian lobe summed exactly over the texels it covers).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub samples: Option<u32>,
 }
@@ -236,8 +239,10 @@ pub fn plan(opts: &ChainOptions, base: usize) -> Vec<(LevelInfo, Option<Lobe>)> 
             1
         });
     let first = plan.iter().position(|(_, l)| l.is_some()).unwrap_or(0);
+    let source_levels = CubeMap::full_chain_len(base);
     for (info, lobe) in &mut plan {
-        if lobe.is_some() {
+        // Narrow cosine and Gaussian lobes are summed exactly: no samples.
+        if lobe.is_some_and(|l| window::Window::plan(l, base, source_levels).is_none()) {
             let doublings = (info.level - first).min(5) as u32;
             info.samples = Some(start.saturating_mul(1 << doublings));
         }
@@ -282,10 +287,15 @@ pub fn prefilter_planned(
             .map(|(info, lobe)| {
                 let faces = match lobe {
                     None => base.levels[0].clone(),
-                    Some(l) => {
-                        let k = Kernel::new(*l, info.samples.unwrap_or(opts.samples), n);
-                        lobe::filter_level(&src, &k, info.size, *l, &bright)
-                    }
+                    Some(l) => match window::Window::plan(*l, n, src.level_count()) {
+                        Some(w) => {
+                            window::filter_level(&src, &w, info.size, &BrightSum::new(&bright, *l))
+                        }
+                        None => {
+                            let k = Kernel::new(*l, info.samples.unwrap_or(opts.samples), n);
+                            lobe::filter_level(&src, &k, info.size, *l, &bright)
+                        }
+                    },
                 };
                 progress(info.level);
                 faces
