@@ -286,7 +286,7 @@ pub fn prefilter_planned(
         plan.par_iter()
             .map(|(info, lobe)| {
                 let faces = match lobe {
-                    None => base.levels[0].clone(),
+                    None => copy_faces(&base.levels[0]),
                     Some(l) => match window::Window::plan(*l, n, src.level_count()) {
                         Some(w) => {
                             window::filter_level(&src, &w, info.size, &BrightSum::new(&bright, *l))
@@ -306,4 +306,19 @@ pub fn prefilter_planned(
         CubeMap { levels },
         plan.into_iter().map(|(i, _)| i).collect(),
     )
+}
+
+/// A copy of six faces, rows in parallel (a level-0 copy of a 512 cube is 25 MB).
+fn copy_faces(faces: &Faces) -> Faces {
+    use rayon::prelude::*;
+    let n = faces[0].width;
+    let mut out: Faces =
+        std::array::from_fn(|f| crate::image::Image::new(faces[f].width, faces[f].height));
+    for (dst, src) in out.iter_mut().zip(faces) {
+        dst.pixels
+            .par_chunks_mut(n.max(1) * 16)
+            .zip(src.pixels.par_chunks(n.max(1) * 16))
+            .for_each(|(d, s)| d.copy_from_slice(s));
+    }
+    out
 }
