@@ -1,85 +1,219 @@
-//! Benchmark (not a timed test): prefilter a 512-face HDR cube map into a full GGX chain and a
-//! full cosine chain (and a 256 cosine chain, cmft's 5.8 s case, and a 256 Charlie chain down
-//! to 16 px); seconds per level and samples per second; and the 128 BRDF lookup tables.
+//! Benchmark (not a timed test): the jobs of the speed issue, each from a 4096 x 2048 HDR
+//! panorama with a sun (the real esplanade enlarged 8x; the demo sky drawn at 4K without
+//! ../shared), stage by stage, best of a few runs, with the issue's reference figures (the
+//! CEO's 2-core machine, cmft built -O3 in the same run) printed beside them, and the
+//! previous code paths timed in the same run where they still exist. Then a Charlie chain
+//! and the 128 BRDF lookup tables. Honours RAYON_NUM_THREADS (run it with 2 and 16).
 //! Run with `cargo bench --bench prefilter`.
 
+use cubeforge::convert::{self, Loaded};
 use cubeforge::cube::CubeMap;
-use cubeforge::filter::{self, ChainOptions, FilterKind, LightingModel};
+use cubeforge::filter::{self, brute, lobe, ChainOptions, FilterKind, LightingModel};
+use cubeforge::image::Image;
+use cubeforge::io::{self, Decoded, ReadOptions, WriteOptions};
+use cubeforge::layout::Projection;
+use cubeforge::resample::{FnEnv, Resampler};
 use cubeforge::synthetic;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-fn run(name: &str, base: &CubeMap, opts: ChainOptions) {
-    let plan = filter::plan(&opts, base.size());
-    let t0 = Instant::now();
-    let (chain, infos) = filter::prefilter(base, &opts, &|_| {});
-    let total = t0.elapsed().as_secs_f64();
-    let samples: f64 = infos
-        .iter()
-        .map(|i| (6 * i.size * i.size) as f64 * i.samples.unwrap_or(0) as f64)
-        .sum();
-    println!(
-        "{name}: {} levels in {total:.3} s, {:.1} M samples/s",
-        chain.levels.len(),
-        samples / total / 1e6
-    );
-    // Per-level cost, each level on its own (the chain itself runs levels in parallel).
-    for (info, lobe) in plan {
-        if let Some(l) = lobe {
-            let src = filter::lobe::source_sampler(base);
-            let k = filter::lobe::Kernel::new(l, info.samples.unwrap(), base.size());
-            let t = Instant::now();
-            let _ = filter::lobe::filter_level(&src, &k, info.size, l, &Default::default());
-            println!(
-                "  level {:2} size {:4}: {:.3} s ({} taps)",
-                info.level,
-                info.size,
-                t.elapsed().as_secs_f64(),
-                k.taps.len()
-            );
-        }
+/// Runs per measurement (the best counts).
+const RUNS: usize = 3;
+
+/// The best wall time of `RUNS` calls of `f`, and its last result.
+fn best<T>(mut f: impl FnMut() -> T) -> (f64, T) {
+    let mut time = f64::MAX;
+    let mut out = None;
+    for _ in 0..RUNS {
+        let t = Instant::now();
+        let r = f();
+        time = time.min(t.elapsed().as_secs_f64());
+        out = Some(r);
     }
+    (time, out.expect("RUNS > 0"))
 }
 
 fn main() {
-    let base512 = CubeMap::from_fn(512, synthetic::demo_sky);
-    let base256 = CubeMap::from_fn(256, synthetic::demo_sky);
-    let ggx = ChainOptions {
-        filter: FilterKind::Ggx,
-        ..ChainOptions::default()
-    };
+    let threads = rayon::current_num_threads();
+    println!("threads: {threads} (RAYON_NUM_THREADS), best of {RUNS}");
+    println!("reference: the issue's figures, cubeforge and cmft on the CEO's 2-core machine");
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench-prefilter");
+    std::fs::create_dir_all(&dir).unwrap();
+    let pano = panorama(&dir);
+    let read = ReadOptions::default();
+    let (decode, loaded) =
+        best(|| convert::load(std::slice::from_ref(&pano), None, &read).unwrap());
+    println!("{}: decode {decode:.3} s", pano.display());
+
+    irradiance(&loaded, decode);
     let cosine = ChainOptions {
         filter: FilterKind::Cosine,
         lighting: LightingModel::Phongbrdf,
         ..ChainOptions::default()
     };
-    println!("threads: {}", rayon::current_num_threads());
-    run("ggx 512 (target < 2 s)", &base512, ggx);
-    run("cosine phongbrdf 256 (cmft 5.8 s)", &base256, cosine);
-    run("cosine phongbrdf 512 (cmft 81 s)", &base512, cosine);
-    let charlie = ChainOptions {
-        filter: FilterKind::Charlie,
-        min_size: Some(16),
-        ..ChainOptions::default()
-    };
-    run("charlie 256, min size 16", &base256, charlie);
+    let base256 = chain(
+        "cosine phongbrdf 256, 9 levels",
+        &loaded,
+        decode,
+        256,
+        ChainOptions {
+            levels: Some(9),
+            ..cosine
+        },
+        "0.99 s, cmft 12.0 s (12x); aim >= 20x cmft",
+    );
+    level0(&base256, &cosine);
+    chain(
+        "cosine phongbrdf 512, 10 levels",
+        &loaded,
+        decode,
+        512,
+        ChainOptions {
+            levels: Some(10),
+            ..cosine
+        },
+        "2.74 s, cmft 151 s (55x); keep",
+    );
+    chain(
+        "GGX 512, 10 levels",
+        &loaded,
+        decode,
+        512,
+        ChainOptions {
+            filter: FilterKind::Ggx,
+            levels: Some(10),
+            ..ChainOptions::default()
+        },
+        "1.83 s, cmgen 12x slower; aim <= 1 s",
+    );
+    let (t, _) = best(|| {
+        let opts = ChainOptions {
+            filter: FilterKind::Charlie,
+            min_size: Some(16),
+            ..ChainOptions::default()
+        };
+        filter::prefilter(&base256, &opts, &|_| {})
+    });
+    println!("charlie 256, min size 16 (5 levels): filter {t:.3} s");
     lut();
 }
 
-/// The 128 lookup tables at the default sample count, best of 5.
+/// The 4K panorama: esplanade (sun about 25000) enlarged 8x, or the demo sky.
+fn panorama(dir: &Path) -> PathBuf {
+    let src =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/fixtures/real/hdr/esplanade.hdr");
+    let (name, img): (&str, Box<dyn Fn() -> Image>) = if src.exists() {
+        (
+            "esplanade4k.hdr",
+            Box::new(move || {
+                let (Decoded::Image(small), _) = io::read(&src, &ReadOptions::default()).unwrap()
+                else {
+                    unreachable!()
+                };
+                Image::from_fn(4096, 2048, |x, y| {
+                    small.bilinear((x as f32 + 0.5) / 8.0, (y as f32 + 0.5) / 8.0, true)
+                })
+            }),
+        )
+    } else {
+        println!("../shared/fixtures/real is absent: the demo sky instead of esplanade");
+        (
+            "sky4k.hdr",
+            Box::new(|| {
+                Resampler::default().to_projection(
+                    &FnEnv(synthetic::demo_sky),
+                    Projection::Equirect,
+                    4096,
+                    2048,
+                )
+            }),
+        )
+    };
+    let path = dir.join(name);
+    if !path.exists() {
+        let bytes = io::encode_image(&path, &img(), &WriteOptions::default()).unwrap();
+        std::fs::write(&path, bytes).unwrap();
+    }
+    path
+}
+
+/// Irradiance, 32 px faces from a 256-face base (what `cubeforge irradiance` makes of a 4K
+/// panorama), and the previous brute force (every texel of a 64-face copy, the sun reduced
+/// with the rest, one powf per texel pair) in the same run.
+fn irradiance(loaded: &Loaded, decode: f64) {
+    let (resample, base) = best(|| convert::to_cube(loaded, 256, &Resampler::default()));
+    let (new, _) = best(|| filter::irradiance(&base, 32, filter::IrradianceMethod::Brute));
+    let (old, _) = best(|| {
+        let chain = CubeMap {
+            levels: vec![base.levels[0].clone()],
+        }
+        .with_box_mips(Some(3));
+        let _sh = filter::sh::project(&base);
+        let copy = CubeMap {
+            levels: vec![chain.levels[2].clone()],
+        };
+        brute::convolve(&copy, lobe::Lobe::CosinePower { power: 1.0 }, 32)
+    });
+    let total = decode + resample + new;
+    println!(
+        "irradiance 256 -> 32: filter {new:.3} s (previous brute force {old:.3} s, {:.1}x); \
+         with decode and resample {total:.3} s",
+        old / new
+    );
+    println!("  issue: 0.86 s, cmft 0.85 s (1.0x); aim >= 3x cmft");
+}
+
+/// A chain from the panorama: resample to `size` faces, filter; stage times and the total
+/// beside the issue's figures (another machine's: compare ratios, not seconds).
+fn chain(
+    name: &str,
+    loaded: &Loaded,
+    decode: f64,
+    size: usize,
+    opts: ChainOptions,
+    issue: &str,
+) -> CubeMap {
+    let (resample, base) = best(|| convert::to_cube(loaded, size, &Resampler::default()));
+    let (filter, (chain, infos)) = best(|| filter::prefilter(&base, &opts, &|_| {}));
+    let total = decode + resample + filter;
+    let exact = infos
+        .iter()
+        .filter(|i| i.samples.is_none() && (i.power.is_some() || i.sigma.is_some()))
+        .count();
+    print!(
+        "{name}: resample {resample:.3} s, filter {filter:.3} s ({} levels, {exact} exact sums); \
+         total {total:.3} s",
+        chain.levels.len()
+    );
+    println!();
+    println!("  issue: {issue}");
+    base
+}
+
+/// Level 0 of the 256 cosine chain (a 2049-power lobe) as the chain sums it, exactly over the
+/// texels it covers, and as 64 filtered importance samples did.
+fn level0(base: &CubeMap, cosine: &ChainOptions) {
+    let one = ChainOptions {
+        levels: Some(1),
+        ..*cosine
+    };
+    let (exact, _) = best(|| filter::prefilter(base, &one, &|_| {}));
+    let l = lobe::Lobe::CosinePower { power: 2049.0 };
+    let k = lobe::Kernel::new(l, 64, base.size());
+    let src = lobe::source_sampler(base);
+    let (sampled, _) = best(|| lobe::filter_level(&src, &k, base.size(), l, &Default::default()));
+    println!(
+        "  level 0 alone: exact sum {exact:.3} s (with the sun split and the box mips), \
+         64 samples {sampled:.3} s"
+    );
+}
+
+/// The 128 lookup tables at the default sample count.
 fn lut() {
     use cubeforge::lut::{self, LutOptions};
     let opts = LutOptions::default();
-    let best = |f: &dyn Fn()| {
-        (0..5)
-            .map(|_| {
-                let t = Instant::now();
-                f();
-                t.elapsed().as_secs_f64()
-            })
-            .fold(f64::MAX, f64::min)
-    };
-    let dfg = best(&|| drop(lut::dfg(128, &opts)));
-    let sheen = best(&|| drop(lut::charlie(128, &opts)));
+    let (dfg, _) = best(|| lut::dfg(128, &opts));
+    let (sheen, _) = best(|| lut::charlie(128, &opts));
     println!(
         "lut 128, {} samples (target well under 1 s): dfg {dfg:.3} s, charlie {sheen:.3} s",
         opts.samples

@@ -123,7 +123,13 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         lighting: a.lighting,
     };
     let plan = filter::plan(&opts, size);
-    let cost = |i: &LevelInfo| (6 * i.size * i.size) as u64 * i.samples.unwrap_or(1) as u64;
+    // An exact sum costs about what 64 samples do.
+    let per_texel = |i: &LevelInfo| match (i.samples, i.power.or(i.sigma)) {
+        (Some(s), _) => s as u64,
+        (None, Some(_)) => 64,
+        _ => 1,
+    };
+    let cost = |i: &LevelInfo| (6 * i.size * i.size) as u64 * per_texel(i);
     let total: u64 = plan.iter().map(|(i, _)| cost(i)).sum();
     let bar = super::progress(total, format!("{} {size}", a.filter.name()));
     let costs: Vec<u64> = plan.iter().map(|(i, _)| cost(i)).collect();
@@ -166,10 +172,12 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             (_, _, Some(s)) => format!("sigma {:.5} rad ({:.3} deg)", s, s.to_degrees()),
             _ => "2x2 box mean".to_string(),
         };
-        let samples = i
-            .samples
-            .map(|s| format!(", {s} samples"))
-            .unwrap_or_default();
+        let samples = match (i.samples, i.power.or(i.sigma)) {
+            (Some(s), _) => format!(", {s} samples"),
+            // A narrow cosine or Gaussian lobe: summed over the texels it covers.
+            (None, Some(_)) => ", exact sum".to_string(),
+            _ => String::new(),
+        };
         super::report(format_args!(
             "level {:2}  {:5} px  {what}{samples}",
             i.level, i.size

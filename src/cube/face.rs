@@ -49,21 +49,31 @@ pub(crate) fn texel_solid_angle(n: usize, x: usize, y: usize) -> f32 {
 /// `texel_solid_angle` for every texel of a face (the same on all six), row by row: one
 /// arctangent per texel corner instead of four per texel.
 pub fn solid_angle_table(n: usize) -> Vec<f32> {
+    use rayon::prelude::*;
     let row = |j: usize| -> Vec<f64> {
         (0..=n)
             .map(|i| corner_area(corner(n, i), corner(n, j)))
             .collect()
     };
-    let mut out = Vec::with_capacity(n * n);
-    let mut above = row(0);
-    for y in 0..n {
-        let below = row(y + 1);
-        for x in 0..n {
-            out.push((above[x] - below[x] - above[x + 1] + below[x + 1]) as f32);
-        }
-        above = below;
+    // Rows of corners, then rows of texels, each in parallel for large faces (a 512 face
+    // has 263 000 corners: a serial step of 10 ms otherwise). Pure functions: the same
+    // values on any thread count.
+    let corners: Vec<Vec<f64>> = if n >= 64 {
+        (0..=n).into_par_iter().map(row).collect()
+    } else {
+        (0..=n).map(row).collect()
+    };
+    let texel_row = |y: usize| -> Vec<f32> {
+        let (above, below) = (&corners[y], &corners[y + 1]);
+        (0..n)
+            .map(|x| (above[x] - below[x] - above[x + 1] + below[x + 1]) as f32)
+            .collect()
+    };
+    if n >= 64 {
+        (0..n).into_par_iter().flat_map_iter(texel_row).collect()
+    } else {
+        (0..n).flat_map(texel_row).collect()
     }
-    out
 }
 
 /// Face-plane coordinate (-1..1) of texel corner `i` on a face of edge `n`.

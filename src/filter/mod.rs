@@ -8,10 +8,12 @@ pub mod brute;
 mod diffuse;
 pub mod lobe;
 pub mod sh;
+mod window;
 
 pub use diffuse::{irradiance, irradiance_with_progress, IrradianceMethod};
 
 use crate::cube::{CubeMap, Faces};
+use bright::BrightSum;
 use lobe::{Kernel, Lobe};
 use serde::{Deserialize, Serialize};
 
@@ -139,7 +141,8 @@ pub struct LevelInfo {
     /// Gaussian standard deviation, radians.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub sigma: Option<f32>,
-    /// Importance samples per texel (None: the level was copied or box-reduced).
+    /// Importance samples per texel (None: the level was copied or box-reduced, or its narrow
+    /// cosine or Gaussian lobe summed exactly over the texels it covers).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub samples: Option<u32>,
 }
@@ -236,8 +239,10 @@ pub fn plan(opts: &ChainOptions, base: usize) -> Vec<(LevelInfo, Option<Lobe>)> 
             1
         });
     let first = plan.iter().position(|(_, l)| l.is_some()).unwrap_or(0);
+    let source_levels = CubeMap::full_chain_len(base);
     for (info, lobe) in &mut plan {
-        if lobe.is_some() {
+        // Narrow cosine and Gaussian lobes are summed exactly: no samples.
+        if lobe.is_some_and(|l| window::Window::plan(l, base, source_levels).is_none()) {
             let doublings = (info.level - first).min(5) as u32;
             info.samples = Some(start.saturating_mul(1 << doublings));
         }
@@ -281,11 +286,16 @@ pub fn prefilter_planned(
         plan.par_iter()
             .map(|(info, lobe)| {
                 let faces = match lobe {
-                    None => base.levels[0].clone(),
-                    Some(l) => {
-                        let k = Kernel::new(*l, info.samples.unwrap_or(opts.samples), n);
-                        lobe::filter_level(&src, &k, info.size, *l, &bright)
-                    }
+                    None => copy_faces(&base.levels[0]),
+                    Some(l) => match window::Window::plan(*l, n, src.level_count()) {
+                        Some(w) => {
+                            window::filter_level(&src, &w, info.size, &BrightSum::new(&bright, *l))
+                        }
+                        None => {
+                            let k = Kernel::new(*l, info.samples.unwrap_or(opts.samples), n);
+                            lobe::filter_level(&src, &k, info.size, *l, &bright)
+                        }
+                    },
                 };
                 progress(info.level);
                 faces
@@ -296,4 +306,19 @@ pub fn prefilter_planned(
         CubeMap { levels },
         plan.into_iter().map(|(i, _)| i).collect(),
     )
+}
+
+/// A copy of six faces, rows in parallel (a level-0 copy of a 512 cube is 25 MB).
+fn copy_faces(faces: &Faces) -> Faces {
+    use rayon::prelude::*;
+    let n = faces[0].width;
+    let mut out: Faces =
+        std::array::from_fn(|f| crate::image::Image::new(faces[f].width, faces[f].height));
+    for (dst, src) in out.iter_mut().zip(faces) {
+        dst.pixels
+            .par_chunks_mut(n.max(1) * 16)
+            .zip(src.pixels.par_chunks(n.max(1) * 16))
+            .for_each(|(d, s)| d.copy_from_slice(s));
+    }
+    out
 }
