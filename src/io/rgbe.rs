@@ -258,25 +258,31 @@ pub fn encode(img: &Image) -> Vec<u8> {
     if w == 0 {
         return out;
     }
+    let flat = !(8..0x8000).contains(&w);
     let rows: Vec<Vec<u8>> = img
         .pixels
         .par_chunks(w)
-        .map(|row| {
-            let texels: Vec<[u8; 4]> = row.iter().map(|p| to_rgbe(*p)).collect();
-            if !(8..0x8000).contains(&w) {
-                return texels.concat();
-            }
-            let mut line = Vec::with_capacity(w * 4 + 4);
-            line.extend_from_slice(&[2, 2, (w >> 8) as u8, (w & 0xff) as u8]);
-            let mut channel = vec![0u8; w];
-            for c in 0..4 {
-                for (v, t) in channel.iter_mut().zip(&texels) {
-                    *v = t[c];
+        .map_init(
+            || vec![0u8; 4 * w],
+            |planes, row| {
+                if flat {
+                    return row.iter().flat_map(|p| to_rgbe(*p)).collect();
                 }
-                run_length(&channel, &mut line);
-            }
-            line
-        })
+                // The scanline's four channels side by side, then each run-length coded.
+                let (r, rest) = planes.split_at_mut(w);
+                let (g, rest) = rest.split_at_mut(w);
+                let (b, e) = rest.split_at_mut(w);
+                for x in 0..w {
+                    [r[x], g[x], b[x], e[x]] = to_rgbe(row[x]);
+                }
+                let mut line = Vec::with_capacity(w * 4 + w / 32 + 8);
+                line.extend_from_slice(&[2, 2, (w >> 8) as u8, (w & 0xff) as u8]);
+                for channel in planes.chunks(w) {
+                    run_length(channel, &mut line);
+                }
+                line
+            },
+        )
         .collect();
     out.reserve(rows.iter().map(Vec::len).sum());
     for r in rows {
@@ -286,62 +292,79 @@ pub fn encode(img: &Image) -> Vec<u8> {
 }
 
 /// Shared-exponent form: the largest channel's exponent e (value = m 2^e, m in [0.5, 1)),
-/// each channel truncated to 8 bits of that scale. Read from the float's bits: no log2.
+/// each channel truncated to 8 bits of that scale, floor(v 2^(8 - e)). Worked on the floats'
+/// bits (a shift of each mantissa), without branches on the channels: no log2, no division.
+#[inline(always)]
 fn to_rgbe(p: Vec4) -> [u8; 4] {
-    // NaN and negatives to 0, infinity to the largest RGBE value.
+    // NaN and negatives to 0, infinity to the largest float.
     let [r, g, b] = [p.x, p.y, p.z].map(|v| if v > 0.0 { v.min(f32::MAX) } else { 0.0 });
     let max = r.max(g).max(b);
-    if max < f32::MIN_POSITIVE {
-        return [0; 4];
+    // The biased exponent of the largest channel: 0 for zero and subnormals (stored as 0).
+    let top = max.to_bits() >> 23;
+    // v = m 2^(ev - 150) with a 24-bit m, so v 2^(8 - e) = m 2^(ev - top - 16), e = top - 126.
+    // Selects, not branches, so that rows vectorize.
+    let q = |v: f32| {
+        let bits = v.to_bits();
+        let ev = bits >> 23;
+        let m = (bits & 0x7f_ffff) | if ev > 0 { 0x80_0000 } else { 0 };
+        let shift = (16 + top).wrapping_sub(ev.max(1));
+        (if shift < 24 { m >> (shift & 31) } else { 0 }) as u8
+    };
+    let out = [q(r), q(g), q(b), (top + 2) as u8];
+    if top == 0 {
+        [0; 4]
+    } else if max >= 1.7e38 {
+        [255; 4]
+    } else {
+        out
     }
-    if max >= 1.7e38 {
-        return [255, 255, 255, 255];
-    }
-    // max = m 2^e with m in [0.5, 1): e is the float's unbiased exponent plus one.
-    let e = ((max.to_bits() >> 23) & 0xff) as i32 - 126;
-    // 2^(8 - e), exact in f64 for every e here (-125..=127).
-    let scale = f64::from_bits(((1023 + 8 - e) as u64) << 52);
-    let q = |v: f32| (v as f64 * scale) as u8;
-    [q(r), q(g), q(b), (e + 128) as u8]
 }
 
 /// Appends one channel of a scanline in the run-length form: runs of 4 to 127 equal bytes as
 /// (128 + n, byte), everything else as literals of up to 128 bytes (n, bytes...).
 fn run_length(data: &[u8], out: &mut Vec<u8>) {
-    const MIN_RUN: usize = 4;
     let n = data.len();
     let mut i = 0;
     while i < n {
-        // The next run of at least MIN_RUN equal bytes, if any, starting at or after i.
-        let mut run_start = i;
-        let mut run_len = 0;
-        while run_start < n {
-            run_len = 1;
-            while run_start + run_len < n
-                && run_len < 127
-                && data[run_start + run_len] == data[run_start]
-            {
-                run_len += 1;
-            }
-            if run_len >= MIN_RUN {
-                break;
-            }
-            run_start += run_len;
-        }
-        // Literals up to the run (or the end), at most 128 at a time.
-        let literal_end = if run_len >= MIN_RUN { run_start } else { n };
-        while i < literal_end {
-            let k = (literal_end - i).min(128);
+        // Literals up to the next run of four (or the end), at most 128 at a time.
+        let run_start = next_run(data, i).unwrap_or(n);
+        while i < run_start {
+            let k = (run_start - i).min(128);
             out.push(k as u8);
             out.extend_from_slice(&data[i..i + k]);
             i += k;
         }
-        if run_len >= MIN_RUN && run_start < n {
-            out.push(128 + run_len as u8);
-            out.push(data[run_start]);
-            i = run_start + run_len;
+        if run_start < n {
+            let byte = data[run_start];
+            let len = data[run_start..n.min(run_start + 127)]
+                .iter()
+                .take_while(|&&v| v == byte)
+                .count();
+            out.extend_from_slice(&[128 + len as u8, byte]);
+            i = run_start + len;
         }
     }
+}
+
+/// The first position at or after `from` where four equal bytes start. Eight positions are
+/// compared with their successors at once (a word and the word one byte on: a zero byte of
+/// their xor marks an equal pair), six starts tested per word.
+fn next_run(data: &[u8], from: usize) -> Option<usize> {
+    const LOW7: u64 = 0x7f7f_7f7f_7f7f_7f7f;
+    let n = data.len();
+    let word = |at: usize| u64::from_le_bytes(data[at..at + 8].try_into().expect("8 bytes"));
+    let mut j = from;
+    while j + 9 <= n {
+        let t = word(j) ^ word(j + 1);
+        // High bit of each byte set exactly where that byte of t is zero.
+        let equal = !(((t & LOW7) + LOW7) | t | LOW7);
+        let starts = equal & (equal >> 8) & (equal >> 16) & 0x0000_8080_8080_8080;
+        if starts != 0 {
+            return Some(j + starts.trailing_zeros() as usize / 8);
+        }
+        j += 6;
+    }
+    (j..n.saturating_sub(3)).find(|&p| data[p + 1..p + 4].iter().all(|&v| v == data[p]))
 }
 
 #[cfg(test)]
@@ -431,5 +454,120 @@ mod tests {
             bad[at] = 0;
             let _ = both(&bad, &format!("zero at {at}"));
         }
+    }
+}
+
+#[cfg(test)]
+mod encode_tests {
+    use super::*;
+
+    /// The shared exponent the plain way: frexp, then a multiply in f64 and truncation.
+    fn reference(p: Vec4) -> [u8; 4] {
+        let [r, g, b] = [p.x, p.y, p.z].map(|v| if v > 0.0 { v.min(f32::MAX) } else { 0.0 });
+        let max = r.max(g).max(b);
+        if max < f32::MIN_POSITIVE {
+            return [0; 4];
+        }
+        if max >= 1.7e38 {
+            return [255; 4];
+        }
+        let e = (max as f64).log2().floor() as i32 + 1;
+        let scale = 2f64.powi(8 - e);
+        let q = |v: f32| (v as f64 * scale) as u8;
+        [q(r), q(g), q(b), (e + 128) as u8]
+    }
+
+    /// The run-length form by its definition: the first run of four or more, greedily.
+    fn naive(data: &[u8]) -> Vec<u8> {
+        let mut out = Vec::new();
+        let mut i = 0;
+        while i < data.len() {
+            let run = (i..data.len())
+                .find(|&p| p + 4 <= data.len() && data[p..p + 4].iter().all(|&v| v == data[p]))
+                .unwrap_or(data.len());
+            for chunk in data[i..run].chunks(128) {
+                out.push(chunk.len() as u8);
+                out.extend_from_slice(chunk);
+            }
+            i = run;
+            if run < data.len() {
+                let len = data[run..]
+                    .iter()
+                    .take(127)
+                    .take_while(|&&v| v == data[run])
+                    .count();
+                out.extend_from_slice(&[128 + len as u8, data[run]]);
+                i += len;
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn shared_exponents_match_the_plain_formula() {
+        // Every binade, subnormals, exact powers of two, channels far apart, specials.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let specials = [
+            0.0,
+            -1.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::MIN_POSITIVE,
+            1e-40,
+            0.5,
+            1.0,
+            255.0 / 256.0,
+            1.7e38,
+            f32::MAX,
+        ];
+        for i in 0..200_000 {
+            let mut v = [0.0f32; 3];
+            for c in &mut v {
+                let bits = next();
+                *c = if bits % 7 == 0 {
+                    specials[(bits >> 8) as usize % specials.len()]
+                } else {
+                    f32::from_bits((bits >> 32) as u32 & 0x7fff_ffff)
+                };
+            }
+            let p = Vec4::new(v[0], v[1], v[2], 1.0);
+            assert_eq!(to_rgbe(p), reference(p), "{i}: {p}");
+        }
+    }
+
+    #[test]
+    fn runs_are_coded_as_the_definition_says() {
+        let mut state = 7u32;
+        for len in [
+            0, 1, 3, 4, 5, 8, 9, 15, 16, 17, 100, 127, 128, 129, 300, 1024,
+        ] {
+            for density in [2u32, 4, 16, 256] {
+                // Few distinct values make runs of every length, up to past 127.
+                let data: Vec<u8> = (0..len)
+                    .map(|_| {
+                        state = state.wrapping_mul(1_103_515_245).wrapping_add(12345);
+                        let v = (state >> 16) % density;
+                        if v < density / 2 {
+                            0
+                        } else {
+                            v as u8
+                        }
+                    })
+                    .collect();
+                let mut out = Vec::new();
+                run_length(&data, &mut out);
+                assert_eq!(out, naive(&data), "length {len}, {density} values");
+            }
+        }
+        let long = vec![9u8; 300];
+        let mut out = Vec::new();
+        run_length(&long, &mut out);
+        assert_eq!(out, [255, 9, 255, 9, 128 + 46, 9]);
     }
 }
