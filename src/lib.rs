@@ -38,6 +38,7 @@ pub mod lut;
 pub mod output;
 pub mod preview;
 pub mod resample;
+mod simd;
 pub mod synthetic;
 
 pub use error::{Error, LimitKind, Result};

@@ -8,6 +8,7 @@ use crate::flux::Grid;
 use crate::image::Image;
 use crate::layout::{equirect, octahedral, Projection};
 use glam::{Mat3, Vec3, Vec4};
+use std::marker::PhantomData;
 
 /// A rotation of the environment (degrees) and an optional handedness flip.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -198,76 +199,147 @@ impl Resampler {
         let levels = env.levels();
         let sub = taps_per_axis(texels);
         Image::from_rows(w, h, |y, row| {
-            let mut taps = Taps {
-                env,
-                interp: self.interp,
-                turn,
-                level: 0,
-                dirs: Dirs::default(),
-                slot: [0; BATCH],
-                weight: [0.0; BATCH],
-            };
-            for (run, out) in row.chunks_mut(RUN).enumerate() {
-                let mut acc = [Vec4::ZERO; RUN];
-                // Sum of a texel's tap weights; 0 for a single tap (weight 1, no division).
-                let mut total = [0.0f32; RUN];
-                let mut empty = [true; RUN];
-                for i in 0..out.len() {
-                    let x = run * RUN + i;
-                    let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
-                    let ratio = if self.antialias {
-                        footprint(cx, cy) / src_angle
-                    } else {
-                        0.0
-                    };
-                    let centre = dir(cx, cy);
-                    if ratio <= 1.5 && (centre.is_some() || !self.antialias) {
-                        if let Some(d) = centre {
-                            taps.push(d, 0, i, 1.0, &mut acc);
-                            empty[i] = false;
-                        }
-                        continue;
+            let setup = (turn, src_angle, levels, sub);
+            let lookups = (&dir, &footprint, &density);
+            crate::simd::fast(RenderRow((self, env, setup, lookups, y, row), PhantomData))
+        })
+    }
+
+    /// One row of `render` (inlined into both builds of `simd::fast`).
+    #[inline(always)]
+    #[allow(clippy::type_complexity)]
+    fn render_row<D, F, G>(
+        (this, env, (turn, src_angle, levels, sub), (dir, footprint, density), y, row): (
+            &Resampler,
+            &dyn Environment,
+            (Option<Mat3>, f32, usize, usize),
+            (&D, &F, &G),
+            usize,
+            &mut [Vec4],
+        ),
+    ) where
+        D: Fn(f32, f32) -> Option<Vec3>,
+        F: Fn(f32, f32) -> f32,
+        G: Fn(f32, f32) -> f32,
+    {
+        let mut taps = Taps {
+            env,
+            interp: this.interp,
+            turn,
+            level: 0,
+            dirs: Dirs::default(),
+            slot: [0; BATCH],
+            weight: [0.0; BATCH],
+        };
+        for (run, out) in row.chunks_mut(RUN).enumerate() {
+            // The common case first: every texel of the run one tap at its centre (an
+            // output about as sharp as the input), looked up straight into the row.
+            if single_taps(&mut taps.dirs, run * RUN, y, out.len(), |cx, cy| {
+                let ratio = if this.antialias {
+                    footprint(cx, cy) / src_angle
+                } else {
+                    0.0
+                };
+                if ratio <= 1.5 {
+                    dir(cx, cy)
+                } else {
+                    None
+                }
+            }) {
+                if let Some(m) = &turn {
+                    taps.dirs.transform(m);
+                }
+                taps.dirs.normalize();
+                env.sample_many(&taps.dirs, 0, this.interp, out);
+                taps.dirs.len = 0;
+                continue;
+            }
+            let mut acc = [Vec4::ZERO; RUN];
+            // Sum of a texel's tap weights; 0 for a single tap (weight 1, no division).
+            let mut total = [0.0f32; RUN];
+            let mut empty = [true; RUN];
+            for i in 0..out.len() {
+                let x = run * RUN + i;
+                let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
+                let ratio = if this.antialias {
+                    footprint(cx, cy) / src_angle
+                } else {
+                    0.0
+                };
+                let centre = dir(cx, cy);
+                if ratio <= 1.5 && (centre.is_some() || !this.antialias) {
+                    if let Some(d) = centre {
+                        taps.push(d, 0, i, 1.0, &mut acc);
+                        empty[i] = false;
                     }
-                    // A pyramid level where the footprint spans at most `sub` texels, then a
-                    // bilinear tap per texel of that level spread over the texel, each weighted
-                    // by the solid angle it stands for. A texel whose centre lies outside a
-                    // ball gets the taps inside it.
-                    let level = footprint_level(ratio, sub).min(levels - 1);
-                    let rest = ratio / (1u32 << level) as f32;
-                    let n = if centre.is_none() {
-                        RIM_SUB
-                    } else {
-                        (rest.ceil() as usize).clamp(1, sub)
-                    };
-                    let step = 1.0 / n as f32;
-                    for j in 0..n {
-                        for k in 0..n {
-                            let sx = x as f32 + (k as f32 + 0.5) * step;
-                            let sy = y as f32 + (j as f32 + 0.5) * step;
-                            if let Some(d) = dir(sx, sy) {
-                                let wgt = density(sx, sy);
-                                if wgt > 0.0 {
-                                    taps.push(d, level, i, wgt, &mut acc);
-                                    total[i] += wgt;
-                                    empty[i] = false;
-                                }
+                    continue;
+                }
+                // A pyramid level where the footprint spans at most `sub` texels, then a
+                // bilinear tap per texel of that level spread over the texel, each weighted
+                // by the solid angle it stands for. A texel whose centre lies outside a
+                // ball gets the taps inside it.
+                let level = footprint_level(ratio, sub).min(levels - 1);
+                let rest = ratio / (1u32 << level) as f32;
+                let n = if centre.is_none() {
+                    RIM_SUB
+                } else {
+                    (rest.ceil() as usize).clamp(1, sub)
+                };
+                let step = 1.0 / n as f32;
+                for j in 0..n {
+                    for k in 0..n {
+                        let sx = x as f32 + (k as f32 + 0.5) * step;
+                        let sy = y as f32 + (j as f32 + 0.5) * step;
+                        if let Some(d) = dir(sx, sy) {
+                            let wgt = density(sx, sy);
+                            if wgt > 0.0 {
+                                taps.push(d, level, i, wgt, &mut acc);
+                                total[i] += wgt;
+                                empty[i] = false;
                             }
                         }
                     }
                 }
-                taps.flush(&mut acc);
-                for (((o, a), &t), &e) in out.iter_mut().zip(acc).zip(&total).zip(&empty) {
-                    *o = if e {
-                        Vec4::ZERO
-                    } else if t > 0.0 {
-                        a / t
-                    } else {
-                        a
-                    };
-                }
             }
-        })
+            taps.flush(&mut acc);
+            for (((o, a), &t), &e) in out.iter_mut().zip(acc).zip(&total).zip(&empty) {
+                *o = if e {
+                    Vec4::ZERO
+                } else if t > 0.0 {
+                    a / t
+                } else {
+                    a
+                };
+            }
+        }
     }
+}
+
+crate::simd::kernel!(RenderRow<D, F, G>((&'k Resampler, &'k dyn Environment, (Option<Mat3>, f32, usize, usize), (&'k D, &'k F, &'k G), usize, &'k mut [Vec4])) -> () = Resampler::render_row where D: Fn(f32, f32) -> Option<Vec3>, F: Fn(f32, f32) -> f32, G: Fn(f32, f32) -> f32);
+
+/// Queues the centre directions of the `n` texels of row `y` from column `x0` into `dirs`,
+/// or leaves `dirs` empty and says false when one of them needs more than its centre
+/// (`centre` gives None for a texel to antialias or outside the layout).
+#[inline(always)]
+fn single_taps(
+    dirs: &mut Dirs,
+    x0: usize,
+    y: usize,
+    n: usize,
+    centre: impl Fn(f32, f32) -> Option<Vec3>,
+) -> bool {
+    debug_assert!(dirs.len == 0 && n <= BATCH);
+    let cy = y as f32 + 0.5;
+    for i in 0..n {
+        match centre((x0 + i) as f32 + 0.5, cy) {
+            Some(d) => dirs.push(d),
+            None => {
+                dirs.len = 0;
+                return false;
+            }
+        }
+    }
+    true
 }
 
 /// Output texels per run: their sums live on the stack while the run's taps are looked up.

@@ -24,6 +24,7 @@ use crate::image::Image;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 use std::f32::consts::PI;
+use std::marker::PhantomData;
 
 /// Weights below this fraction of the lobe's peak are left out (a cosine power loses
 /// e^-9.2 of its mass beyond, about 1e-4; the sum is normalised by the weights it keeps).
@@ -427,9 +428,6 @@ pub(crate) fn filter_level(
     bright: &BrightSum,
 ) -> Faces {
     let inv = 1.0 / size as f32;
-    let centre = |face: usize, x: usize, y: usize| {
-        face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize()
-    };
     let reach = window.reach();
     // A tile's texel centres lie within TILE texels of its axis, and no texel spans more
     // than 2 / size radians.
@@ -445,27 +443,49 @@ pub(crate) fn filter_level(
         }
     }
     bands.into_par_iter().for_each(|(face, y0, band)| {
-        let mut found = Candidates::default();
-        let rows = band.len() / size;
-        for x0 in (0..size).step_by(tile) {
-            let (x1, y1) = ((x0 + tile).min(size), y0 + rows);
-            // The tile's cone: its centre and the furthest texel centre from it.
-            let mid = (x0 + x1) as f32 * 0.5 * inv;
-            let (t, b) = (y0 as f32 * inv, y1 as f32 * inv);
-            let axis = face_dir(face, mid, (t + b) * 0.5).normalize();
-            let radius = [(x0, y0), (x1 - 1, y0), (x0, y1 - 1), (x1 - 1, y1 - 1)]
-                .iter()
-                .map(|&(x, y)| axis.dot(centre(face, x, y)).clamp(-1.0, 1.0).acos())
-                .fold(0.0f32, f32::max);
-            found.clear();
-            source.gather(axis, (reach + radius + 1e-4).min(max_reach), &mut found);
-            for y in y0..y1 {
-                for x in x0..x1 {
-                    let n = centre(face, x, y);
-                    band[(y - y0) * size + x] = found.mean(window, n) + bright.at(n).extend(0.0);
-                }
-            }
-        }
+        let setup = (&source, window, bright, size, reach, max_reach);
+        crate::simd::fast(Band((setup, face, y0, band), PhantomData));
     });
     out
+}
+
+type BandSetup<'k> = (&'k Source, &'k Window, &'k BrightSum, usize, f32, f32);
+crate::simd::kernel!(Band((BandSetup<'k>, usize, usize, &'k mut [Vec4])) -> () = filter_band);
+
+/// One band of `filter_level`: `TILE` output rows of one face, tile by tile.
+#[inline(always)]
+fn filter_band(
+    ((source, window, bright, size, reach, max_reach), face, y0, band): (
+        BandSetup,
+        usize,
+        usize,
+        &mut [Vec4],
+    ),
+) {
+    let inv = 1.0 / size as f32;
+    let centre = |face: usize, x: usize, y: usize| {
+        face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize()
+    };
+    let tile = TILE.min(size);
+    let mut found = Candidates::default();
+    let rows = band.len() / size;
+    for x0 in (0..size).step_by(tile) {
+        let (x1, y1) = ((x0 + tile).min(size), y0 + rows);
+        // The tile's cone: its centre and the furthest texel centre from it.
+        let mid = (x0 + x1) as f32 * 0.5 * inv;
+        let (t, b) = (y0 as f32 * inv, y1 as f32 * inv);
+        let axis = face_dir(face, mid, (t + b) * 0.5).normalize();
+        let radius = [(x0, y0), (x1 - 1, y0), (x0, y1 - 1), (x1 - 1, y1 - 1)]
+            .iter()
+            .map(|&(x, y)| axis.dot(centre(face, x, y)).clamp(-1.0, 1.0).acos())
+            .fold(0.0f32, f32::max);
+        found.clear();
+        source.gather(axis, (reach + radius + 1e-4).min(max_reach), &mut found);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let n = centre(face, x, y);
+                band[(y - y0) * size + x] = found.mean(window, n) + bright.at(n).extend(0.0);
+            }
+        }
+    }
 }

@@ -15,7 +15,7 @@
 
 use crate::cube::{dir_face, face_dir, solid_angle_table, texel_solid_angle};
 use crate::image::Image;
-use crate::layout::Projection;
+use crate::layout::{equirect, Projection};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -66,6 +66,54 @@ impl Grid {
             }
             Grid::Projection(p, w, h) => p.to_dir(x / w as f32, y / h as f32),
         }
+    }
+
+    /// The k x k sub-cells of texel (x, y) of `face` (row by row) that have a direction, with
+    /// their weights (`density`), into `cells`; returns the sum of the weights. A panorama's
+    /// directions are separable: k sines and cosines per axis, not per cell.
+    pub(crate) fn sub_cells(
+        self,
+        face: usize,
+        x: f32,
+        y: f32,
+        k: usize,
+        cells: &mut Vec<(Vec3, f32)>,
+    ) -> f32 {
+        let at = |i: usize| (i as f32 + 0.5) / k as f32;
+        let mut total = 0.0f32;
+        if let Grid::Projection(Projection::Equirect, w, h) = self {
+            let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
+            let area = std::f32::consts::TAU * iw * PI as f32 * ih;
+            let lon: Vec<(f32, f32)> = (0..k)
+                .map(|i| equirect::sin_cos(((x + at(i)) * iw - 0.5) * std::f32::consts::TAU))
+                .collect();
+            for j in 0..k {
+                let (st, ct) = equirect::sin_cos((0.5 - (y + at(j)) * ih) * PI as f32);
+                let wgt = area * ct.max(0.0);
+                if wgt <= 0.0 {
+                    continue;
+                }
+                for &(sp, cp) in &lon {
+                    cells.push((Vec3::new(ct * sp, st, ct * cp), wgt));
+                    total += wgt;
+                }
+            }
+            return total;
+        }
+        for j in 0..k {
+            for i in 0..k {
+                let (sx, sy) = (x + at(i), y + at(j));
+                let wgt = self.density(sx, sy);
+                if wgt <= 0.0 {
+                    continue;
+                }
+                if let Some(d) = self.dir(face, sx, sy) {
+                    cells.push((d, wgt));
+                    total += wgt;
+                }
+            }
+        }
+        total
     }
 
     /// The texel a unit direction falls in. On a ball the point is kept half a texel inside

@@ -200,34 +200,24 @@ impl Peaks {
             .texels
             .par_chunks(1024)
             .map(|chunk| {
-                let mut shares = Vec::new();
+                let mut shares: Vec<(u64, Vec3)> = Vec::new();
                 let mut cells: Vec<(Vec3, f32)> = Vec::new();
                 for p in chunk {
                     let (face, x, y) = (p.face as usize, p.x as f32, p.y as f32);
-                    let to_out = |d: Vec3| back.map_or(d, |m| (m * d).normalize());
                     let Some(centre) = self.grid.dir(face, x + 0.5, y + 0.5) else {
                         continue;
                     };
                     // Sub-cells per texel edge: two per output texel there (one where the
                     // output texel spans two input texels or more).
-                    let (_, cx, cy) = out.locate(to_out(centre));
+                    let (_, cx, cy) = out.locate(back.map_or(centre, |m| (m * centre).normalize()));
                     let a_in = self.grid.density(x + 0.5, y + 0.5).sqrt();
                     let a_out = out.density(cx as f32 + 0.5, cy as f32 + 0.5).sqrt();
                     let k = (2.0 * a_in / a_out.max(1e-12)).ceil().clamp(1.0, 64.0) as usize;
                     cells.clear();
-                    let mut total = 0.0f32;
-                    for j in 0..k {
-                        for i in 0..k {
-                            let sx = x + (i as f32 + 0.5) / k as f32;
-                            let sy = y + (j as f32 + 0.5) / k as f32;
-                            let wgt = self.grid.density(sx, sy);
-                            if wgt <= 0.0 {
-                                continue;
-                            }
-                            if let Some(d) = self.grid.dir(face, sx, sy) {
-                                cells.push((to_out(d), wgt));
-                                total += wgt;
-                            }
+                    let total = self.grid.sub_cells(face, x, y, k, &mut cells);
+                    if let Some(m) = back {
+                        for c in &mut cells {
+                            c.0 = (m * c.0).normalize();
                         }
                     }
                     if total <= 0.0 {
@@ -238,13 +228,14 @@ impl Peaks {
                     // Each sub-cell covers a square of its own area around where it lands,
                     // shared by overlap between the (at most 2 x 2) output texels under it,
                     // so the peak arrives smooth; on a ball (whose outside covers nothing)
-                    // it goes whole to the texel it lands in. Neighbouring sub-cells mostly
-                    // land together: one share per run.
+                    // it goes whole to the texel it lands in.
                     let side = if out.is_ball() {
                         0.0
                     } else {
                         (a_in / a_out.max(1e-12) / k as f32).min(1.0)
                     };
+                    // A peak's shares summed as they come (its sub-cells land on a few
+                    // texels, the last eight searched): fewer entries to sort.
                     let start = shares.len();
                     for &(d, wgt) in &cells {
                         let (f, fx, fy) = out.position(d);
@@ -253,10 +244,11 @@ impl Peaks {
                             for &(y, wy) in ys.iter().flatten() {
                                 let k = key((f, x, y));
                                 let share = flux * (wgt * wx * wy);
-                                let open = shares.len() > start;
-                                match shares.last_mut() {
-                                    Some((last, s)) if open && *last == k => *s += share,
-                                    _ => shares.push((k, share)),
+                                let mine = &mut shares[start..];
+                                let recent = mine.len().saturating_sub(8);
+                                match mine[recent..].iter_mut().find(|s| s.0 == k) {
+                                    Some((_, s)) => *s += share,
+                                    None => shares.push((k, share)),
                                 }
                             }
                         }
@@ -274,6 +266,7 @@ impl Peaks {
             .collect();
         let mut shares: Vec<(u64, [f64; 3])> = shares.into_iter().flatten().collect();
         shares.par_sort_by_key(|s| s.0);
+
         // Each texel once: their solid angles (atan2s) in parallel, then the additions.
         let adds: Vec<(usize, usize, usize, Vec3)> = merge(shares.into_iter())
             .into_par_iter()

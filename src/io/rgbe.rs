@@ -17,6 +17,7 @@ use ::image::ImageDecoder;
 use glam::Vec4;
 use rayon::prelude::*;
 use std::io::Cursor;
+use std::marker::PhantomData;
 use std::path::Path;
 
 /// The image, or None when the image crate should read this file instead (a header it
@@ -264,24 +265,7 @@ pub fn encode(img: &Image) -> Vec<u8> {
         .par_chunks(w)
         .map_init(
             || vec![0u8; 4 * w],
-            |planes, row| {
-                if flat {
-                    return row.iter().flat_map(|p| to_rgbe(*p)).collect();
-                }
-                // The scanline's four channels side by side, then each run-length coded.
-                let (r, rest) = planes.split_at_mut(w);
-                let (g, rest) = rest.split_at_mut(w);
-                let (b, e) = rest.split_at_mut(w);
-                for x in 0..w {
-                    [r[x], g[x], b[x], e[x]] = to_rgbe(row[x]);
-                }
-                let mut line = Vec::with_capacity(w * 4 + w / 32 + 8);
-                line.extend_from_slice(&[2, 2, (w >> 8) as u8, (w & 0xff) as u8]);
-                for channel in planes.chunks(w) {
-                    run_length(channel, &mut line);
-                }
-                line
-            },
+            |planes, row| crate::simd::fast(EncodeRow((row, planes, flat), PhantomData)),
         )
         .collect();
     out.reserve(rows.iter().map(Vec::len).sum());
@@ -289,6 +273,31 @@ pub fn encode(img: &Image) -> Vec<u8> {
         out.extend_from_slice(&r);
     }
     out
+}
+
+crate::simd::kernel!(EncodeRow((&'k [Vec4], &'k mut [u8], bool)) -> Vec<u8> = encode_row);
+
+/// One scanline of `encode`, `planes` its scratch space (inlined into both builds of
+/// `simd::fast`).
+#[inline(always)]
+fn encode_row((row, planes, flat): (&[Vec4], &mut [u8], bool)) -> Vec<u8> {
+    let w = row.len();
+    if flat {
+        return row.iter().flat_map(|p| to_rgbe(*p)).collect();
+    }
+    // The scanline's four channels side by side, then each run-length coded.
+    let (r, rest) = planes.split_at_mut(w);
+    let (g, rest) = rest.split_at_mut(w);
+    let (b, e) = rest.split_at_mut(w);
+    for x in 0..w {
+        [r[x], g[x], b[x], e[x]] = to_rgbe(row[x]);
+    }
+    let mut line = Vec::with_capacity(w * 4 + w / 32 + 8);
+    line.extend_from_slice(&[2, 2, (w >> 8) as u8, (w & 0xff) as u8]);
+    for channel in planes.chunks(w) {
+        run_length(channel, &mut line);
+    }
+    line
 }
 
 /// Shared-exponent form: the largest channel's exponent e (value = m 2^e, m in [0.5, 1)),
