@@ -29,3 +29,4 @@ mod preview_pbr;
 mod readme;
 mod real_images;
 mod rgbe;
+mod simd;
