@@ -325,7 +325,6 @@ impl Image {
     /// image width of the image (all a projection produces), in three passes: the coordinate
     /// arithmetic in vector lanes, prefetches for every tap so many cache misses are in flight
     /// at once (a lookup at a time was bound by one miss at a time), then the texel reads.
-    #[inline(always)]
     pub(crate) fn bilinear_many_below(
         &self,
         x: &[f32],

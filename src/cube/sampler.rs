@@ -8,7 +8,6 @@ use super::face::{dir_face, dir_face_lanes, face_dir, solid_angle_table, texel_a
 use super::map::{box_reduce_face, CubeMap, Faces};
 use crate::image::Image;
 use glam::{Vec3, Vec4};
-use std::marker::PhantomData;
 
 /// Border texels added around each face so bilinear and bicubic taps never leave the face.
 const BORDER: usize = 2;
@@ -131,9 +130,8 @@ impl CubeSampler {
 
     /// `bilinear` for a whole batch: face selection and texel coordinates in vector lanes,
     /// prefetches for every tap, then the reads. Gives `bilinear`'s values bit for bit.
-    #[inline(always)]
-    fn bilinear_many((this, dirs, level, out): (&CubeSampler, &Dirs, usize, &mut [Vec4])) {
-        let (n, faces) = &this.levels[level];
+    fn bilinear_many(&self, dirs: &Dirs, level: usize, out: &mut [Vec4]) {
+        let (n, faces) = &self.levels[level];
         let count = dirs.len;
         let mut face = [0u8; BATCH];
         let mut at = [TexelAt::default(); BATCH];
@@ -395,13 +393,11 @@ fn trunc_small(v: f32) -> f32 {
     (unsafe { v.min(8_388_608.0).to_int_unchecked::<i32>() }) as f32
 }
 
-crate::simd::kernel!(BilinearMany((&'k CubeSampler, &'k Dirs, usize, &'k mut [Vec4])) -> () = CubeSampler::bilinear_many);
-
 impl Environment for CubeSampler {
     fn sample_many(&self, dirs: &Dirs, level: usize, interp: Interp, out: &mut [Vec4]) {
         let level = level.min(self.levels.len() - 1);
         if interp == Interp::Bilinear {
-            return crate::simd::fast(BilinearMany((self, dirs, level, out), PhantomData));
+            return self.bilinear_many(dirs, level, out);
         }
         for (i, o) in out.iter_mut().enumerate().take(dirs.len) {
             *o = self.sample(dirs.get(i), level, interp);

@@ -12,7 +12,6 @@ pub mod sphere;
 use crate::cube::{Dirs, Environment, Interp, BATCH};
 use crate::image::{Edges, Image};
 use glam::{Vec2, Vec3, Vec4};
-use std::marker::PhantomData;
 
 /// Every kind of environment map cubeforge reads or writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -248,39 +247,6 @@ pub struct ImageEnv<'a> {
 }
 
 impl<'a> ImageEnv<'a> {
-    /// `sample_many`'s work (inlined into both builds of `simd::fast`).
-    #[inline(always)]
-    fn sample_lanes((this, dirs, level, interp, out): (&Self, &Dirs, usize, Interp, &mut [Vec4])) {
-        let n = dirs.len;
-        let mut u = [0.0f32; BATCH];
-        let mut v = [0.0f32; BATCH];
-        // One loop per projection, so each is branch-free and vectorises.
-        match this.projection {
-            Projection::Equirect => project(dirs, &mut u, &mut v, equirect::dir_to_uv),
-            Projection::Sphere => project(dirs, &mut u, &mut v, |d| flip(sphere::dir_to_st(d))),
-            Projection::Angular => project(dirs, &mut u, &mut v, |d| flip(angular::dir_to_st(d))),
-            Projection::Octahedral => project(dirs, &mut u, &mut v, octahedral::dir_to_uv),
-        }
-        if this.projection == Projection::Equirect && interp == Interp::Bilinear {
-            let img = this.level(level);
-            let (w, h) = (img.width as f32, img.height as f32);
-            for (u, v) in u[..n].iter_mut().zip(v[..n].iter_mut()) {
-                *u *= w;
-                *v *= h;
-            }
-            let ceiling = if level == 0 {
-                this.ceiling
-            } else {
-                Vec4::INFINITY
-            };
-            img.bilinear_many_below(&u[..n], &v[..n], true, ceiling, &mut out[..n]);
-            return;
-        }
-        for ((o, &u), &v) in out[..n].iter_mut().zip(&u[..n]).zip(&v[..n]) {
-            *o = this.at(Vec2::new(u, v), level, interp);
-        }
-    }
-
     /// Prepares `levels` pyramid levels (None: down to 8 texels high).
     pub fn new(projection: Projection, base: &'a Image, levels: Option<usize>) -> ImageEnv<'a> {
         Self::below(projection, base, levels, Vec4::INFINITY)
@@ -407,8 +373,6 @@ impl ImageEnv<'_> {
     }
 }
 
-crate::simd::kernel!(SampleLanes((&'k ImageEnv<'k>, &'k Dirs, usize, Interp, &'k mut [Vec4])) -> () = ImageEnv::sample_lanes);
-
 impl Environment for ImageEnv<'_> {
     #[inline]
     fn sample(&self, d: Vec3, level: usize, interp: Interp) -> Vec4 {
@@ -418,7 +382,34 @@ impl Environment for ImageEnv<'_> {
     /// Image coordinates of the whole batch first (a vectorised loop: the trigonometry is
     /// most of a panorama lookup's cost), then the texel reads.
     fn sample_many(&self, dirs: &Dirs, level: usize, interp: Interp, out: &mut [Vec4]) {
-        crate::simd::fast(SampleLanes((self, dirs, level, interp, out), PhantomData))
+        let n = dirs.len;
+        let mut u = [0.0f32; BATCH];
+        let mut v = [0.0f32; BATCH];
+        // One loop per projection, so each is branch-free and vectorises.
+        match self.projection {
+            Projection::Equirect => project(dirs, &mut u, &mut v, equirect::dir_to_uv),
+            Projection::Sphere => project(dirs, &mut u, &mut v, |d| flip(sphere::dir_to_st(d))),
+            Projection::Angular => project(dirs, &mut u, &mut v, |d| flip(angular::dir_to_st(d))),
+            Projection::Octahedral => project(dirs, &mut u, &mut v, octahedral::dir_to_uv),
+        }
+        if self.projection == Projection::Equirect && interp == Interp::Bilinear {
+            let img = self.level(level);
+            let (w, h) = (img.width as f32, img.height as f32);
+            for (u, v) in u[..n].iter_mut().zip(v[..n].iter_mut()) {
+                *u *= w;
+                *v *= h;
+            }
+            let ceiling = if level == 0 {
+                self.ceiling
+            } else {
+                Vec4::INFINITY
+            };
+            img.bilinear_many_below(&u[..n], &v[..n], true, ceiling, &mut out[..n]);
+            return;
+        }
+        for ((o, &u), &v) in out[..n].iter_mut().zip(&u[..n]).zip(&v[..n]) {
+            *o = self.at(Vec2::new(u, v), level, interp);
+        }
     }
 
     fn texel_angle(&self) -> f32 {
