@@ -156,6 +156,7 @@ impl Grid {
     /// The texels along one axis (of `n`) that a span of `side` texels centred on `at`
     /// overlaps, with the fraction of the span each gets. The span is kept inside the image
     /// (a panorama's columns wrap).
+    #[inline(always)]
     fn spans(self, at: f32, side: f32, n: usize) -> [Option<(usize, f32)>; 2] {
         let wraps = matches!(self, Grid::Projection(Projection::Equirect, w, _) if w == n);
         let half = 0.5 * side;
@@ -165,7 +166,9 @@ impl Grid {
             at.clamp(half, n as f32 - half)
         };
         let (lo, hi) = (c - half, c + half);
-        let first = lo.floor();
+        // floor() without libm's call (texel coordinates, far inside i32's range).
+        let t = lo as i32 as f32;
+        let first = if t > lo { t - 1.0 } else { t };
         let index = |v: f32| {
             if wraps {
                 (v as i64).rem_euclid(n as i64) as usize
