@@ -185,7 +185,7 @@ impl Grid {
 
     /// Solid angle per unit texel area at continuous texel coordinates (0 outside a ball):
     /// the weight of a point when a texel is cut into sub-cells.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn density(self, x: f32, y: f32) -> f32 {
         match self {
             Grid::Cube(n) => {

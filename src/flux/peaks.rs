@@ -64,21 +64,8 @@ impl RowStats {
                 max: m.truncate(),
             };
         }
-        // A cube face's density written out (`Grid::density`'s arithmetic, so the same bits)
-        // instead of a call per texel: a third of the time of finding a cube's peaks.
-        let cube = match grid {
-            Grid::Cube(n) => Some(2.0 / n as f32),
-            _ => None,
-        };
         for (x, p) in row.iter().enumerate() {
-            let a = match cube {
-                Some(inv) => {
-                    let (sc, tc) = ((x as f32 + 0.5) * inv - 1.0, (y as f32 + 0.5) * inv - 1.0);
-                    let q = 1.0 + sc * sc + tc * tc;
-                    inv * inv / (q * q.sqrt())
-                }
-                None => grid.density(x as f32 + 0.5, y as f32 + 0.5),
-            };
+            let a = grid.density(x as f32 + 0.5, y as f32 + 0.5);
             if a > 0.0 {
                 for (c, s) in sum.iter_mut().enumerate() {
                     *s += (p[c] * a) as f64;
