@@ -10,7 +10,6 @@ use crate::cube::{face_dir, CubeMap, CubeSampler, Dirs, TapLevels, TapScratch, B
 use crate::image::Image;
 use glam::{Mat3, Vec3, Vec4};
 use std::f32::consts::{PI, TAU};
-use std::marker::PhantomData;
 
 /// A lobe around the direction being filtered, as a function of the angle to it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -321,27 +320,17 @@ pub fn filter_level(
     };
     std::array::from_fn(|face| {
         Image::from_rows(size, size, |y, row| {
-            crate::simd::fast(LobeRow((&filter_texel, face, y, inv, row), PhantomData))
+            let mut scratch = Scratch {
+                dirs: Dirs::default(),
+                taps: TapScratch::new(),
+                values: [Vec4::ZERO; BATCH],
+            };
+            for (x, texel) in row.iter_mut().enumerate() {
+                let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                *texel = filter_texel(n, &mut scratch);
+            }
         })
     })
-}
-
-crate::simd::kernel!(LobeRow<F>((&'k F, usize, usize, f32, &'k mut [Vec4])) -> () = lobe_row where F: Fn(Vec3, &mut Scratch) -> Vec4);
-
-/// One output row of `filter_level` (inlined into both builds of `simd::fast`).
-#[inline(always)]
-fn lobe_row<F: Fn(Vec3, &mut Scratch) -> Vec4>(
-    (filter_texel, face, y, inv, row): (&F, usize, usize, f32, &mut [Vec4]),
-) {
-    let mut scratch = Scratch {
-        dirs: Dirs::default(),
-        taps: TapScratch::new(),
-        values: [Vec4::ZERO; BATCH],
-    };
-    for (x, texel) in row.iter_mut().enumerate() {
-        let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
-        *texel = filter_texel(n, &mut scratch);
-    }
 }
 
 /// One row's scratch space: a batch of turned directions, the lookups' and their values.
