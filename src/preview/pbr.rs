@@ -240,6 +240,16 @@ impl std::fmt::Debug for PbrSetup {
 }
 
 impl PbrSetup {
+    /// The environment's own chain, read with `mapping` (its level 0 gives the diffuse SH).
+    fn own_chain(level0: &CubeMap, mapping: LevelMapping, note: String) -> PbrSetup {
+        PbrSetup {
+            split_sum: SplitSum::for_cube(level0, mapping),
+            chain: None,
+            note,
+            warning: None,
+        }
+    }
+
     /// The chain `pbr` materials sample: the one made in memory, or `env`'s own.
     pub fn sampler<'a>(&'a self, env: &'a LoadedEnv) -> &'a CubeSampler {
         self.chain.as_ref().unwrap_or(&env.sampler)
@@ -287,12 +297,7 @@ pub fn prepare(env: &LoadedEnv, name: &Path, target: Option<Engine>) -> Result<P
                 e.name(),
                 list(&m.level_roughness())
             );
-            return Ok(PbrSetup {
-                split_sum: SplitSum::for_cube(&level0, m),
-                chain: None,
-                note,
-                warning: None,
-            });
+            return Ok(PbrSetup::own_chain(&level0, m, note));
         }
         let why = match &env.levels {
             Some(d) if d.filter != FilterKind::Ggx => {
@@ -310,12 +315,7 @@ pub fn prepare(env: &LoadedEnv, name: &Path, target: Option<Engine>) -> Result<P
                             "{shown}: GGX chain of {count} levels, roughness {} (its description)",
                             list(&m.level_roughness())
                         );
-                        return Ok(PbrSetup {
-                            split_sum: SplitSum::for_cube(&level0, m),
-                            chain: None,
-                            note,
-                            warning: None,
-                        });
+                        return Ok(PbrSetup::own_chain(&level0, m, note));
                     }
                     Some(Err(e)) => format!("has a description whose {e}"),
                     None => "has a description without every level's roughness".into(),
