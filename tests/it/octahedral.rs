@@ -178,29 +178,32 @@ fn wavy(d: Vec3) -> Vec4 {
 fn round_trips_through_an_octahedral_map() {
     let n = 64;
     let rs = Resampler::default();
+    // The input converted to an octahedral map, loaded again as an input.
+    let via_octahedral = |src: &Loaded| {
+        let octa = image(convert::convert(src, Kind::Octahedral, n, &rs));
+        loaded(
+            Source::Projection(Projection::Octahedral, octa),
+            Kind::Octahedral,
+        )
+    };
     let pano = exact(Projection::Equirect, 4 * n, 2 * n, wavy);
     let src = loaded(
         Source::Projection(Projection::Equirect, pano.clone()),
         Kind::Equirect,
     );
-    let octa = image(convert::convert(&src, Kind::Octahedral, n, &rs));
-    let mid = loaded(
-        Source::Projection(Projection::Octahedral, octa),
-        Kind::Octahedral,
-    );
-    let back = image(convert::convert(&mid, Kind::Equirect, n, &rs));
+    let back = image(convert::convert(
+        &via_octahedral(&src),
+        Kind::Equirect,
+        n,
+        &rs,
+    ));
     let (p, e) = scores(&back, &pano);
     println!("equirect -> octahedral -> equirect: {p:.1} dB, max {e:.5}");
     assert!(p >= 58.0 && e <= 0.01, "{p:.1} dB, {e}");
 
     let faces = CubeMap::from_fn(n, wavy);
     let src = loaded(Source::Cube(faces.clone()), Kind::Faces);
-    let octa = image(convert::convert(&src, Kind::Octahedral, n, &rs));
-    let mid = loaded(
-        Source::Projection(Projection::Octahedral, octa),
-        Kind::Octahedral,
-    );
-    let back = cube(convert::convert(&mid, Kind::Faces, n, &rs));
+    let back = cube(convert::convert(&via_octahedral(&src), Kind::Faces, n, &rs));
     let (p, e) = cube_scores(&back, &faces);
     println!("faces -> octahedral -> faces: {p:.1} dB, max {e:.5}");
     assert!(p >= 58.0 && e <= 0.01, "{p:.1} dB, {e}");
