@@ -134,10 +134,32 @@ pub fn stage(files: &[(PathBuf, Vec<u8>)]) -> Result<Staged> {
     let written: Vec<Result<()>> = files
         .par_iter()
         .zip(&tmps)
-        .map(|((path, bytes), tmp)| std::fs::write(tmp, bytes).map_err(|e| Error::io(path, e)))
+        .map(|((path, bytes), tmp)| write_file(tmp, bytes, path).map_err(|e| Error::io(path, e)))
         .collect();
     written.into_iter().collect::<Result<()>>()?;
     Ok(staged)
+}
+
+/// Writes `bytes` to `tmp`, to be renamed onto `target` later. When that rename replaces a
+/// file, ext4 (`auto_da_alloc`) first allocates and flushes the new file's blocks, serially,
+/// inside the rename: 3 ms per 3 MB face, 18 ms for six, more than the whole write. Starting
+/// that writeback here, on the parallel writers, leaves the renames nothing to wait for.
+fn write_file(tmp: &Path, bytes: &[u8], target: &Path) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut f = std::fs::File::create(tmp)?;
+    f.write_all(bytes)?;
+    #[cfg(target_os = "linux")]
+    if target.is_file() {
+        use std::os::fd::AsRawFd;
+        // SAFETY: a plain system call on this open file; it reads no memory of ours. A
+        // failure only means the rename flushes as before.
+        unsafe {
+            libc::sync_file_range(f.as_raw_fd(), 0, 0, libc::SYNC_FILE_RANGE_WRITE);
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = target;
+    Ok(())
 }
 
 /// An advisory lock on a folder, held while files are renamed into it.
