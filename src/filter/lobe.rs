@@ -162,10 +162,32 @@ impl Kernel {
     /// cover the solid angle the sample stands for (Krivanek and Colbert's filtered importance
     /// sampling), on a source whose level 0 has faces of edge `src_size`.
     pub fn new(lobe: Lobe, count: u32, src_size: usize) -> Kernel {
+        Kernel::sampled(lobe, count, src_size, 0.0)
+    }
+
+    /// `count` samples of a GGX lobe's tail: the directions more than `reach` radians from
+    /// its axis, the part `filter::hybrid` leaves to sampling. None for
+    /// other lobes.
+    pub(crate) fn ggx_tail(lobe: Lobe, count: u32, src_size: usize, reach: f32) -> Option<Kernel> {
+        let Lobe::Ggx { alpha } = lobe else {
+            return None;
+        };
+        // The reflected direction's angle is twice the half vector's: the fraction of the
+        // half vectors within half the reach, from the sampling formula below inverted.
+        let a2 = alpha as f64 * alpha as f64;
+        let c2 = (reach as f64 * 0.5).cos().powi(2);
+        let u0 = (1.0 - c2) / (1.0 + c2 * (a2 - 1.0));
+        Some(Kernel::sampled(lobe, count, src_size, u0 as f32))
+    }
+
+    /// The samples of `new`, drawn from the part of the sampling distribution above `u0` (0:
+    /// all of it); the density rises by 1 / (1 - u0) in the part drawn from.
+    fn sampled(lobe: Lobe, count: u32, src_size: usize, u0: f32) -> Kernel {
         let texel_solid_angle = 4.0 * PI / (6.0 * (src_size * src_size) as f32);
         let mut taps = Vec::with_capacity(count as usize);
         for i in 0..count {
             let (u, v) = hammersley(i, count);
+            let u = u0 + u * (1.0 - u0);
             let phi = TAU * v;
             // (cos theta of the sampled direction, weight, pdf in solid angle)
             let (cos_t, weight, pdf) = match lobe {
@@ -216,6 +238,7 @@ impl Kernel {
             };
             let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
             let dir = Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
+            let pdf = pdf / (1.0 - u0);
             let sample_solid_angle = 1.0 / (count as f32 * pdf.max(1e-20));
             let max_lod = (CubeMap::full_chain_len(src_size) - 1) as f32;
             let lod = (0.5 * (sample_solid_angle / texel_solid_angle).log2()).clamp(0.0, max_lod);

@@ -6,6 +6,7 @@
 mod bright;
 pub mod brute;
 mod diffuse;
+mod hybrid;
 pub mod lobe;
 pub mod sh;
 mod window;
@@ -281,10 +282,12 @@ pub fn prefilter_planned(
     // BRIGHT_RATIO times the mean luminance, so no tap can turn into a firefly.
     let (residual, bright) = bright::split_bright(base, BRIGHT_RATIO);
     let src = lobe::source_sampler(&residual);
-    let levels: Vec<Faces> = {
+    // Each level's faces, and the samples it took where that differs from the plan's.
+    let levels: Vec<(Faces, Option<u32>)> = {
         use rayon::prelude::*;
         plan.par_iter()
             .map(|(info, lobe)| {
+                let mut samples = info.samples;
                 let faces = match lobe {
                     None => copy_faces(&base.levels[0]),
                     Some(l) => match window::Window::plan(*l, n, src.level_count()) {
@@ -292,20 +295,32 @@ pub fn prefilter_planned(
                             window::filter_level(&src, &w, info.size, &BrightSum::new(&bright, *l))
                         }
                         None => {
-                            let k = Kernel::new(*l, info.samples.unwrap_or(opts.samples), n);
-                            lobe::filter_level(&src, &k, info.size, *l, &bright)
+                            let count = info.samples.unwrap_or(opts.samples);
+                            match hybrid::Hybrid::plan(*l, count, n, src.level_count()) {
+                                Some(h) => {
+                                    samples = Some(h.samples);
+                                    h.filter_level(&src, info.size, &bright)
+                                }
+                                None => {
+                                    let k = Kernel::new(*l, count, n);
+                                    lobe::filter_level(&src, &k, info.size, *l, &bright)
+                                }
+                            }
                         }
                     },
                 };
                 progress(info.level);
-                faces
+                (faces, samples)
             })
             .collect()
     };
-    (
-        CubeMap { levels },
-        plan.into_iter().map(|(i, _)| i).collect(),
-    )
+    let (levels, samples): (Vec<Faces>, Vec<Option<u32>>) = levels.into_iter().unzip();
+    let infos = plan
+        .into_iter()
+        .zip(samples)
+        .map(|((info, _), samples)| LevelInfo { samples, ..info })
+        .collect();
+    (CubeMap { levels }, infos)
 }
 
 /// A copy of six faces, rows in parallel (a level-0 copy of a 512 cube is 25 MB).

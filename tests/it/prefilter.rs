@@ -87,6 +87,26 @@ fn ggx_cosine_and_charlie_match_brute_force() {
     }
 }
 
+/// The glossiest GGX levels of a larger chain are an exact core plus a sampled tail
+/// (`filter::hybrid`): against brute force on the detailed sky, each level's mean relative
+/// error stays within 1.5% (measured: levels 1 to 3 0.31%, 0.26%, 0.43%; with 64 samples of
+/// the whole lobe before the split, 0.52%, 0.55%, 0.43%).
+#[test]
+fn glossy_ggx_levels_match_brute_force() {
+    let base = CubeMap::from_fn(128, sky);
+    let (out, infos) = chain(FilterKind::Ggx, &base, filter::DEFAULT_SAMPLES);
+    for (m, info) in infos.iter().enumerate().skip(1).take(3) {
+        let lobe = stated_lobe(FilterKind::Ggx, info).unwrap();
+        let reference = brute::convolve(&base, lobe, info.size);
+        let e = mean_rel_error(&out.levels[m], &reference);
+        eprintln!(
+            "GGX 128 level {m} ({} px, {:?} samples): mean relative error {e:.4}",
+            info.size, info.samples
+        );
+        assert!(e < 0.015, "level {m}: mean relative error {e}");
+    }
+}
+
 /// The largest step between texels either side of any face edge, against the largest step
 /// between neighbours inside a face, over every level of a chain.
 fn seam_ratio(cube: &CubeMap) -> f32 {

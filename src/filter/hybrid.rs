@@ -1,0 +1,95 @@
+//! Narrow GGX lobes split in two: the core within two lobe widths of the axis summed exactly
+//! over the texels it covers (as `window` sums narrow cosine lobes), the long tail (GGX falls
+//! off as the inverse fourth power of the angle: a fifth of its mass lies beyond two widths)
+//! importance-sampled. The glossiest levels of a chain cost most as 64 trilinear samples
+//! per texel; the core's exact sum over a few dozen texels of a coarse level and half the
+//! samples for the tail cost less (GGX 512 chain, one thread: filtering 0.51 -> 0.46 s) and
+//! come closer to brute force (128 faces, the detailed sky: levels 1 and 2 0.52% and 0.55%
+//! mean relative error before, 0.31% and 0.26% split).
+
+#![warn(missing_docs)]
+
+use super::bright::{Bright, BrightSum};
+use super::lobe::{self, Kernel, Lobe};
+use super::window::{self, Window};
+use crate::cube::{face_dir, CubeSampler, Faces};
+use crate::image::Image;
+use rayon::prelude::*;
+
+/// The core reaches this many lobe widths (2 alpha radians) from the axis: about 80% of the
+/// mass. Three widths (90%) made the core's sum cost nearly what the samples it replaced did
+/// (512 chain, level 1: 0.145 s against 0.26 s for 64 samples, one thread); two, 0.089 s.
+const CORE_WIDTHS: f32 = 2.0;
+
+/// The tail gets 1 / TAIL_SHARE of the samples the whole lobe would (at least `MIN_TAIL`).
+/// A quarter was 5% faster but too few next to a sun: a tail sample landing on its clamped
+/// residual stands for 1.25% of the lobe (the preview's pipeline error at roughness 0.25
+/// rose from 0.01 to 0.043; with half, 0.006).
+const TAIL_SHARE: u32 = 2;
+const MIN_TAIL: u32 = 8;
+
+/// A lobe's level planned as an exact core and a sampled tail.
+pub(crate) struct Hybrid {
+    core: Window,
+    tail: Kernel,
+    /// The core's share of the lobe's mass (over the sphere, weighted by solid angle).
+    share: f32,
+    lobe: Lobe,
+    /// Samples per texel of the tail.
+    pub(crate) samples: u32,
+}
+
+impl Hybrid {
+    /// The split for `lobe` (GGX only) on a source of `levels` box mips below a level 0 of
+    /// edge `src_size`, whose whole lobe would take `samples` samples; None where it does not
+    /// pay or would not hold: other lobes, cores wider than a window sums, or lobes narrower
+    /// than the source's texels (the core would hold a texel or none).
+    pub(crate) fn plan(lobe: Lobe, samples: u32, src_size: usize, levels: usize) -> Option<Self> {
+        let Lobe::Ggx { alpha } = lobe else {
+            return None;
+        };
+        let width = 2.0 * alpha;
+        if width * src_size as f32 / 2.0 < window::MIN_SIGMA_TEXELS {
+            return None;
+        }
+        let reach = CORE_WIDTHS * width;
+        let core = Window::core(lobe, width, reach, src_size, levels)?;
+        let samples = (samples / TAIL_SHARE).max(MIN_TAIL);
+        let tail = Kernel::ggx_tail(lobe, samples, src_size, reach)?;
+        let share = window::share_within(lobe, reach) as f32;
+        Some(Hybrid {
+            core,
+            tail,
+            share,
+            lobe,
+            samples,
+        })
+    }
+
+    /// Six faces of edge `size`: the core's mean and the tail's, each weighted by its share
+    /// of the lobe, plus the bright texels' exact convolution with the whole lobe.
+    pub(crate) fn filter_level(&self, src: &CubeSampler, size: usize, bright: &Bright) -> Faces {
+        let none = Bright::default();
+        let core = window::filter_level(src, &self.core, size, &BrightSum::new(&none, self.lobe));
+        let tail = lobe::filter_level(src, &self.tail, size, self.lobe, &none);
+        let bright = BrightSum::new(bright, self.lobe);
+        let (a, b) = (self.share, 1.0 - self.share);
+        let inv = 1.0 / size as f32;
+        std::array::from_fn(|face| {
+            let (core, tail) = (&core[face].pixels, &tail[face].pixels);
+            let mut out = Image::new(size, size);
+            out.pixels
+                .par_chunks_mut(size.max(1))
+                .enumerate()
+                .for_each(|(y, row)| {
+                    for (x, o) in row.iter_mut().enumerate() {
+                        let i = y * size + x;
+                        let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv)
+                            .normalize();
+                        *o = core[i] * a + tail[i] * b + bright.at(n).extend(0.0);
+                    }
+                });
+            out
+        })
+    }
+}
