@@ -222,6 +222,7 @@ impl Staged {
         let locks = lock_dirs(&mut dirs);
         let files = std::mem::take(&mut self.files);
         let existed: Vec<bool> = files.iter().map(|(_, p)| p.exists()).collect();
+        let old = keep_replaced(&files);
         for (i, (tmp, path)) in files.iter().enumerate() {
             if let Err(e) = std::fs::rename(tmp, path) {
                 self.files = files[i..].to_vec();
@@ -229,13 +230,48 @@ impl Staged {
                 created.extend(made.map(|((_, p), _)| p.clone()));
                 drop(locks);
                 rollback(&created);
+                remove_all(&old);
                 return Err(Error::io(path, e));
             }
             forget(tmp);
         }
         drop(locks);
+        remove_all(&old);
         Ok(())
     }
+}
+
+/// A second name for each regular file the renames will replace, so that no rename drops a
+/// file's last name: freeing a replaced file's pages and blocks happened inside its rename,
+/// one file after another (device, six 4 MB faces rewritten: 17-21 ms of a 70 ms command at
+/// 16 threads). The names are removed afterwards, in parallel. Where a file system has no
+/// hard links, the renames free the files as before.
+fn keep_replaced(files: &[(PathBuf, PathBuf)]) -> Vec<PathBuf> {
+    files
+        .iter()
+        .filter(|(_, p)| std::fs::symlink_metadata(p).is_ok_and(|m| m.is_file()))
+        .filter_map(|(_, p)| {
+            let name = p.file_name()?.to_string_lossy().into_owned();
+            let old = parent(p).join(format!(".{name}.cubeforge-{}.old", std::process::id()));
+            register(&old);
+            match std::fs::hard_link(p, &old) {
+                Ok(()) => Some(old),
+                Err(_) => {
+                    forget(&old);
+                    None
+                }
+            }
+        })
+        .collect()
+}
+
+/// Removes the replaced files' second names, in parallel.
+fn remove_all(names: &[PathBuf]) {
+    use rayon::prelude::*;
+    names.par_iter().for_each(|p| {
+        let _ = std::fs::remove_file(p);
+        forget(p);
+    });
 }
 
 /// The files under a staged tree, paired with their targets under `top`.
