@@ -52,12 +52,15 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(I
         .par_chunks_mut(w)
         .zip(starts.par_iter())
         .for_each_init(
-            || vec![[0u8; 4]; w],
-            |rgbe, (row, &start)| {
-                let done = scanline(bytes, start, w, Some(rgbe));
+            || vec![0u8; 4 * w],
+            |planes, (row, &start)| {
+                let done = scanline(bytes, start, w, Some(planes));
                 debug_assert!(done.is_some(), "a scanned line decodes");
-                for (o, t) in row.iter_mut().zip(rgbe.iter()) {
-                    *o = texel(*t);
+                let (r, rest) = planes.split_at(w);
+                let (g, rest) = rest.split_at(w);
+                let (b, e) = rest.split_at(w);
+                for (x, o) in row.iter_mut().enumerate() {
+                    *o = texel([r[x], g[x], b[x], e[x]]);
                 }
             },
         );
@@ -170,15 +173,11 @@ fn texel([r, g, b, e]: [u8; 4]) -> Vec4 {
 }
 
 /// Walks the scanline of `w` texels that starts at byte `p`, writing its texels to `out` when
-/// given; returns where the next one starts, or None if the line is malformed. New-style lines
-/// hold four run-length-coded channels; anything else is old-style texels (flat, or with
-/// (1, 1, 1, n) repeat markers).
-fn scanline(
-    data: &[u8],
-    mut p: usize,
-    w: usize,
-    mut out: Option<&mut Vec<[u8; 4]>>,
-) -> Option<usize> {
+/// given, as four planes of `w` bytes (R, G, B, E: a run-length channel's literals are then
+/// one copy, its runs one fill); returns where the next one starts, or None if the line is
+/// malformed. New-style lines hold four run-length-coded channels; anything else is old-style
+/// texels (flat, or with (1, 1, 1, n) repeat markers).
+fn scanline(data: &[u8], mut p: usize, w: usize, mut out: Option<&mut [u8]>) -> Option<usize> {
     let first: [u8; 4] = data.get(p..p + 4)?.try_into().ok()?;
     p += 4;
     if first[0] == 2 && first[1] == 2 && first[2] < 128 {
@@ -193,9 +192,7 @@ fn scanline(
                         return None;
                     }
                     if let Some(o) = out.as_deref_mut() {
-                        for (t, &v) in o[x..x + code].iter_mut().zip(values) {
-                            t[c] = v;
-                        }
+                        o[c * w + x..c * w + x + code].copy_from_slice(values);
                     }
                     p += code;
                     x += code;
@@ -207,9 +204,7 @@ fn scanline(
                         return None;
                     }
                     if let Some(o) = out.as_deref_mut() {
-                        for t in &mut o[x..x + n] {
-                            t[c] = v;
-                        }
+                        o[c * w + x..c * w + x + n].fill(v);
                     }
                     x += n;
                 }
@@ -221,8 +216,13 @@ fn scanline(
     if marker(&first) {
         return None;
     }
+    let put = |o: &mut [u8], x: usize, t: [u8; 4]| {
+        for (c, v) in t.into_iter().enumerate() {
+            o[c * w + x] = v;
+        }
+    };
     if let Some(o) = out.as_deref_mut() {
-        o[0] = first;
+        put(o, 0, first);
     }
     let (mut x, mut shift, mut prev) = (1, 0u32, first);
     while x < w {
@@ -236,14 +236,16 @@ fn scanline(
                 return None;
             }
             if let Some(o) = out.as_deref_mut() {
-                o[x..x + n].fill(prev);
+                for (c, v) in prev.into_iter().enumerate() {
+                    o[c * w + x..c * w + x + n].fill(v);
+                }
             }
             x += n;
         } else {
             shift = 0;
             prev = t;
             if let Some(o) = out.as_deref_mut() {
-                o[x] = t;
+                put(o, x, t);
             }
             x += 1;
         }
@@ -489,6 +491,47 @@ mod tests {
 #[cfg(test)]
 mod encode_tests {
     use super::*;
+
+    /// Every line form decodes into the planes as it should: old-style flat texels and
+    /// (1, 1, 1, n) repeats, and run-length lines of literals and runs (round trip).
+    #[test]
+    fn every_line_form_decodes() {
+        let t = [
+            [10u8, 20, 30, 129],
+            [40, 50, 60, 130],
+            [70, 80, 90, 128],
+            [1, 2, 3, 140],
+        ];
+        let mut file = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 5\n".to_vec();
+        // Line 0 flat; line 1: one texel, three repeats of it, then another.
+        for k in [0, 1, 2, 3, 0] {
+            file.extend_from_slice(&t[k]);
+        }
+        file.extend_from_slice(&t[1]);
+        file.extend_from_slice(&[1, 1, 1, 3]);
+        file.extend_from_slice(&t[3]);
+        let opts = crate::io::ReadOptions::default();
+        let (img, _) = decode(&file, Path::new("old.hdr"), &opts).unwrap().unwrap();
+        let want = [0, 1, 2, 3, 0, 1, 1, 1, 1, 3].map(|k| texel(t[k]));
+        assert_eq!(img.pixels, want);
+        // Run-length lines: literals and runs in every channel.
+        let src = Image::from_fn(40, 3, |x, y| {
+            let v = if x % 10 < 5 {
+                1.5
+            } else {
+                (x * 7 + y) as f32 * 0.25
+            };
+            Vec4::new(v, 2.0 * v, 0.5, 1.0)
+        });
+        let file = encode(&src);
+        let (img, _) = decode(&file, Path::new("rle.hdr"), &opts).unwrap().unwrap();
+        for (a, b) in img.pixels.iter().zip(&src.pixels) {
+            assert!(
+                (*a - *b).abs().max_element() <= b.max_element() / 128.0,
+                "{a} vs {b}"
+            );
+        }
+    }
 
     /// No channel's run-length form is longer than the slot `encode` gives it: its bytes, a
     /// count per 128 literals and one more, for the shapes that cost most (literals cut by
