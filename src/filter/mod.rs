@@ -143,7 +143,8 @@ pub struct LevelInfo {
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub sigma: Option<f32>,
     /// Importance samples per texel (None: the level was copied or box-reduced, or its narrow
-    /// cosine or Gaussian lobe summed exactly over the texels it covers).
+    /// cosine or Gaussian lobe summed exactly over the texels it covers; for a glossy GGX
+    /// level, those of its tail: its core is summed exactly).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub samples: Option<u32>,
 }
