@@ -113,7 +113,7 @@ impl Resampler {
         let mut faces = std::array::from_fn(|face| {
             self.render(
                 env,
-                (size, size, 6 * size * size),
+                (size, size, 6 * size * size, 2.0 * inv),
                 |x, y| Some(face_dir(face, x * inv, y * inv)),
                 |x, y| {
                     // Angle of one texel at (sc, tc) on the face plane, the larger axis.
@@ -158,12 +158,18 @@ impl Resampler {
             Projection::Equirect => {
                 let rows = std::f32::consts::PI * ih;
                 let dir = move |x: f32, y: f32| Some(equirect::uv_to_dir(x * iw, y * ih));
-                self.render(env, (w, h, w * h), dir, move |_, _| rows, density)
+                self.render(env, (w, h, w * h, rows), dir, move |_, _| rows, density)
             }
             // The angle from -Z is pi r: pi per unit radius, across and around.
             Projection::Angular => {
                 let texel = std::f32::consts::TAU * iw;
-                self.render(env, (w, h, w * h), at(proj), move |_, _| texel, density)
+                self.render(
+                    env,
+                    (w, h, w * h, texel),
+                    at(proj),
+                    move |_, _| texel,
+                    density,
+                )
             }
             // The angle from -Z is 2 asin r: 2 / sqrt(1 - r^2) across the rings, more than the
             // 2 sqrt(1 - r^2) around them; taken half a texel inside the rim for the texels
@@ -175,7 +181,13 @@ impl Resampler {
                     let rr = (sx * sx + sy * sy).min(rim * rim);
                     4.0 * iw / (1.0 - rr).sqrt()
                 };
-                self.render(env, (w, h, w * h), at(proj), footprint, density)
+                self.render(
+                    env,
+                    (w, h, w * h, f32::INFINITY),
+                    at(proj),
+                    footprint,
+                    density,
+                )
             }
             // The larger singular value of the fold's map to directions, per texel.
             Projection::Octahedral => {
@@ -183,7 +195,13 @@ impl Resampler {
                     let (a, b) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
                     2.0 * iw * octahedral::stretch(a, b)
                 };
-                self.render(env, (w, h, w * h), at(proj), footprint, density)
+                self.render(
+                    env,
+                    (w, h, w * h, f32::INFINITY),
+                    at(proj),
+                    footprint,
+                    density,
+                )
             }
         };
         self.splat(env, grid, std::slice::from_mut(&mut image));
@@ -193,14 +211,15 @@ impl Resampler {
     /// The shared loop: `dir(x, y)` gives the direction at continuous pixel coordinates
     /// (None where the layout shows nothing), `footprint` the angle one texel spans there and
     /// `density` the solid angle per unit of texel area, which weights the taps of a texel.
-    /// `texels` counts the whole output's texels (it sets the taps per coarse texel).
+    /// `texels` counts the whole output's texels (it sets the taps per coarse texel), `widest`
+    /// bounds `footprint` over the whole output (infinity: no bound known).
     /// Texels are worked in short runs of a row: every tap of a run (one per texel, or up to
     /// MAX_SUB x MAX_SUB for coarse texels and for texels a ball's rim cuts) is queued and
     /// looked up in batches.
     fn render(
         &self,
         env: &dyn Environment,
-        (w, h, texels): (usize, usize, usize),
+        (w, h, texels, widest): (usize, usize, usize, f32),
         dir: impl Fn(f32, f32) -> Option<Vec3> + Sync,
         footprint: impl Fn(f32, f32) -> f32 + Sync,
         density: impl Fn(f32, f32) -> f32 + Sync,
@@ -209,8 +228,11 @@ impl Resampler {
         let src_angle = env.texel_angle();
         let levels = env.levels();
         let sub = taps_per_axis(texels);
+        // An output no sharper than the input anywhere takes one tap per texel: no texel's
+        // footprint need be worked out (a square root and a division each).
+        let single = !self.antialias || widest / src_angle <= 1.5;
         Image::from_rows(w, h, |y, row| {
-            let setup = (turn, src_angle, levels, sub);
+            let setup = (turn, src_angle, levels, sub, single);
             let lookups = (&dir, &footprint, &density);
             crate::simd::fast(RenderRow((self, env, setup, lookups, y, row), PhantomData))
         })
@@ -220,10 +242,10 @@ impl Resampler {
     #[inline(always)]
     #[allow(clippy::type_complexity)]
     fn render_row<D, F, G>(
-        (this, env, (turn, src_angle, levels, sub), (dir, footprint, density), y, row): (
+        (this, env, (turn, src_angle, levels, sub, single), (dir, footprint, density), y, row): (
             &Resampler,
             &dyn Environment,
-            (Option<Mat3>, f32, usize, usize),
+            (Option<Mat3>, f32, usize, usize, bool),
             (&D, &F, &G),
             usize,
             &mut [Vec4],
@@ -246,6 +268,9 @@ impl Resampler {
             // The common case first: every texel of the run one tap at its centre (an
             // output about as sharp as the input), looked up straight into the row.
             if single_taps(&mut taps.dirs, run * RUN, y, out.len(), |cx, cy| {
+                if single {
+                    return dir(cx, cy);
+                }
                 let ratio = if this.antialias {
                     footprint(cx, cy) / src_angle
                 } else {
@@ -326,7 +351,7 @@ impl Resampler {
     }
 }
 
-crate::simd::kernel!(RenderRow<D, F, G>((&'k Resampler, &'k dyn Environment, (Option<Mat3>, f32, usize, usize), (&'k D, &'k F, &'k G), usize, &'k mut [Vec4])) -> () = Resampler::render_row where D: Fn(f32, f32) -> Option<Vec3>, F: Fn(f32, f32) -> f32, G: Fn(f32, f32) -> f32);
+crate::simd::kernel!(RenderRow<D, F, G>((&'k Resampler, &'k dyn Environment, (Option<Mat3>, f32, usize, usize, bool), (&'k D, &'k F, &'k G), usize, &'k mut [Vec4])) -> () = Resampler::render_row where D: Fn(f32, f32) -> Option<Vec3>, F: Fn(f32, f32) -> f32, G: Fn(f32, f32) -> f32);
 
 /// Queues the centre directions of the `n` texels of row `y` from column `x0` into `dirs`,
 /// or leaves `dirs` empty and says false when one of them needs more than its centre
