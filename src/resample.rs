@@ -151,6 +151,8 @@ impl Resampler {
         let at = move |p: Projection| move |x: f32, y: f32| p.to_dir(x * iw, y * ih);
         let grid = Grid::Projection(proj, w, h);
         let density = move |x: f32, y: f32| grid.density(x, y);
+        // The output's size and texel count, and `widest` (see `render`).
+        let dims = |widest: f32| (w, h, w * h, widest);
         // The angle one texel spans, from each layout's formula (the larger of its radial and
         // tangential rates times the texel's size in disc radii, 2 / w). One render per
         // layout, so each inlines its own direction maths.
@@ -158,18 +160,12 @@ impl Resampler {
             Projection::Equirect => {
                 let rows = std::f32::consts::PI * ih;
                 let dir = move |x: f32, y: f32| Some(equirect::uv_to_dir(x * iw, y * ih));
-                self.render(env, (w, h, w * h, rows), dir, move |_, _| rows, density)
+                self.render(env, dims(rows), dir, move |_, _| rows, density)
             }
             // The angle from -Z is pi r: pi per unit radius, across and around.
             Projection::Angular => {
                 let texel = std::f32::consts::TAU * iw;
-                self.render(
-                    env,
-                    (w, h, w * h, texel),
-                    at(proj),
-                    move |_, _| texel,
-                    density,
-                )
+                self.render(env, dims(texel), at(proj), move |_, _| texel, density)
             }
             // The angle from -Z is 2 asin r: 2 / sqrt(1 - r^2) across the rings, more than the
             // 2 sqrt(1 - r^2) around them; taken half a texel inside the rim for the texels
@@ -181,13 +177,7 @@ impl Resampler {
                     let rr = (sx * sx + sy * sy).min(rim * rim);
                     4.0 * iw / (1.0 - rr).sqrt()
                 };
-                self.render(
-                    env,
-                    (w, h, w * h, f32::INFINITY),
-                    at(proj),
-                    footprint,
-                    density,
-                )
+                self.render(env, dims(f32::INFINITY), at(proj), footprint, density)
             }
             // The larger singular value of the fold's map to directions, per texel.
             Projection::Octahedral => {
@@ -195,13 +185,7 @@ impl Resampler {
                     let (a, b) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
                     2.0 * iw * octahedral::stretch(a, b)
                 };
-                self.render(
-                    env,
-                    (w, h, w * h, f32::INFINITY),
-                    at(proj),
-                    footprint,
-                    density,
-                )
+                self.render(env, dims(f32::INFINITY), at(proj), footprint, density)
             }
         };
         self.splat(env, grid, std::slice::from_mut(&mut image));
@@ -264,19 +248,19 @@ impl Resampler {
             slot: [0; BATCH],
             weight: [0.0; BATCH],
         };
+        // Source texels a texel spans (0 without antialiasing: always one tap).
+        let ratio = |cx: f32, cy: f32| {
+            if this.antialias {
+                footprint(cx, cy) / src_angle
+            } else {
+                0.0
+            }
+        };
         for (run, out) in row.chunks_mut(RUN).enumerate() {
             // The common case first: every texel of the run one tap at its centre (an
             // output about as sharp as the input), looked up straight into the row.
             if single_taps(&mut taps.dirs, run * RUN, y, out.len(), |cx, cy| {
-                if single {
-                    return dir(cx, cy);
-                }
-                let ratio = if this.antialias {
-                    footprint(cx, cy) / src_angle
-                } else {
-                    0.0
-                };
-                if ratio <= 1.5 {
+                if single || ratio(cx, cy) <= 1.5 {
                     dir(cx, cy)
                 } else {
                     None
@@ -297,11 +281,7 @@ impl Resampler {
             for i in 0..out.len() {
                 let x = run * RUN + i;
                 let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
-                let ratio = if this.antialias {
-                    footprint(cx, cy) / src_angle
-                } else {
-                    0.0
-                };
+                let ratio = ratio(cx, cy);
                 let centre = dir(cx, cy);
                 if ratio <= 1.5 && (centre.is_some() || !this.antialias) {
                     if let Some(d) = centre {
