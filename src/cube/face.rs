@@ -51,26 +51,24 @@ pub(crate) fn texel_solid_angle(n: usize, x: usize, y: usize) -> f32 {
 /// one command asks for the same size several times (its resample, bright split, mips), and
 /// a 512 face's table is 263 000 double-precision arctangents.
 pub fn solid_angle_table(n: usize) -> Vec<f32> {
-    use std::sync::{Arc, Mutex};
-    static RECENT: Mutex<Vec<(usize, Arc<Vec<f32>>)>> = Mutex::new(Vec::new());
+    use std::sync::Mutex;
+    static RECENT: Mutex<Vec<(usize, Vec<f32>)>> = Mutex::new(Vec::new());
     let lock = || RECENT.lock().unwrap_or_else(|e| e.into_inner());
     if let Some((_, t)) = lock().iter().find(|(m, _)| *m == n) {
-        return t.as_ref().clone();
+        return t.clone();
     }
-    let table = Arc::new(compute_solid_angle_table(n));
-    if n > 2048 {
-        // Held for no one: a 4096 face's table is 64 MB.
-        return Arc::unwrap_or_clone(table);
-    }
-    let mut recent = lock();
-    if !recent.iter().any(|(m, _)| *m == n) {
-        if recent.len() >= 4 {
-            recent.remove(0);
+    let table = compute_solid_angle_table(n);
+    // Larger tables are held for no one: a 4096 face's is 64 MB.
+    if n <= 2048 {
+        let mut recent = lock();
+        if !recent.iter().any(|(m, _)| *m == n) {
+            if recent.len() >= 4 {
+                recent.remove(0);
+            }
+            recent.push((n, table.clone()));
         }
-        recent.push((n, table.clone()));
     }
-    drop(recent);
-    Arc::unwrap_or_clone(table)
+    table
 }
 
 fn compute_solid_angle_table(n: usize) -> Vec<f32> {
