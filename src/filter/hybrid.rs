@@ -13,7 +13,6 @@ use super::bright::{Bright, BrightSum};
 use super::lobe::{self, Kernel, Lobe};
 use super::window::{self, Window};
 use crate::cube::{face_dir, CubeSampler, Faces};
-use crate::image::Image;
 use rayon::prelude::*;
 
 /// The core reaches this many lobe widths (2 alpha radians) from the axis: about 80% of the
@@ -70,26 +69,27 @@ impl Hybrid {
     /// of the lobe, plus the bright texels' exact convolution with the whole lobe.
     pub(crate) fn filter_level(&self, src: &CubeSampler, size: usize, bright: &Bright) -> Faces {
         let none = Bright::default();
-        let core = window::filter_level(src, &self.core, size, &BrightSum::new(&none, self.lobe));
+        let mut out =
+            window::filter_level(src, &self.core, size, &BrightSum::new(&none, self.lobe));
         let tail = lobe::filter_level(src, &self.tail, size, self.lobe, &none);
         let bright = BrightSum::new(bright, self.lobe);
         let (a, b) = (self.share, 1.0 - self.share);
         let inv = 1.0 / size as f32;
-        std::array::from_fn(|face| {
-            let (core, tail) = (&core[face].pixels, &tail[face].pixels);
-            let mut out = Image::new(size, size);
-            out.pixels
-                .par_chunks_mut(size.max(1))
+        // The core's faces become the level's, row by row.
+        for (face, (core, tail)) in out.iter_mut().zip(&tail).enumerate() {
+            let w = size.max(1);
+            core.pixels
+                .par_chunks_mut(w)
+                .zip(tail.pixels.par_chunks(w))
                 .enumerate()
-                .for_each(|(y, row)| {
-                    for (x, o) in row.iter_mut().enumerate() {
-                        let i = y * size + x;
+                .for_each(|(y, (row, tail_row))| {
+                    for (x, (o, t)) in row.iter_mut().zip(tail_row).enumerate() {
                         let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv)
                             .normalize();
-                        *o = core[i] * a + tail[i] * b + bright.at(n).extend(0.0);
+                        *o = *o * a + *t * b + bright.at(n).extend(0.0);
                     }
                 });
-            out
-        })
+        }
+        out
     }
 }
