@@ -3,7 +3,8 @@
 //! job's row loops: 5-15% faster on the device's Xeon). Only where measured to help: the
 //! panorama lookups wrapped the same way got slower. Results are the same bits either way:
 //! Rust never fuses a multiply and an add or reorders float sums by itself, and `mul_add` is
-//! exact on both.
+//! exact on both (a CPU without FMA computes it in software: the exact window sums, which use
+//! it, run many times slower there, but give the same bits).
 
 /// A hot loop and its arguments. `run` must be `#[inline(always)]`: called directly from
 /// each build of [`fast`], it is then compiled into both (a closure would not be: the
