@@ -70,7 +70,7 @@ impl Grid {
 
     /// The k x k sub-cells of texel (x, y) of `face` (row by row) that have a direction, with
     /// their weights (`density`), into `cells`; returns the sum of the weights. A panorama's
-    /// directions are separable: k sines and cosines per axis, not per cell.
+    /// directions are separable: k sines and cosines per axis, not per cell. `k` is at most 64.
     pub(crate) fn sub_cells(
         self,
         face: usize,
@@ -79,21 +79,24 @@ impl Grid {
         k: usize,
         cells: &mut Vec<(Vec3, f32)>,
     ) -> f32 {
+        debug_assert!((1..=64).contains(&k));
         let at = |i: usize| (i as f32 + 0.5) / k as f32;
         let mut total = 0.0f32;
         if let Grid::Projection(Projection::Equirect, w, h) = self {
             let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
             let area = std::f32::consts::TAU * iw * PI as f32 * ih;
-            let lon: Vec<(f32, f32)> = (0..k)
-                .map(|i| equirect::sin_cos(((x + at(i)) * iw - 0.5) * std::f32::consts::TAU))
-                .collect();
+            let mut lon = [(0.0f32, 0.0f32); 64];
+            let lon = &mut lon[..k.min(64)];
+            for (i, l) in lon.iter_mut().enumerate() {
+                *l = equirect::sin_cos(((x + at(i)) * iw - 0.5) * std::f32::consts::TAU);
+            }
             for j in 0..k {
                 let (st, ct) = equirect::sin_cos((0.5 - (y + at(j)) * ih) * PI as f32);
                 let wgt = area * ct.max(0.0);
                 if wgt <= 0.0 {
                     continue;
                 }
-                for &(sp, cp) in &lon {
+                for &(sp, cp) in lon.iter() {
                     cells.push((Vec3::new(ct * sp, st, ct * cp), wgt));
                     total += wgt;
                 }

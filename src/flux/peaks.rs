@@ -202,6 +202,8 @@ impl Peaks {
             .map(|chunk| {
                 let mut shares: Vec<(u64, Vec3)> = Vec::new();
                 let mut cells: Vec<(Vec3, f32)> = Vec::new();
+                // A panorama's texels of one row share a solid angle (two f64 sines).
+                let mut row_omega: Option<(u32, f64)> = None;
                 for p in chunk {
                     let (face, x, y) = (p.face as usize, p.x as f32, p.y as f32);
                     let Some(centre) = self.grid.dir(face, x + 0.5, y + 0.5) else {
@@ -223,8 +225,16 @@ impl Peaks {
                     if total <= 0.0 {
                         continue;
                     }
-                    let flux =
-                        p.excess * self.grid.solid_angle(p.x as usize, p.y as usize) as f32 / total;
+                    let omega = match (self.grid, row_omega) {
+                        (Grid::Projection(Projection::Equirect, ..), Some((y, a))) if y == p.y => a,
+                        (g @ Grid::Projection(Projection::Equirect, ..), _) => {
+                            let a = g.solid_angle(0, p.y as usize);
+                            row_omega = Some((p.y, a));
+                            a
+                        }
+                        (g, _) => g.solid_angle(p.x as usize, p.y as usize),
+                    };
+                    let flux = p.excess * omega as f32 / total;
                     // Each sub-cell covers a square of its own area around where it lands,
                     // shared by overlap between the (at most 2 x 2) output texels under it,
                     // so the peak arrives smooth; on a ball (whose outside covers nothing)
