@@ -26,6 +26,13 @@ pub fn face_dir(face: usize, s: f32, t: f32) -> Vec3 {
     }
 }
 
+/// The unit direction through the centre of texel (x, y) of `face`, `inv` being 1 / the face's
+/// edge: what every per-texel loop over a cube's faces looks up or sums around.
+#[inline(always)]
+pub fn texel_dir(face: usize, x: usize, y: usize, inv: f32) -> Vec3 {
+    face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize()
+}
+
 /// The face a direction selects (largest component; ties go to X, then Y) and its (s, t).
 #[inline(always)]
 pub fn dir_face(d: Vec3) -> (usize, f32, f32) {

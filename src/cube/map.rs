@@ -3,7 +3,7 @@
 
 #![warn(missing_docs)]
 
-use super::face::{face_dir, solid_angle_table, FACE_NAMES};
+use super::face::{solid_angle_table, texel_dir, FACE_NAMES};
 use crate::error::{Error, Result};
 use crate::image::Image;
 use glam::{Vec3, Vec4};
@@ -38,9 +38,7 @@ impl CubeMap {
     pub fn from_fn(size: usize, f: impl Fn(Vec3) -> Vec4 + Sync) -> CubeMap {
         let inv = 1.0 / size as f32;
         let faces = std::array::from_fn(|face| {
-            Image::from_fn(size, size, |x, y| {
-                f(face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize())
-            })
+            Image::from_fn(size, size, |x, y| f(texel_dir(face, x, y, inv)))
         });
         CubeMap {
             levels: vec![faces],

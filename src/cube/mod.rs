@@ -12,7 +12,7 @@ mod map;
 mod sampler;
 
 pub use environment::{Dirs, Environment, Interp, BATCH};
-pub use face::{dir_face, face_dir, solid_angle_table, FACE_LONG_NAMES, FACE_NAMES};
+pub use face::{dir_face, face_dir, solid_angle_table, texel_dir, FACE_LONG_NAMES, FACE_NAMES};
 pub(crate) use face::{texel_angle, texel_solid_angle};
 pub(crate) use map::{box_reduce_face, faces_from_images};
 pub use map::{CubeMap, Faces};

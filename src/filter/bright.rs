@@ -4,7 +4,7 @@
 #![warn(missing_docs)]
 
 use super::lobe::Lobe;
-use crate::cube::{face_dir, solid_angle_table, CubeMap, Faces};
+use crate::cube::{solid_angle_table, texel_dir, CubeMap, Faces};
 use glam::{Vec3, Vec4};
 use std::f32::consts::PI;
 
@@ -134,8 +134,7 @@ pub(crate) fn split_bright_faces(faces: &Faces, ratio: f32) -> (Faces, Bright) {
                 if l > threshold {
                     let kept = (*p * (threshold / l)).truncate().extend(p.w);
                     let excess = (*p - kept).truncate().extend(0.0);
-                    let d =
-                        face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                    let d = texel_dir(face, x, y, inv);
                     out.push(((d, angles[y * n + x], excess), (face, x, y)));
                     *p = kept;
                 }

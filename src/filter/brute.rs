@@ -5,7 +5,7 @@
 #![warn(missing_docs)]
 
 use super::lobe::Lobe;
-use crate::cube::{face_dir, solid_angle_table, CubeMap};
+use crate::cube::{solid_angle_table, texel_dir, CubeMap};
 use crate::image::Image;
 use glam::{Vec3, Vec4};
 
@@ -17,7 +17,7 @@ pub(crate) fn texel_table(n: usize) -> Vec<(Vec3, f32)> {
     for face in 0..6 {
         for y in 0..n {
             for x in 0..n {
-                let d = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                let d = texel_dir(face, x, y, inv);
                 out.push((d, angles[y * n + x]));
             }
         }
@@ -48,7 +48,7 @@ pub(crate) fn convolve_with_progress(
     std::array::from_fn(|face| {
         Image::from_rows(size, size, |y, row| {
             for (x, out) in row.iter_mut().enumerate() {
-                let r = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                let r = texel_dir(face, x, y, inv);
                 let mut acc = Vec4::ZERO;
                 let mut wsum = 0.0f32;
                 for ((d, sa), v) in table.iter().zip(&values) {

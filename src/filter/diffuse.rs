@@ -10,7 +10,7 @@
 #![warn(missing_docs)]
 
 use super::{bright, sh, BRIGHT_RATIO};
-use crate::cube::{box_reduce_face, face_dir, solid_angle_table, CubeMap, Faces};
+use crate::cube::{box_reduce_face, solid_angle_table, texel_dir, CubeMap, Faces};
 use crate::image::Image;
 use glam::{Vec3, Vec4};
 use serde::Serialize;
@@ -118,7 +118,7 @@ fn brute_force(src: &Faces, size: usize, progress: &(dyn Fn(u64) + Sync)) -> Fac
     }
     rows.into_par_iter().for_each(|(face, y, row)| {
         for (x, texel) in row.iter_mut().enumerate() {
-            let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+            let n = texel_dir(face, x, y, inv);
             let sum = texels.cosine_sum(n);
             // Normalised by the discrete integral of the cosine, so a constant stays exact.
             let wsum = sum.w;
@@ -179,8 +179,7 @@ impl Lanes {
         for (face, img) in faces.iter().enumerate() {
             for y in 0..n {
                 for x in 0..n {
-                    let d =
-                        face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                    let d = texel_dir(face, x, y, inv);
                     out.push(d, angles[y * n + x], img.get(x, y).truncate());
                 }
             }

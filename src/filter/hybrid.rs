@@ -12,7 +12,7 @@
 use super::bright::{Bright, BrightSum};
 use super::lobe::{self, Kernel, Lobe};
 use super::window::{self, Window};
-use crate::cube::{face_dir, CubeSampler, Faces};
+use crate::cube::{texel_dir, CubeSampler, Faces};
 use rayon::prelude::*;
 
 /// The core reaches this many lobe widths (2 alpha radians) from the axis: about 80% of the
@@ -84,8 +84,7 @@ impl Hybrid {
                 .enumerate()
                 .for_each(|(y, (row, tail_row))| {
                     for (x, (o, t)) in row.iter_mut().zip(tail_row).enumerate() {
-                        let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv)
-                            .normalize();
+                        let n = texel_dir(face, x, y, inv);
                         *o = *o * a + *t * b + bright.at(n).extend(0.0);
                     }
                 });

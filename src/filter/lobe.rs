@@ -6,7 +6,7 @@
 
 use super::bright::BrightSum;
 pub use super::bright::{Bright, Patch};
-use crate::cube::{face_dir, CubeMap, CubeSampler, Dirs, TapLevels, TapScratch, BATCH};
+use crate::cube::{texel_dir, CubeMap, CubeSampler, Dirs, TapLevels, TapScratch, BATCH};
 use crate::image::Image;
 use glam::{Mat3, Vec3, Vec4};
 use std::f32::consts::{PI, TAU};
@@ -349,7 +349,7 @@ pub fn filter_level(
                 values: [Vec4::ZERO; BATCH],
             };
             for (x, texel) in row.iter_mut().enumerate() {
-                let n = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                let n = texel_dir(face, x, y, inv);
                 *texel = filter_texel(n, &mut scratch);
             }
         })

@@ -3,7 +3,7 @@
 
 #![warn(missing_docs)]
 
-use crate::cube::{face_dir, solid_angle_table, CubeMap, Faces};
+use crate::cube::{solid_angle_table, texel_dir, CubeMap, Faces};
 use glam::{Vec3, Vec4};
 use serde::Serialize;
 use std::f64::consts::PI;
@@ -70,7 +70,7 @@ pub(crate) fn project_faces(faces: &Faces) -> [[f64; 3]; 9] {
             let (face, y) = (fy / n, fy % n);
             let mut c = [[0.0f64; 3]; 9];
             for x in 0..n {
-                let d = face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize();
+                let d = texel_dir(face, x, y, inv);
                 let v = faces[face].get(x, y);
                 let sa = angles[y * n + x] as f64;
                 for (i, yi) in basis(d).iter().enumerate() {

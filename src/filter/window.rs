@@ -23,7 +23,7 @@
 
 use super::bright::BrightSum;
 use super::lobe::Lobe;
-use crate::cube::{face_dir, solid_angle_table, CubeSampler, Faces};
+use crate::cube::{face_dir, solid_angle_table, texel_dir, CubeSampler, Faces};
 use crate::image::Image;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
@@ -295,11 +295,7 @@ impl Source {
             .into_par_iter()
             .map(|fy| {
                 let (face, y) = (fy / n, fy % n);
-                let dirs = (0..n)
-                    .map(|x| {
-                        face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize()
-                    })
-                    .collect();
+                let dirs = (0..n).map(|x| texel_dir(face, x, y, inv)).collect();
                 let sa = angles[y * n..(y + 1) * n].to_vec();
                 (dirs, sa, src.row(level, face, y).to_vec())
             })
@@ -615,9 +611,7 @@ fn filter_band(
     ),
 ) {
     let inv = 1.0 / size as f32;
-    let centre = |face: usize, x: usize, y: usize| {
-        face_dir(face, (x as f32 + 0.5) * inv, (y as f32 + 0.5) * inv).normalize()
-    };
+    let centre = |face: usize, x: usize, y: usize| texel_dir(face, x, y, inv);
     let tile = TILE.min(size);
     let mut found = Candidates::default();
     let rows = band.len() / size;
