@@ -291,23 +291,30 @@ impl Source {
         let n = src.level_size(level);
         let inv = 1.0 / n as f32;
         let angles = solid_angle_table(n);
-        let rows: Vec<(Vec<Vec3>, Vec<f32>, Vec<Vec4>)> = (0..6 * n)
-            .into_par_iter()
-            .map(|fy| {
-                let (face, y) = (fy / n, fy % n);
-                let dirs = (0..n).map(|x| texel_dir(face, x, y, inv)).collect();
-                let sa = angles[y * n..(y + 1) * n].to_vec();
-                (dirs, sa, src.row(level, face, y).to_vec())
-            })
-            .collect();
-        let mut dirs = Vec::with_capacity(6 * n * n);
-        let mut solid_angles = Vec::with_capacity(6 * n * n);
-        let mut values = Vec::with_capacity(6 * n * n);
-        for (d, s, v) in rows {
-            dirs.extend(d);
-            solid_angles.extend(s);
-            values.extend(v);
-        }
+        // Every texel's direction (and its components apart), solid angle and value, row by
+        // row in parallel straight into place.
+        let count = 6 * n * n;
+        let mut dirs = vec![Vec3::ZERO; count];
+        let (mut xs, mut ys, mut zs) = (vec![0.0; count], vec![0.0; count], vec![0.0; count]);
+        let mut solid_angles = vec![0.0; count];
+        let mut values = vec![Vec4::ZERO; count];
+        let w = n.max(1);
+        dirs.par_chunks_mut(w)
+            .zip(xs.par_chunks_mut(w))
+            .zip(ys.par_chunks_mut(w))
+            .zip(zs.par_chunks_mut(w))
+            .zip(solid_angles.par_chunks_mut(w))
+            .zip(values.par_chunks_mut(w))
+            .enumerate()
+            .for_each(|(fy, (((((d, x), y), z), sa), v))| {
+                let (face, row) = (fy / n, fy % n);
+                for (i, d) in d.iter_mut().enumerate() {
+                    *d = texel_dir(face, i, row, inv);
+                    (x[i], y[i], z[i]) = (d.x, d.y, d.z);
+                }
+                sa.copy_from_slice(&angles[row * n..(row + 1) * n]);
+                v.copy_from_slice(src.row(level, face, row));
+            });
         // About 16 blocks per face edge: few enough to test them all per tile.
         let block = n.div_ceil(16).max(1);
         let per_edge = n.div_ceil(block);
@@ -360,9 +367,9 @@ impl Source {
         };
         Source {
             n,
-            xs: dirs.iter().map(|d| d.x).collect(),
-            ys: dirs.iter().map(|d| d.y).collect(),
-            zs: dirs.iter().map(|d| d.z).collect(),
+            xs,
+            ys,
+            zs,
             dirs,
             solid_angles,
             values,
