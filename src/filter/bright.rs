@@ -152,6 +152,9 @@ pub(crate) fn split_bright_faces(faces: &Faces, ratio: f32) -> (Faces, Bright) {
 pub(crate) struct BrightSum {
     lobe: Lobe,
     patches: Vec<(Vec3, f32, Vec<Quad>)>,
+    /// A cone around every patch's, widened by the lobe's reach: an output texel outside it
+    /// reaches no patch (most of a narrow lobe's texels: one test instead of one per patch).
+    all: (Vec3, f32),
 }
 
 /// Four members: directions and weighted excess radiance (zero in padding lanes).
@@ -171,6 +174,7 @@ impl BrightSum {
             return BrightSum {
                 lobe,
                 patches: Vec::new(),
+                all: (Vec3::Z, -2.0),
             };
         }
         let norm = (1.0 / lobe.integral()) as f32;
@@ -210,7 +214,22 @@ impl BrightSum {
                 (p.axis, limit, quads)
             })
             .collect();
-        BrightSum { lobe, patches }
+        // The patches' cone: around the mean of their axes, out to the furthest patch's edge,
+        // then the lobe's reach (with a margin for the rounding of the cosines).
+        let axis = bright
+            .patches
+            .iter()
+            .map(|p| p.axis)
+            .sum::<Vec3>()
+            .normalize_or(Vec3::Z);
+        let radius = bright
+            .patches
+            .iter()
+            .map(|p| axis.dot(p.axis).clamp(-1.0, 1.0).acos() + p.radius)
+            .fold(0.0f32, f32::max);
+        let a = radius + reach + 1e-4;
+        let all = (axis, if a >= PI { -2.0 } else { a.cos() });
+        BrightSum { lobe, patches, all }
     }
 
     /// The lobe's weight at four cosines; 0 where it is not positive (NaN included).
@@ -233,7 +252,7 @@ impl BrightSum {
     /// each member's share summed in its lane, the lanes added in a fixed order.
     #[inline]
     pub(crate) fn at(&self, n: Vec3) -> Vec3 {
-        if self.patches.is_empty() {
+        if self.patches.is_empty() || n.dot(self.all.0) <= self.all.1 {
             return Vec3::ZERO;
         }
         let (nx, ny, nz) = (Vec4::splat(n.x), Vec4::splat(n.y), Vec4::splat(n.z));
