@@ -61,7 +61,7 @@ impl Image {
             // Zeroed by the allocator (fresh pages come zeroed from the kernel):
             // `vec![Vec4::ZERO; n]` writes every byte first, doubling the memory traffic of
             // images that are filled right after.
-            pixels: huge_zeroed(width * height),
+            pixels: crate::alloc::zeroed(width * height),
         }
     }
 
@@ -574,49 +574,4 @@ pub(crate) fn sanitize_texel(p: &mut Vec4) -> usize {
         }
     }
     count
-}
-
-/// A zeroed vector of `n` texels. Large ones ask the kernel for 2 MiB pages before their first
-/// touch: filling a fresh 128 MB level otherwise costs 32768 page faults, as much time as the
-/// arithmetic that fills it.
-///
-/// A failed allocation is a panic with the size, not the allocator's abort, so the command
-/// ends with one line.
-fn huge_zeroed(n: usize) -> Vec<Vec4> {
-    let v: Vec<Vec4> = match std::alloc::Layout::array::<Vec4>(n) {
-        Ok(layout) if layout.size() > 0 => {
-            // SAFETY: a zeroed allocation of `n` Vec4 (all-zero bytes are a valid Vec4) with
-            // the layout Vec<Vec4> itself uses, handed to Vec to own and free.
-            unsafe {
-                let p = std::alloc::alloc_zeroed(layout) as *mut Vec4;
-                if p.is_null() {
-                    panic!(
-                        "out of memory: cannot allocate {} for an image",
-                        crate::io::human_bytes(layout.size() as u64)
-                    );
-                }
-                Vec::from_raw_parts(p, n, n)
-            }
-        }
-        Ok(_) => Vec::new(),
-        Err(_) => panic!("out of memory: an image of {n} texels is too large to address"),
-    };
-    #[cfg(target_os = "linux")]
-    {
-        const HUGE: usize = 2 << 20;
-        let bytes = n * std::mem::size_of::<Vec4>();
-        if bytes >= 4 * HUGE {
-            let start = v.as_ptr() as usize;
-            let first = start.next_multiple_of(HUGE);
-            let end = (start + bytes) / HUGE * HUGE;
-            if end > first {
-                // SAFETY: advice on whole pages inside this vector's own allocation; it
-                // changes how the kernel backs them, never their contents (all zero).
-                unsafe {
-                    libc::madvise(first as *mut libc::c_void, end - first, libc::MADV_HUGEPAGE);
-                }
-            }
-        }
-    }
-    v
 }

@@ -22,6 +22,7 @@
 
 #![warn(missing_docs)]
 
+mod alloc;
 pub mod chain;
 pub mod control;
 pub mod convert;

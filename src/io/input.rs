@@ -26,8 +26,8 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
             let len = usize::try_from(len).map_err(|_| {
                 Error::file(path, "is too large to read into memory on this machine")
             })?;
-            // Zeroed by the allocator: fresh pages, first touched by the reads.
-            let mut bytes = vec![0u8; len];
+            // Fresh zeroed pages (2 MiB ones), first touched by the reads.
+            let mut bytes: Vec<u8> = crate::alloc::zeroed(len);
             bytes
                 .par_chunks_mut(PIECE)
                 .enumerate()

@@ -321,7 +321,7 @@ pub fn encode(img: &Image) -> Vec<u8> {
         4 + 4 * (w + w.div_ceil(128) + 1)
     };
     let start = head.len();
-    let mut out = vec![0u8; start + slot * h];
+    let mut out: Vec<u8> = crate::alloc::zeroed(start + slot * h);
     out[..start].copy_from_slice(&head);
     let lens: Vec<usize> = out[start..]
         .par_chunks_mut(slot)

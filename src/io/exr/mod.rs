@@ -271,7 +271,10 @@ pub fn encode(img: &Image) -> std::result::Result<Vec<u8>, String> {
             |deflate, b| zip_block(img, b * ZIP_LINES, order, deflate),
         )
         .collect();
-    let mut out = Vec::new();
+    // The blocks, their offset table and line headers, and room for the header: one
+    // allocation, not a doubling chain of copies.
+    let size = blocks.iter().map(|b| b.len() + 16).sum::<usize>() + 4096;
+    let mut out: Vec<u8> = Vec::with_capacity(size);
     exr::block::write(
         Cursor::new(&mut out),
         SmallVec::from_vec(vec![header]),
