@@ -274,12 +274,15 @@ impl Peaks {
                 )
             })
             .collect();
-        let mut shares: Vec<(u64, [f64; 3])> = shares.into_iter().flatten().collect();
+        let mut shares: Vec<(u64, [f64; 3])> = shares.concat();
         shares.par_sort_by_key(|s| s.0);
 
-        // Each texel once: their solid angles (atan2s) in parallel, then the additions.
-        let adds: Vec<(usize, usize, usize, Vec3)> = merge(shares.into_iter())
-            .into_par_iter()
+        // Each texel once, summed and divided by its solid angle (atan2s) in pieces in
+        // parallel; a texel's shares never straddle two pieces, so each sum keeps one order.
+        let cuts = group_cuts(&shares, 4 * rayon::current_num_threads());
+        let adds: Vec<(usize, usize, usize, Vec3)> = cuts
+            .par_windows(2)
+            .flat_map_iter(|w| merge(shares[w[0]..w[1]].iter().copied()))
             .filter_map(|(k, sum)| {
                 let k = k as usize;
                 let (face, y, x) = (k / (ow * oh), (k / ow) % oh, k % ow);
@@ -294,6 +297,24 @@ impl Peaks {
             img.set(x, y, (p.truncate() + add).extend(p.w));
         }
     }
+}
+
+/// About `pieces` + 1 cut points into `sorted` (0 and its length included), each where the key
+/// changes.
+fn group_cuts(sorted: &[(u64, [f64; 3])], pieces: usize) -> Vec<usize> {
+    let n = sorted.len();
+    let mut cuts = vec![0];
+    for i in 1..pieces.max(1) {
+        let mut c = (n * i / pieces).max(*cuts.last().unwrap_or(&0));
+        while c > 0 && c < n && sorted[c].0 == sorted[c - 1].0 {
+            c += 1;
+        }
+        if c > *cuts.last().unwrap_or(&0) && c < n {
+            cuts.push(c);
+        }
+    }
+    cuts.push(n);
+    cuts
 }
 
 /// Sums the values of equal consecutive keys, in order.
@@ -334,5 +355,37 @@ impl<E: Environment> Environment for Split<E> {
     }
     fn peaks(&self) -> Option<&Peaks> {
         Some(&self.peaks)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pieces_merge_as_one() {
+        // Runs of equal keys of every length, some longer than a piece.
+        let sorted: Vec<(u64, [f64; 3])> = (0..5000u64)
+            .flat_map(|k| (0..(k * 7919 % 13 + (k % 97 == 0) as u64 * 400)).map(move |i| (k, i)))
+            .map(|(k, i)| (k, [0.1 * i as f64, 1.0 / (1 + i) as f64, k as f64]))
+            .collect();
+        let whole = merge(sorted.iter().copied());
+        for pieces in [1, 2, 3, 16, 64, 1000, 100_000] {
+            let cuts = group_cuts(&sorted, pieces);
+            assert_eq!((cuts[0], *cuts.last().unwrap()), (0, sorted.len()));
+            for w in cuts.windows(2) {
+                assert!(w[0] < w[1]);
+                assert_ne!(
+                    sorted[w[1] - 1].0,
+                    sorted.get(w[1]).map_or(u64::MAX, |s| s.0)
+                );
+            }
+            let parts: Vec<_> = cuts
+                .windows(2)
+                .flat_map(|w| merge(sorted[w[0]..w[1]].iter().copied()))
+                .collect();
+            assert_eq!(parts, whole, "{pieces} pieces");
+        }
+        assert_eq!(group_cuts(&[], 8), vec![0, 0]);
     }
 }
