@@ -19,6 +19,7 @@ use rayon::prelude::*;
 /// block it met.
 struct Scratch {
     inflate: libdeflater::Decompressor,
+    piz: super::piz::Scratch,
     bytes: Vec<u8>,
     floats: Vec<f32>,
     halves: Vec<f16>,
@@ -70,8 +71,14 @@ pub(super) fn decode_blocks(
         rest = tail;
         jobs.push((y, chunk, rows));
     }
+    // 16-bit words per sample of each channel, for PIZ.
+    let words: Vec<usize> = slots
+        .iter()
+        .map(|(_, t)| t.bytes_per_sample() / 2)
+        .collect();
     let scratch = || Scratch {
         inflate: libdeflater::Decompressor::new(),
+        piz: Default::default(),
         bytes: Vec::new(),
         floats: vec![0.0; w],
         halves: vec![f16::ZERO; w],
@@ -81,6 +88,7 @@ pub(super) fn decode_blocks(
         .map_init(scratch, |s, (y, chunk, rows)| {
             let Scratch {
                 inflate,
+                piz,
                 bytes,
                 floats,
                 halves,
@@ -108,6 +116,11 @@ pub(super) fn decode_blocks(
                         .map_err(|e| format!("the RLE block at line {y} {e}"))?;
                     undo_differences(&mut bytes[..expected]);
                     Samples::Split(&bytes[..expected])
+                }
+                (Compression::PIZ, data) => {
+                    super::piz::decompress(data, &words, w, rows.len() / w, piz, bytes)
+                        .map_err(|e| format!("{e} (block at line {y})"))?;
+                    Samples::Plain(&bytes[..])
                 }
                 (Compression::Uncompressed, data) => Samples::Plain(data),
                 _ => {

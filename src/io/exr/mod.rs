@@ -21,6 +21,7 @@ use std::path::Path;
 
 mod blocks;
 mod checks;
+mod piz;
 use checks::{read_chunks, read_meta, RawChunk};
 
 /// Decodes an OpenEXR file's first RGB(A) layer; `path` names it in errors, `limits` are checked before any pixel is allocated.
@@ -456,7 +457,7 @@ mod tests {
         both(&encode(&opaque).unwrap(), "ours, RGB half");
         // Noise that does not shrink: its blocks are stored as they are.
         let noisy = |x: usize, y: usize, c: usize| {
-            let mut h = ((x * 131 + y) * 4 + c) as u64 * 0x9e37_79b9_7f4a_7c15;
+            let mut h = (((x * 131 + y) * 4 + c) as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
             h ^= h >> 29;
             h = h.wrapping_mul(0xbf58_476d_1ce4_e5b9);
             h ^= h >> 32;
@@ -591,6 +592,40 @@ mod tests {
         let img = slow(&out);
         assert_eq!(img.get(39, 29), Vec4::new(39.0, 29.0, 0.5, 1.0));
         assert_eq!(img, crate_reader(&out));
+    }
+
+    /// Corrupt PIZ blocks (every byte of one changed in turn, cut short at every length) give
+    /// an image or an error, never a panic; intact ones read as the crate reads them.
+    #[test]
+    fn corrupt_piz_blocks_are_errors() {
+        let limits = Limits::default();
+        for types in ["fff", "hhhh"] {
+            let good = written((64, 33), Compression::PIZ, types);
+            both(&good, types);
+            let (meta, start) = read_meta(&good).unwrap();
+            let chunks = read_chunks(&good, &meta, start).unwrap();
+            let data = chunks[0].data;
+            let stored = 64 * 32 * if types == "fff" { 12 } else { 8 };
+            assert!(
+                data.len() < stored,
+                "{types}: a PIZ block, not a stored one"
+            );
+            let at = data.as_ptr() as usize - good.as_ptr() as usize;
+            let path = Path::new("t.exr");
+            // Every byte of the headers (bitmap, lengths, code table), every 7th after.
+            let picked = (0..data.len()).filter(|&i| i < 160 || i % 7 == 0);
+            for i in picked.clone().map(|i| at + i) {
+                for v in [0u8, 0xff, good[i] ^ 0x10, good[i].wrapping_add(1)] {
+                    let mut bad = good.clone();
+                    bad[i] = v;
+                    let _ = decode(&bad, path, &limits);
+                }
+            }
+            for n in picked {
+                // The chunk's size field keeps its length: the file is cut inside the block.
+                let _ = decode(&good[..at + n], path, &limits);
+            }
+        }
     }
 
     /// A panic inside a guarded call is a message, not an unwinding thread.
