@@ -292,7 +292,13 @@ fn equirect_row(w: usize, h: usize, y: usize) -> f64 {
 /// f64, row by row, then in a fixed order, so the figure does not depend on thread count.
 pub fn mean_radiance(grid: Grid, images: &[&Image]) -> [f64; 3] {
     let (w, h) = grid.dims();
-    let omega = grid.solid_angles();
+    // A panorama's rows each have one solid angle (two sines): no table of every texel's.
+    let equirect = matches!(grid, Grid::Projection(Projection::Equirect, ..));
+    let omega = if equirect {
+        Vec::new()
+    } else {
+        grid.solid_angles()
+    };
     let rows: Vec<([f64; 3], f64)> = (0..grid.faces() * h)
         .into_par_iter()
         .map(|fy| {
@@ -300,8 +306,9 @@ pub fn mean_radiance(grid: Grid, images: &[&Image]) -> [f64; 3] {
             let img = images[face];
             let mut acc = [0.0f64; 3];
             let mut total = 0.0;
+            let row = equirect.then(|| equirect_row(w, h, y));
             for x in 0..w {
-                let a = omega[(face * h + y) * w + x];
+                let a = row.unwrap_or_else(|| omega[(face * h + y) * w + x]);
                 let p = img.get(x, y);
                 for c in 0..3 {
                     acc[c] += p[c] as f64 * a;
