@@ -17,8 +17,9 @@ unsafe impl Zeroable for u8 {}
 // SAFETY: as above.
 unsafe impl Zeroable for glam::Vec4 {}
 
-/// `n` zeroed values. The memory comes straight from the kernel (already zero: nothing is
-/// written here), each page first touched by whoever fills it.
+/// `n` zeroed values. Fresh memory comes zeroed from the kernel, so nothing is written here
+/// (memory the allocator reuses it clears); each fresh page is first touched by whoever fills
+/// it.
 ///
 /// A failed allocation is a panic with the size, not the allocator's abort, so the command
 /// ends with one line.

@@ -594,8 +594,9 @@ mod tests {
         assert_eq!(img, crate_reader(&out));
     }
 
-    /// Corrupt PIZ blocks (every byte of one changed in turn, cut short at every length) give
-    /// an image or an error, never a panic; intact ones read as the crate reads them.
+    /// Corrupt PIZ blocks (the headers and code table changed byte by byte, every 7th byte
+    /// after; cut short at as many lengths) give an image or an error, never a panic; intact
+    /// ones read as the crate reads them.
     #[test]
     fn corrupt_piz_blocks_are_errors() {
         let limits = Limits::default();
