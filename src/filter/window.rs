@@ -129,7 +129,7 @@ impl Window {
                 }
             }
             _ => Shape::Exp2 {
-                q: fit_log_weight(lobe, u_cut).0,
+                q: fit_log_weight(lobe, u_cut),
             },
         };
         Window {
@@ -147,10 +147,10 @@ impl Window {
 
 /// The polynomial q of [`Shape::Exp2`] for `lobe` on 0 < u <= `u_cut`, of the lowest degree
 /// whose weights (its f32 coefficients, evaluated in f64) are within 2e-7 of the lobe's
-/// relative to it, and that largest relative error. Chebyshev interpolation on t = u / u_cut,
+/// relative to it (else the closest fit of degree up to MAX_DEGREE). Chebyshev interpolation on t = u / u_cut,
 /// turned into powers of t and then of u in f64 (the coefficients fall fast: the log weights
 /// are nearly linear in u).
-fn fit_log_weight(lobe: Lobe, u_cut: f64) -> ([f32; MAX_DEGREE + 1], f64) {
+fn fit_log_weight(lobe: Lobe, u_cut: f64) -> [f32; MAX_DEGREE + 1] {
     let peak = weight_f64(lobe, 1.0).ln();
     let q = |t: f64| {
         let u = t * u_cut;
@@ -218,7 +218,7 @@ fn fit_log_weight(lobe: Lobe, u_cut: f64) -> ([f32; MAX_DEGREE + 1], f64) {
             break;
         }
     }
-    best
+    best.0
 }
 
 /// The share of `lobe`'s mass (weighted by solid angle) within `reach` radians of its axis:

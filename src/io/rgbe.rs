@@ -166,7 +166,7 @@ fn texels(r: &[u8], g: &[u8], b: &[u8], e: &[u8], row: &mut [Vec4]) {
     let done = {
         use std::arch::x86_64::*;
         let quads = row.len() / 4;
-        for (q, out) in row.chunks_exact_mut(4).enumerate().take(quads) {
+        for (q, out) in row.chunks_exact_mut(4).enumerate() {
             let i = 4 * q;
             // SAFETY: SSE2 is part of x86-64; each plane holds row.len() >= i + 4 bytes, and
             // `out` is four Vec4s (16 bytes each, unaligned stores).
