@@ -76,37 +76,43 @@ impl Image {
 
     /// Builds an image by calling `f(x, y)` for every pixel, rows in parallel.
     pub fn from_fn(width: usize, height: usize, f: impl Fn(usize, usize) -> Vec4 + Sync) -> Self {
-        use rayon::prelude::*;
-        let mut img = Image::new(width, height);
-        if width > 0 {
-            img.pixels
-                .par_chunks_mut(width)
-                .enumerate()
-                .for_each(|(y, row)| {
-                    for (x, p) in row.iter_mut().enumerate() {
-                        *p = f(x, y);
-                    }
-                });
-        }
-        img
+        Image::from_rows(width, height, |y, row| {
+            for (x, p) in row.iter_mut().enumerate() {
+                *p = f(x, y);
+            }
+        })
     }
 
     /// Builds an image by letting `f(y, row)` fill each row, rows in parallel: for loops that
-    /// keep per-row state (batches, scratch space) instead of working texel by texel.
+    /// keep per-row state (batches, scratch space) instead of working texel by texel. Each
+    /// row is cleared just before `f` sees it, by the thread that fills it, not the whole
+    /// image up front on one thread (see `alloc::uninit`).
     pub(crate) fn from_rows(
         width: usize,
         height: usize,
         f: impl Fn(usize, &mut [Vec4]) + Sync,
     ) -> Self {
         use rayon::prelude::*;
-        let mut img = Image::new(width, height);
+        use std::mem::MaybeUninit;
+        let mut pixels = crate::alloc::uninit::<Vec4>(width * height);
         if width > 0 {
-            img.pixels
+            pixels
                 .par_chunks_mut(width)
                 .enumerate()
-                .for_each(|(y, row)| f(y, row));
+                .for_each(|(y, row)| {
+                    row.fill(MaybeUninit::new(Vec4::ZERO));
+                    // SAFETY: every element of the row was just written; MaybeUninit<Vec4>
+                    // has Vec4's layout.
+                    let row = unsafe { &mut *(row as *mut [MaybeUninit<Vec4>] as *mut [Vec4]) };
+                    f(y, row)
+                });
         }
-        img
+        Image {
+            width,
+            height,
+            // SAFETY: every row was written above (no row: no element, width 0 or height 0).
+            pixels: unsafe { crate::alloc::assume_init(pixels) },
+        }
     }
 
     /// The pixel at column `x`, row `y` (panics outside the image).
