@@ -274,24 +274,26 @@ impl Peaks {
                 )
             })
             .collect();
-        let mut shares: Vec<(u64, [f64; 3])> = shares.concat();
-        shares.par_sort_by_key(|s| s.0);
-
-        // Each texel once, summed and divided by its solid angle (atan2s) in pieces in
-        // parallel; a texel's shares never straddle two pieces, so each sum keeps one order.
-        let cuts = group_cuts(&shares, 4 * rayon::current_num_threads());
-        let adds: Vec<(usize, usize, usize, Vec3)> = cuts
+        // Each texel once: its shares from every chunk, in the chunks' order, summed and
+        // divided by its solid angle (atan2s), key ranges in parallel. Where a range ends
+        // never changes a texel's order of summation.
+        let bounds = key_bounds(&shares, 4 * rayon::current_num_threads());
+        let adds: Vec<Vec<(usize, usize, usize, Vec3)>> = bounds
             .par_windows(2)
-            .flat_map_iter(|w| merge(shares[w[0]..w[1]].iter().copied()))
-            .filter_map(|(k, sum)| {
-                let k = k as usize;
-                let (face, y, x) = (k / (ow * oh), (k / ow) % oh, k % ow);
-                let omega = out.solid_angle(x, y);
-                let add = Vec3::from_array(sum.map(|s| (s / omega) as f32));
-                (omega > 0.0).then_some((face, x, y, add))
+            .map(|w| {
+                gather(&shares, w[0], w[1])
+                    .into_iter()
+                    .filter_map(|(k, sum)| {
+                        let k = k as usize;
+                        let (face, y, x) = (k / (ow * oh), (k / ow) % oh, k % ow);
+                        let omega = out.solid_angle(x, y);
+                        let add = Vec3::from_array(sum.map(|s| (s / omega) as f32));
+                        (omega > 0.0).then_some((face, x, y, add))
+                    })
+                    .collect()
             })
             .collect();
-        for (face, x, y, add) in adds {
+        for (face, x, y, add) in adds.into_iter().flatten() {
             let img = &mut images[face];
             let p = img.get(x, y);
             img.set(x, y, (p.truncate() + add).extend(p.w));
@@ -299,22 +301,39 @@ impl Peaks {
     }
 }
 
-/// About `pieces` + 1 cut points into `sorted` (0 and its length included), each where the key
-/// changes.
-fn group_cuts(sorted: &[(u64, [f64; 3])], pieces: usize) -> Vec<usize> {
-    let n = sorted.len();
-    let mut cuts = vec![0];
-    for i in 1..pieces.max(1) {
-        let mut c = (n * i / pieces).max(*cuts.last().unwrap_or(&0));
-        while c > 0 && c < n && sorted[c].0 == sorted[c - 1].0 {
-            c += 1;
-        }
-        if c > *cuts.last().unwrap_or(&0) && c < n {
-            cuts.push(c);
+/// Bounds of about `pieces` key ranges holding similar numbers of shares, from a sample of
+/// the (sorted) chunks' keys: 0 first, u64::MAX last, increasing.
+fn key_bounds(chunks: &[Vec<(u64, [f64; 3])>], pieces: usize) -> Vec<u64> {
+    let pieces = pieces.max(1);
+    let mut sample: Vec<u64> = chunks
+        .iter()
+        .flat_map(|c| c.iter().step_by((c.len() / pieces).max(1)).map(|s| s.0))
+        .collect();
+    sample.sort_unstable();
+    let mut bounds = vec![0];
+    for i in 1..pieces {
+        if let Some(&k) = sample.get(sample.len() * i / pieces) {
+            if k > *bounds.last().unwrap_or(&0) {
+                bounds.push(k);
+            }
         }
     }
-    cuts.push(n);
-    cuts
+    bounds.push(u64::MAX);
+    bounds
+}
+
+/// The shares of keys in `lo..hi` from every chunk (each sorted by key), summed per key in
+/// the chunks' order.
+fn gather(chunks: &[Vec<(u64, [f64; 3])>], lo: u64, hi: u64) -> Vec<(u64, [f64; 3])> {
+    let mut part: Vec<(u64, [f64; 3])> = Vec::new();
+    for c in chunks {
+        let a = c.partition_point(|s| s.0 < lo);
+        let b = c.partition_point(|s| s.0 < hi);
+        part.extend_from_slice(&c[a..b]);
+    }
+    // Stable: a key's shares stay in the chunks' order.
+    part.sort_by_key(|s| s.0);
+    merge(part.into_iter())
 }
 
 /// Sums the values of equal consecutive keys, in order.
@@ -363,29 +382,43 @@ mod tests {
     use super::*;
 
     #[test]
-    fn pieces_merge_as_one() {
-        // Runs of equal keys of every length, some longer than a piece.
-        let sorted: Vec<(u64, [f64; 3])> = (0..5000u64)
-            .flat_map(|k| (0..(k * 7919 % 13 + (k % 97 == 0) as u64 * 400)).map(move |i| (k, i)))
-            .map(|(k, i)| (k, [0.1 * i as f64, 1.0 / (1 + i) as f64, k as f64]))
+    fn key_ranges_sum_as_one_sort() {
+        // Chunks of sorted unique keys, overlapping, some keys in many chunks, one chunk
+        // empty; values that round differently in another order.
+        let chunks: Vec<Vec<(u64, [f64; 3])>> = (0..40u64)
+            .map(|c| {
+                (0..c * 37 % 300)
+                    .map(|i| (i * (c % 7 + 1) + c * 11 % 5, i))
+                    .map(|(k, i)| {
+                        (
+                            k,
+                            [
+                                0.1 * (i + c) as f64,
+                                1.0 / (1 + i + c) as f64,
+                                1e16 + c as f64,
+                            ],
+                        )
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .map(|mut v| {
+                v.dedup_by_key(|s| s.0);
+                v
+            })
             .collect();
-        let whole = merge(sorted.iter().copied());
+        let mut all = chunks.concat();
+        all.sort_by_key(|s| s.0);
+        let whole = merge(all.into_iter());
         for pieces in [1, 2, 3, 16, 64, 1000, 100_000] {
-            let cuts = group_cuts(&sorted, pieces);
-            assert_eq!((cuts[0], *cuts.last().unwrap()), (0, sorted.len()));
-            for w in cuts.windows(2) {
-                assert!(w[0] < w[1]);
-                assert_ne!(
-                    sorted[w[1] - 1].0,
-                    sorted.get(w[1]).map_or(u64::MAX, |s| s.0)
-                );
-            }
-            let parts: Vec<_> = cuts
+            let bounds = key_bounds(&chunks, pieces);
+            assert_eq!((bounds[0], *bounds.last().unwrap()), (0, u64::MAX));
+            assert!(bounds.windows(2).all(|w| w[0] < w[1]));
+            let parts: Vec<_> = bounds
                 .windows(2)
-                .flat_map(|w| merge(sorted[w[0]..w[1]].iter().copied()))
+                .flat_map(|w| gather(&chunks, w[0], w[1]))
                 .collect();
             assert_eq!(parts, whole, "{pieces} pieces");
         }
-        assert_eq!(group_cuts(&[], 8), vec![0, 0]);
+        assert_eq!(key_bounds(&[], 8), vec![0, u64::MAX]);
     }
 }
