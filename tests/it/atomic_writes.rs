@@ -95,6 +95,53 @@ fn an_existing_folder_gets_every_file_and_keeps_others() {
     assert_eq!(std::fs::read_to_string(d.join("px.txt")).unwrap(), "new");
 }
 
+/// A file replaced again and again is always there, whole, for a reader that keeps opening
+/// it: old or new, never missing or partial; the replaced ones leave no names behind.
+#[test]
+fn a_replaced_file_is_never_missing_or_partial() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let t = tempfile::tempdir().unwrap();
+    let p = t.path().join("px.txt");
+    let body = |i: usize| format!("{i:06}").repeat(20_000);
+    std::fs::write(&p, body(0)).unwrap();
+    let done = AtomicBool::new(false);
+    std::thread::scope(|s| {
+        let reader = s.spawn(|| {
+            let mut reads = 0;
+            while !done.load(Ordering::Relaxed) {
+                let got = std::fs::read_to_string(&p).expect("the file is always there");
+                assert_eq!(got.len(), 120_000, "a whole file");
+                assert_eq!(got, got[..6].repeat(20_000), "one file's bytes");
+                reads += 1;
+            }
+            reads
+        });
+        for i in 1..=200 {
+            write_all_atomic(&[(p.clone(), body(i).into_bytes())]).unwrap();
+        }
+        done.store(true, Ordering::Relaxed);
+        assert!(reader.join().unwrap() > 0);
+    });
+    assert_eq!(std::fs::read_to_string(&p).unwrap(), body(200));
+    assert_eq!(tree(t.path()), ["px.txt"]);
+}
+
+/// A symbolic link in the way is replaced by the file, as a rename does; what it pointed to
+/// is left alone.
+#[test]
+fn a_link_in_the_way_is_replaced_not_followed() {
+    let t = tempfile::tempdir().unwrap();
+    let target = t.path().join("elsewhere.txt");
+    std::fs::write(&target, "theirs").unwrap();
+    let p = t.path().join("px.txt");
+    std::os::unix::fs::symlink(&target, &p).unwrap();
+    write_all_atomic(&files(&[(&p, "mine")])).unwrap();
+    assert!(!p.is_symlink());
+    assert_eq!(std::fs::read_to_string(&p).unwrap(), "mine");
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "theirs");
+    assert_eq!(tree(t.path()), ["elsewhere.txt", "px.txt"]);
+}
+
 fn convert(out: &Path, yaw: &str, pause_ms: u64) -> Child {
     Command::new(env!("CARGO_BIN_EXE_cubeforge"))
         .args(["convert", SKY, "-o"])
