@@ -17,8 +17,10 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
         use rayon::prelude::*;
         use std::io::{Read, Seek};
         use std::os::unix::fs::FileExt;
-        // Pieces small enough for 16 threads to share a 100 MB panorama evenly.
-        const PIECE: usize = 1 << 20;
+        // Pieces of one 2 MiB page each (the buffer's pages, not the file's): a page the
+        // kernel backs with a 2 MiB page is zeroed whole at its first touch, and two threads
+        // filling halves of one would wait on each other.
+        const PIECE: usize = 2 << 20;
         const PARALLEL_FROM: u64 = 16 << 20;
         let mut file = std::fs::File::open(path).map_err(fail)?;
         let len = file.metadata().map_err(fail)?.len();
@@ -28,11 +30,19 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
             })?;
             // Fresh zeroed pages (2 MiB ones), first touched by the reads.
             let mut bytes: Vec<u8> = crate::alloc::zeroed(len);
-            bytes
-                .par_chunks_mut(PIECE)
-                .enumerate()
-                .try_for_each(|(i, piece)| file.read_exact_at(piece, (i * PIECE) as u64))
-                .map_err(fail)?;
+            let base = bytes.as_ptr() as usize;
+            let head = (base.next_multiple_of(PIECE) - base).min(len);
+            let (first, rest) = bytes.split_at_mut(head);
+            let read_at = |piece: &mut [u8], at: usize| file.read_exact_at(piece, at as u64);
+            let (a, b) = rayon::join(
+                || read_at(first, 0),
+                || {
+                    rest.par_chunks_mut(PIECE)
+                        .enumerate()
+                        .try_for_each(|(i, piece)| read_at(piece, head + i * PIECE))
+                },
+            );
+            a.and(b).map_err(fail)?;
             // What a file still being written gained since.
             file.seek(std::io::SeekFrom::Start(len as u64))
                 .and_then(|_| file.read_to_end(&mut bytes))
