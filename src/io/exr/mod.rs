@@ -264,13 +264,9 @@ pub fn encode(img: &Image) -> std::result::Result<Vec<u8>, String> {
         );
     let blocks: Vec<Vec<u8>> = (0..img.height.div_ceil(ZIP_LINES))
         .into_par_iter()
-        .map_init(
-            || {
-                let level = libdeflater::CompressionLvl::new(4).expect("valid level");
-                libdeflater::Compressor::new(level)
-            },
-            |deflate, b| zip_block(img, b * ZIP_LINES, order, deflate),
-        )
+        .map_init(ZipRoom::new, |room, b| {
+            zip_block(img, b * ZIP_LINES, order, room)
+        })
         .collect();
     // The blocks, their offset table and line headers, and room for the header: one
     // allocation, not a doubling chain of copies.
@@ -301,23 +297,52 @@ pub fn encode(img: &Image) -> std::result::Result<Vec<u8>, String> {
     Ok(out)
 }
 
+/// One thread's working memory for ZIP blocks, reused from block to block: fresh buffers
+/// for each block (some 500 KB, zeroed) grew every worker's heap a few pages at a time, and
+/// each growth takes the address-space lock the other threads' page faults need.
+struct ZipRoom {
+    deflate: libdeflater::Compressor,
+    floats: Vec<f32>,
+    halves: Vec<f16>,
+    samples: Vec<u16>,
+    split: Vec<u8>,
+    packed: Vec<u8>,
+}
+
+impl ZipRoom {
+    fn new() -> Self {
+        let level = libdeflater::CompressionLvl::new(4).expect("valid level");
+        ZipRoom {
+            deflate: libdeflater::Compressor::new(level),
+            floats: Vec::new(),
+            halves: Vec::new(),
+            samples: Vec::new(),
+            split: Vec::new(),
+            packed: Vec::new(),
+        }
+    }
+}
+
 /// One ZIP block as OpenEXR stores it: for each line, each channel's half-float samples
 /// (little-endian); then the bytes split into even and odd halves, each byte replaced by its
 /// difference from the previous one, and zlib-compressed. A block that does not shrink is
 /// stored as it is, which readers recognise by its size. The halves and their differences
 /// are made in one pass over the samples (vectorised), not byte by byte.
-fn zip_block(
-    img: &Image,
-    y0: usize,
-    order: &[usize],
-    deflate: &mut libdeflater::Compressor,
-) -> Vec<u8> {
+fn zip_block(img: &Image, y0: usize, order: &[usize], room: &mut ZipRoom) -> Vec<u8> {
     use half::slice::HalfFloatSliceExt;
     let w = img.width;
     let lines = ZIP_LINES.min(img.height - y0);
-    let mut samples: Vec<u16> = Vec::with_capacity(lines * order.len() * w);
-    let mut floats = vec![0.0f32; w];
-    let mut halves = vec![f16::ZERO; w];
+    let ZipRoom {
+        deflate,
+        floats,
+        halves,
+        samples,
+        split,
+        packed,
+    } = room;
+    floats.resize(w, 0.0);
+    halves.resize(w, f16::ZERO);
+    samples.clear();
     for y in y0..y0 + lines {
         let row = &img.pixels[y * w..(y + 1) * w];
         for &c in order {
@@ -325,14 +350,15 @@ fn zip_block(
                 *f = super::finite(p[c], super::HALF_MAX);
             }
             // Slice conversion uses the CPU's F16C instructions where present.
-            halves.convert_from_f32_slice(&floats);
+            halves.convert_from_f32_slice(floats);
             samples.extend(halves.iter().map(|h| h.to_bits()));
         }
     }
     // Byte i of the stored form is the low byte of sample i / 2 (even i) or its high byte.
+    // Every byte of `split` is written below.
     let m = samples.len();
     let n = 2 * m;
-    let mut split = vec![0u8; n];
+    split.resize(n, 0);
     let (even, odd) = split.split_at_mut(m);
     let (lo, hi) = (|h: u16| h as u8, |h: u16| (h >> 8) as u8);
     let delta = |a: u8, b: u8| a.wrapping_sub(b).wrapping_add(128);
@@ -352,12 +378,10 @@ fn zip_block(
     {
         *o = delta(hi(a), hi(b));
     }
-    let mut packed = vec![0u8; deflate.zlib_compress_bound(n)];
-    match deflate.zlib_compress(&split, &mut packed) {
-        Ok(len) if len < n => {
-            packed.truncate(len);
-            packed
-        }
+    packed.resize(deflate.zlib_compress_bound(n), 0);
+    match deflate.zlib_compress(split, packed) {
+        // The block keeps only its bytes.
+        Ok(len) if len < n => packed[..len].to_vec(),
         _ => samples.iter().flat_map(|h| h.to_le_bytes()).collect(),
     }
 }
