@@ -56,11 +56,12 @@ fn main() {
         if wanted("exr") {
             let zip = photo_exr(&dir, "f32-zip", exr::prelude::Compression::ZIP16, false);
             faces(&zip, "photo", &dir, "exr");
-            command(&zip, &dir, "exr");
+            let ours = command(&zip, &dir, "exr");
             println!(
                 "  (issue 14, 2 cores: 0.83-1.0 s before, decode 0.48-0.61; \
-                 py360convert e2c compute alone 0.72 s; aim >= 2x that: <= 0.36 s)"
+                 aim >= 2x py360convert)"
             );
+            py360convert(&dir, &zip, ours);
         }
         if wanted("decode") {
             exr_decode(&dir);
@@ -84,7 +85,7 @@ fn wanted(name: &str) -> bool {
 /// The whole command, start to exit (`cubeforge convert INPUT -o DIR --to faces --format
 /// EXT`), best of RUNS: what the issue's figures measure. CUBEFORGE_BIN=PATH times another
 /// build of the command (an older one, to compare in the same run).
-fn command(input: &Path, dir: &Path, ext: &str) {
+fn command(input: &Path, dir: &Path, ext: &str) -> f64 {
     let out = dir.join(format!("command-{ext}"));
     let bin = std::env::var_os("CUBEFORGE_BIN").map_or_else(
         || PathBuf::from(env!("CARGO_BIN_EXE_cubeforge")),
@@ -106,6 +107,7 @@ fn command(input: &Path, dir: &Path, ext: &str) {
     }
     let from = input.extension().unwrap().to_string_lossy();
     println!("  whole command, .{from} -> .{ext} faces: {best:.3} s");
+    best
 }
 
 /// The photo as OpenEXR written by the exr crate: RGB, half or full floats, `compression`.
@@ -169,6 +171,101 @@ fn exr_decode(dir: &Path) {
         println!("  {name} ({mb:.0} MB)  {best:7.3} s");
     }
     println!("  (issue 14: f32 ZIP 0.48-0.61 s before; aim about 0.1 s)");
+}
+
+/// py360convert's `e2c` of the same photo (float32 RGB, 4096 x 2048) to six 1024 faces,
+/// bilinear, its computation alone (no file read or write). Run in fresh Python processes, as
+/// a command would: the first call builds sampling maps that later calls in one process reuse.
+const PY360_COMPUTE: &str = r#"
+import sys, time, numpy as np, py360convert as p
+img = np.fromfile(sys.argv[1], dtype=np.float32).reshape(2048, 4096, 3)
+t = []
+for i in range(2):
+    s = time.perf_counter()
+    p.e2c(img, face_w=1024, mode="bilinear", cube_format="list")
+    t.append(time.perf_counter() - s)
+print(t[0], t[1], p.__version__)
+"#;
+
+/// The same job as ours, start to end, in Python: the float ZIP EXR read with OpenEXR's own
+/// bindings, `e2c`, six half-float ZIP EXR faces written with them.
+const PY360_WHOLE: &str = r#"
+import sys, time, os
+t0 = time.perf_counter()
+import numpy as np, OpenEXR, py360convert as p
+with OpenEXR.File(sys.argv[1]) as f:
+    ch = f.channels()
+    img = ch["RGB"].pixels if "RGB" in ch else np.stack([ch[c].pixels for c in "RGB"], axis=-1)
+faces = p.e2c(img.astype(np.float32), face_w=1024, mode="bilinear", cube_format="list")
+os.makedirs(sys.argv[2], exist_ok=True)
+for name, face in zip(["px", "nx", "py", "ny", "pz", "nz"], faces):
+    head = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with OpenEXR.File(head, {"RGB": face.astype(np.float16)}) as f:
+        f.write(os.path.join(sys.argv[2], name + ".exr"))
+print(time.perf_counter() - t0)
+"#;
+
+/// The peer the issue names, measured in this run next to `ours` (our whole command, best of
+/// RUNS): its computation alone, and the whole job in Python. Each part is skipped with a note
+/// when python3 lacks what it needs (`python3 -m pip install py360convert OpenEXR`).
+fn py360convert(dir: &Path, exr: &Path, ours: f64) {
+    let raw = dir.join("photo4k-rgb-f32.raw");
+    if !raw.exists() {
+        let Some(img) = photo_image() else { return };
+        let bytes: Vec<u8> = img
+            .pixels
+            .iter()
+            .flat_map(|p| [p.x, p.y, p.z])
+            .flat_map(f32::to_le_bytes)
+            .collect();
+        std::fs::write(&raw, bytes).unwrap();
+    }
+    let python = |script: &str, args: &[&Path]| -> Option<Vec<String>> {
+        let out = std::process::Command::new("python3")
+            .args(["-c", script])
+            .args(args)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())?;
+        let text = String::from_utf8_lossy(&out.stdout);
+        Some(text.split_whitespace().map(str::to_string).collect())
+    };
+    let best_median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        (v[0], v[v.len() / 2])
+    };
+    let (mut first, mut cached, mut version) = (Vec::new(), f64::MAX, String::new());
+    for _ in 0..RUNS {
+        let Some(f) = python(PY360_COMPUTE, &[&raw]) else {
+            println!("  py360convert: skipped (python3 with numpy and py360convert not found)");
+            return;
+        };
+        first.push(f[0].parse().unwrap());
+        cached = cached.min(f[1].parse().unwrap());
+        version = f[2].clone();
+    }
+    let (best, median) = best_median(first);
+    println!(
+        "  py360convert {version} e2c, computation alone: first call best {best:.3} s, median \
+         {median:.3} s (maps cached: {cached:.3} s); its median first call / our whole command: \
+         {:.2}x",
+        median / ours
+    );
+    let faces = dir.join("py360convert-faces");
+    let mut whole = Vec::new();
+    for _ in 0..RUNS {
+        let Some(f) = python(PY360_WHOLE, &[exr, &faces]) else {
+            println!("  py360convert whole job: skipped (OpenEXR's Python bindings not found)");
+            return;
+        };
+        whole.push(f[0].parse().unwrap());
+    }
+    let (best, median) = best_median(whole);
+    println!(
+        "  py360convert whole job (OpenEXR read, e2c, six half ZIP faces written): best \
+         {best:.3} s, median {median:.3} s; its best / our best: {:.1}x",
+        best / ours
+    );
 }
 
 fn write(path: &Path, img: &Image) {
