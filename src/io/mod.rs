@@ -166,24 +166,31 @@ pub fn count_out_of_range<'a>(images: impl IntoIterator<Item = &'a Image>, max: 
 }
 
 /// How many of the first `channels` values of each texel are NaN or outside [`min`, `max`].
+/// Counted per channel in float lanes over runs of texels (exact: a run's counts stay far below
+/// 2^24), which compiles to a few vector instructions a texel; a count per texel through a
+/// bit mask did not vectorise and read the faces at half the memory's speed.
 fn count_outside<'a>(
     images: impl IntoIterator<Item = &'a Image>,
     min: f32,
     max: f32,
     channels: usize,
 ) -> u64 {
+    use glam::Vec4;
     use rayon::prelude::*;
-    let keep = (1u32 << channels) - 1;
+    let keep = Vec4::from_array(std::array::from_fn(|c| f32::from(u8::from(c < channels))));
+    let (lo, hi) = (Vec4::splat(min), Vec4::splat(max));
     images
         .into_iter()
         .map(|img| {
             img.pixels
-                .par_iter()
-                .map(|p| {
-                    let bad = p.is_nan_mask()
-                        | p.cmpgt(glam::Vec4::splat(max))
-                        | p.cmplt(glam::Vec4::splat(min));
-                    (bad.bitmask() & keep).count_ones() as u64
+                .par_chunks(1 << 12)
+                .map(|run| {
+                    let lanes = run.iter().fold(Vec4::ZERO, |n, p| {
+                        // NaN compares false: it is not inside.
+                        let inside = p.cmpge(lo) & p.cmple(hi);
+                        n + Vec4::select(inside, Vec4::ZERO, Vec4::ONE)
+                    });
+                    (lanes * keep).element_sum() as u64
                 })
                 .sum::<u64>()
         })
@@ -511,5 +518,60 @@ pub fn io_msg(e: &std::io::Error) -> String {
     match s.find(" (os error") {
         Some(i) => s[..i].to_string(),
         None => s,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lane counts agree with a count value by value, for NaN, infinities, the bounds
+    /// themselves, -0.0 and ordinary values, in images of several runs (and a partial one).
+    #[test]
+    fn out_of_range_counts_match_a_plain_count() {
+        let special = [
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            HALF_MAX,
+            -HALF_MAX,
+            HALF_MAX * 1.0001,
+            -0.0,
+            0.0,
+            1e-30,
+            -1e-30,
+            7.5,
+            -3.0,
+        ];
+        let img = |n: usize, seed: usize| {
+            let mut img = Image::new(n, 1);
+            for (i, p) in img.pixels.iter_mut().enumerate() {
+                let v = |c: usize| special[(i * 7 + c * 3 + seed) % special.len()];
+                *p = glam::Vec4::new(v(0), v(1), v(2), v(3));
+            }
+            img
+        };
+        let images = [img(10_007, 0), img(1, 5), img(4096 * 3, 2)];
+        let plain = |min: f32, max: f32, channels: usize| -> u64 {
+            let inside = |v: f32| v >= min && v <= max;
+            images
+                .iter()
+                .flat_map(|i| &i.pixels)
+                .map(|p| (0..channels).filter(|&c| !inside(p[c])).count() as u64)
+                .sum()
+        };
+        for (min, max, channels) in [(-HALF_MAX, HALF_MAX, 4), (0.0, HALF_MAX, 3), (0.0, 1.0, 4)] {
+            let n = count_outside(&images, min, max, channels);
+            assert_eq!(
+                n,
+                plain(min, max, channels),
+                "[{min}, {max}], {channels} channels"
+            );
+            assert!(n > 0);
+        }
+        assert_eq!(
+            count_out_of_range(&images, HALF_MAX),
+            plain(-HALF_MAX, HALF_MAX, 4)
+        );
     }
 }
