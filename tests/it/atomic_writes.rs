@@ -128,6 +128,7 @@ fn a_replaced_file_is_never_missing_or_partial() {
 
 /// A symbolic link in the way is replaced by the file, as a rename does; what it pointed to
 /// is left alone.
+#[cfg(unix)]
 #[test]
 fn a_link_in_the_way_is_replaced_not_followed() {
     let t = tempfile::tempdir().unwrap();

@@ -297,9 +297,10 @@ pub fn encode(img: &Image) -> std::result::Result<Vec<u8>, String> {
     Ok(out)
 }
 
-/// One thread's working memory for ZIP blocks, reused from block to block: fresh buffers
-/// for each block (some 500 KB, zeroed) grew every worker's heap a few pages at a time, and
-/// each growth takes the address-space lock the other threads' page faults need.
+/// Working memory for ZIP blocks, one for each piece of the block range that rayon hands a
+/// worker (`map_init`), reused from block to block: fresh buffers for each block (some
+/// 500 KB, zeroed) grew every worker's heap a few pages at a time, and each growth takes the
+/// address-space lock the other threads' page faults need.
 struct ZipRoom {
     deflate: libdeflater::Compressor,
     floats: Vec<f32>,
