@@ -122,16 +122,34 @@ fn huffman(
     if data.len() < 20 {
         return bad("is truncated");
     }
+    // The header, every field checked against the block before use: the first and last
+    // symbol of the code table (the last is the repeat symbol), the table's length in
+    // bytes (OpenEXR's own reader ignores it; it must still fit), the coded bits, and a
+    // reserved word.
     let word = |i: usize| u32::from_le_bytes(data[4 * i..4 * i + 4].try_into().expect("4 bytes"));
-    let (first_sym, last_sym, n_bits) = (word(0) as usize, word(1) as usize, word(3) as u64);
+    let (first_sym, last_sym) = (word(0) as usize, word(1) as usize);
+    let (table_len, n_bits) = (word(2) as usize, word(3) as u64);
+    let stream_bytes = data.len() - 20;
     if first_sym >= SYMBOLS || last_sym >= SYMBOLS {
-        return bad("has an invalid table size");
+        return Err(format!(
+            "the PIZ block's Huffman data has an invalid table size (symbols {first_sym} to {last_sym}, at most {})",
+            SYMBOLS - 1
+        ));
+    }
+    if first_sym > last_sym {
+        return Err(format!(
+            "the PIZ block's Huffman data has its first symbol ({first_sym}) after its last ({last_sym})"
+        ));
+    }
+    if table_len > stream_bytes {
+        return Err(format!(
+            "the PIZ block's Huffman data claims a {table_len}-byte code table in {stream_bytes} bytes"
+        ));
     }
     // The stream, padded so a 64-bit read past its end finds zeros.
     bits.clear();
     bits.extend_from_slice(&data[20..]);
-    bits.resize(data.len() - 20 + 16, 0);
-    let stream_bytes = data.len() - 20;
+    bits.resize(stream_bytes + 16, 0);
 
     // Code lengths, six bits each from first_sym to last_sym, with runs of zeros.
     lengths.clear();
