@@ -91,6 +91,38 @@ pub(crate) fn param(name: &str) -> String {
     }
 }
 
+/// `text` with every character that would act on a terminal written out instead: control
+/// characters (C0, DEL, C1: ESC, BEL, line breaks) as `\n`, `\x1b`, `\u{9b}`, and the
+/// bidirectional overrides that reorder what is shown. Messages quote what files hold (a
+/// Radiance header line, a KTX key, a JSON error): a hostile file must not drive the
+/// terminal that prints them.
+pub fn escape_text(text: &str) -> std::borrow::Cow<'_, str> {
+    let acts =
+        |c: char| c.is_control() || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}');
+    if !text.chars().any(acts) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        match c {
+            '\n' => out.push_str("\\n"),
+            '\r' => out.push_str("\\r"),
+            '\t' => out.push_str("\\t"),
+            c if acts(c) && (c as u32) < 0x100 => out.push_str(&format!("\\x{:02x}", c as u32)),
+            c if acts(c) => out.push_str(&format!("\\u{{{:x}}}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
+fn escaped(msg: String) -> String {
+    match escape_text(&msg) {
+        std::borrow::Cow::Borrowed(_) => msg,
+        std::borrow::Cow::Owned(s) => s,
+    }
+}
+
 /// The result of every fallible call in cubeforge.
 pub type Result<T> = std::result::Result<T, Error>;
 
@@ -99,12 +131,12 @@ impl Error {
     pub fn file(path: impl AsRef<Path>, msg: impl Into<String>) -> Self {
         Error::Decode {
             path: path.as_ref().to_path_buf(),
-            msg: msg.into(),
+            msg: escaped(msg.into()),
         }
     }
     /// A parameter the caller gave that cannot work.
     pub fn usage(msg: impl Into<String>) -> Self {
-        Error::InvalidOption(msg.into())
+        Error::InvalidOption(escaped(msg.into()))
     }
     /// The operating system's refusal to read or write `path`.
     pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
@@ -119,14 +151,14 @@ impl Error {
         Error::Limit {
             path: path.map(Path::to_path_buf),
             kind,
-            msg: msg.into(),
+            msg: escaped(msg.into()),
         }
     }
     /// Something valid in or about `path` that cubeforge does not handle.
     pub fn unsupported(path: impl AsRef<Path>, msg: impl Into<String>) -> Self {
         Error::Unsupported {
             path: path.as_ref().to_path_buf(),
-            msg: msg.into(),
+            msg: escaped(msg.into()),
         }
     }
     /// A mistake in a recipe or material file, at `line` (from 1) when known.
@@ -134,7 +166,7 @@ impl Error {
         Error::Recipe {
             path: path.as_ref().to_path_buf(),
             line,
-            msg: msg.into(),
+            msg: escaped(msg.into()),
         }
     }
     /// The file the error is about, if any.

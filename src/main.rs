@@ -3,6 +3,7 @@
 mod cli;
 
 fn main() {
+    cli::guard_standard_streams();
     // Messages name parameters by their flags (--size), not the library's field names.
     cubeforge::error::name_parameters_as_flags();
     keep_freed_memory();
@@ -18,7 +19,7 @@ fn main() {
             .location()
             .map(|l| format!(" ({}:{})", l.file(), l.line()))
             .unwrap_or_default();
-        let msg = msg.replace(['\n', '\r'], " ");
+        let msg = cubeforge::error::escape_text(&msg).into_owned();
         cli::tell(format_args!("cubeforge: error: internal error: {msg}{at}"));
     }));
     std::process::exit(cli::run());

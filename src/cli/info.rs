@@ -44,7 +44,8 @@ pub fn run(args: Args) -> Result<()> {
             Err(e) if args.files.len() == 1 => return Err(e),
             Err(e) => {
                 // One line, even for a name that holds a line break.
-                let e = e.to_string().replace(['\n', '\r'], " ");
+                let text = e.to_string();
+                let e = cubeforge::error::escape_text(&text);
                 super::tell(format_args!("cubeforge: error: {e}"));
                 failed += 1;
             }

@@ -313,10 +313,10 @@ fn json_stays_valid_with_a_bad_input() {
     assert_eq!(out.status.code(), Some(1));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("valid JSON");
     assert_eq!(v.as_array().map(Vec::len), Some(1), "{v}");
-    // One line for the file (its name's line break made a space), one for the summary.
+    // One line for the file (its name's line break written out), one for the summary.
     let err = stderr(&out);
     assert_eq!(err.lines().count(), 2, "{err}");
-    assert!(err.contains("bad name.exr: "), "{err}");
+    assert!(err.contains("bad\\nname.exr: "), "{err}");
     assert!(err.contains("1 of 2 files could not be read"), "{err}");
 }
 
