@@ -114,6 +114,8 @@ pub(crate) struct ChainDir {
 /// Reads a chain folder: every `mK/` while they last, each half the size of the one before,
 /// and `levels.json` if present (it must list as many levels).
 pub(crate) fn read_dir(dir: &Path, opts: &ReadOptions) -> Result<ChainDir> {
+    // Every level's faces within the budget together, before any is decoded.
+    convert::plan_input(std::slice::from_ref(&dir.to_path_buf()), None, opts)?;
     let mut levels: Vec<Faces> = Vec::new();
     let mut files = Vec::new();
     let mut meta: Option<Meta> = None;
@@ -122,7 +124,7 @@ pub(crate) fn read_dir(dir: &Path, opts: &ReadOptions) -> Result<ChainDir> {
         if !sub.is_dir() {
             break;
         }
-        let loaded = convert::load(std::slice::from_ref(&sub), None, opts)?;
+        let loaded = convert::load_planned(std::slice::from_ref(&sub), None, opts)?;
         let Source::Cube(mut c) = loaded.source else {
             return Err(Error::file(
                 &sub,
@@ -197,6 +199,7 @@ pub(crate) fn encode_dir(
     write: &WriteOptions,
     inputs: &[PathBuf],
 ) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    crate::output::refuse_folder(dir, inputs)?;
     let mut files = Vec::new();
     for (k, faces) in chain.levels.iter().enumerate() {
         files.extend(crate::output::encode_faces(
@@ -274,5 +277,10 @@ pub fn encode(
         files,
         clamped,
         psnr,
+        folders: if container.is_none() {
+            vec![path.to_path_buf()]
+        } else {
+            Vec::new()
+        },
     })
 }

@@ -165,8 +165,119 @@ impl Loaded {
     }
 }
 
-/// Loads one image file (any layout), a folder of six faces, or six face files.
+/// What loading an input will take, from its files' headers alone ([`io::claim`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct InputPlan {
+    /// The face edge that keeps the input's resolution, where the headers tell it.
+    pub face_size: Option<usize>,
+    /// Bytes the decoded input keeps (RGBA f32 texels, every level of a chain or container).
+    pub held_bytes: u64,
+    /// Bytes in use at the peak of decoding it: the files decode one after another, each
+    /// with its file's bytes and a decoder's buffer while the ones before it are kept.
+    pub peak_bytes: u64,
+}
+
+impl InputPlan {
+    /// The input's bytes while a command works from it: its texels and the lookup pyramid
+    /// built over them (box means: at most half as many again), or the decode's peak.
+    pub fn working_bytes(&self) -> u64 {
+        self.peak_bytes
+            .max(self.held_bytes.saturating_add(self.held_bytes / 2))
+    }
+}
+
+/// [`plan_input`] for [`load_level`]: a chain folder's level `level` is read alone.
+pub fn plan_level(
+    inputs: &[PathBuf],
+    from: Option<Kind>,
+    opts: &ReadOptions,
+    level: usize,
+) -> Result<InputPlan> {
+    match inputs {
+        [dir]
+            if crate::chain::is_chain_dir(dir) && crate::chain::level_dir(dir, level).is_dir() =>
+        {
+            plan_input(&[crate::chain::level_dir(dir, level)], from, opts)
+        }
+        _ => plan_input(inputs, from, opts),
+    }
+}
+
+/// Plans loading `inputs` as [`load`] would read them (one image, six faces, a folder of
+/// faces, a chain folder's every level), checking the decode's peak against the memory
+/// budget before any file is decoded: six faces each within the budget are refused when
+/// together they are not.
+pub fn plan_input(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Result<InputPlan> {
+    let files: Vec<PathBuf> = match inputs {
+        [dir] if dir.is_dir() && crate::chain::is_chain_dir(dir) => {
+            let mut all = Vec::new();
+            for k in 0.. {
+                let sub = crate::chain::level_dir(dir, k);
+                if !sub.is_dir() {
+                    break;
+                }
+                all.extend(find_faces(&sub)?);
+            }
+            all
+        }
+        [dir] if dir.is_dir() => find_faces(dir)?,
+        files => files.to_vec(),
+    };
+    let mut plan = InputPlan::default();
+    let mut first = None;
+    for f in &files {
+        let Some(c) = io::claim(f, opts)? else {
+            continue; // standard input: checked by its reader as it arrives
+        };
+        first.get_or_insert(c);
+        plan.peak_bytes = plan
+            .peak_bytes
+            .max(plan.held_bytes.saturating_add(c.decode_bytes));
+        plan.held_bytes = plan.held_bytes.saturating_add(c.held_bytes);
+    }
+    // Looking a cube up by direction (its flux, its peaks) takes a face's solid-angle table.
+    if let Some(c) = first.filter(|c| c.cube || files.len() > 1) {
+        let table = c.width.saturating_mul(c.width).saturating_mul(4);
+        plan.peak_bytes = plan.peak_bytes.max(plan.held_bytes.saturating_add(table));
+    }
+    plan.face_size = first.and_then(|c| {
+        let (w, h) = (c.width as usize, c.height as usize);
+        if c.cube || files.len() > 1 {
+            return Some(w);
+        }
+        let kind = from.or_else(|| layout::detect(w, h).ok())?;
+        (kind != Kind::Faces && !kind.is_container() && kind.fits(w, h))
+            .then(|| kind.face_size(w, h))
+    });
+    let what = match &files[..] {
+        [one] => one.display().to_string(),
+        [first, ..] => format!(
+            "{} input files ({} and the others)",
+            files.len(),
+            first.display()
+        ),
+        [] => return Err(Error::usage("no input given")),
+    };
+    opts.limits
+        .check_memory(format_args!("decoding {what}"), plan.peak_bytes)?;
+    Ok(plan)
+}
+
+/// Loads one image file (any layout), a folder of six faces, or six face files, once the
+/// whole input's decode is planned within the memory budget ([`plan_input`]).
 pub fn load(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Result<Loaded> {
+    if inputs.len() == 1 || inputs.len() == 6 {
+        plan_input(inputs, from, opts)?;
+    }
+    load_planned(inputs, from, opts)
+}
+
+/// [`load`] without the plan (the caller made it).
+pub(crate) fn load_planned(
+    inputs: &[PathBuf],
+    from: Option<Kind>,
+    opts: &ReadOptions,
+) -> Result<Loaded> {
     match inputs {
         [] => Err(Error::usage("no input given")),
         [dir] if dir.is_dir() => load_faces(&find_faces(dir)?, opts),

@@ -39,12 +39,15 @@ pub struct Encoded {
     /// A lossy container format's (BC6H, BC7) quality: level 0 as read back against the map
     /// before encoding, in dB ([`io::gpu::psnr`]).
     pub psnr: Option<f64>,
+    /// Folders that are outputs in their own right (six faces, a chain), replaced whole.
+    pub folders: Vec<PathBuf>,
 }
 
 impl Encoded {
-    /// Writes every file, all or none ([`io::atomic`]).
+    /// Writes every file, all or none, folder outputs replacing theirs whole
+    /// ([`io::atomic`]).
     pub fn write(&self) -> Result<()> {
-        io::write_all_atomic(&self.files)
+        io::write_all_atomic_with(&self.files, &self.folders)
     }
 }
 
@@ -116,14 +119,22 @@ impl Target {
             io::clamp_warning(&self.path, f, self.write.gpu_format, images)
         });
         let mut psnr = None;
+        let folders = if self.kind == Kind::Faces {
+            vec![self.path.clone()]
+        } else {
+            Vec::new()
+        };
         let files = match out {
-            Output::Cube(cube) if self.kind == Kind::Faces => encode_faces(
-                &self.path,
-                &cube.levels[0],
-                self.face_format,
-                &self.write,
-                inputs,
-            )?,
+            Output::Cube(cube) if self.kind == Kind::Faces => {
+                refuse_folder(&self.path, inputs)?;
+                encode_faces(
+                    &self.path,
+                    &cube.levels[0],
+                    self.face_format,
+                    &self.write,
+                    inputs,
+                )?
+            }
             Output::Cube(cube) => {
                 refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
                 // Babylon needs the whole chain down to 1x1.
@@ -150,6 +161,7 @@ impl Target {
             files,
             clamped,
             psnr,
+            folders,
         })
     }
 }
@@ -249,6 +261,25 @@ pub(crate) fn encode_faces(
         .zip(encoded)
         .map(|(p, e)| e.map(|b| (p, b)))
         .collect()
+}
+
+/// Refuses a folder output (replaced whole) that holds an input.
+pub fn refuse_folder(dir: &Path, inputs: &[PathBuf]) -> Result<()> {
+    let Ok(real) = std::fs::canonicalize(dir) else {
+        return Ok(()); // a new folder holds nothing yet
+    };
+    for i in inputs {
+        if std::fs::canonicalize(i).is_ok_and(|c| c.starts_with(&real)) {
+            return Err(Error::file(
+                dir,
+                format!(
+                    "holds the input {}: the output folder is replaced whole, so write to another folder",
+                    i.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Refuses to write over any input file.

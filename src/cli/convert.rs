@@ -107,6 +107,18 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
         (Kind::Faces, Some(f)) => Some(output::face_format(f)?),
         _ => None,
     };
+    // The whole plan against the budget before any file is decoded: the input as the
+    // headers describe it, the output at the size it will have.
+    if let Some(n) = a.size.filter(|&n| n > limits.max_dimension as usize) {
+        return Err(Error::usage(format!(
+            "--size {n}: over the size limit of {} px per side",
+            limits.max_dimension
+        )));
+    }
+    let plan = convert::plan_level(&a.inputs, a.input.from, &read, a.level)?;
+    if let Some(size) = a.size.or(plan.face_size).filter(|&s| s > 0) {
+        check_memory(&limits, to, size, plan.working_bytes())?;
+    }
     let loaded = convert::load_level(&a.inputs, a.input.from, &read, a.level)?;
     stages.done("decode");
     if loaded.meta.replaced_values > 0 {
@@ -134,17 +146,13 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
             "--size {size} makes a {w}x{h} output, over the size limit (--max-pixels)"
         )));
     }
-    // The output (RGBA f32, twice over for mips and encoding) and the input's pyramid.
-    let texels = if to.projection().is_some() || to.is_cells() {
-        w as u64 * h as u64
-    } else {
-        6 * size as u64 * size as u64
-    };
-    let input: u64 = loaded.images().iter().map(|i| i.pixels.len() as u64).sum();
-    limits.check_memory(
-        format_args!("--size {size} ({w}x{h} output)"),
-        (texels * 2 + input / 2) * 16,
-    )?;
+    // Again with what was decoded (standard input's size is known only now).
+    let input: u64 = loaded
+        .images()
+        .iter()
+        .map(|i| i.pixels.len() as u64 * 16)
+        .sum();
+    check_memory(&limits, to, size, input + input / 2)?;
     target.face_format = face_format.unwrap_or(if loaded.hdr {
         FileFormat::Exr
     } else {
@@ -177,8 +185,23 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     }
     stages.done("encode");
     stages.quality(target.write.gpu_format, encoded.psnr);
-    super::deliver(&encoded.files, to_stdout)?;
+    super::deliver(&encoded.files, &encoded.folders, to_stdout)?;
     stages.done("write");
     stages.total();
     Ok(())
+}
+
+/// The plan's memory: the output (RGBA f32, twice over for mips and encoding) beside the
+/// input's texels and pyramid (`input` bytes).
+fn check_memory(limits: &io::Limits, to: Kind, size: usize, input: u64) -> Result<()> {
+    let (w, h) = to.image_size(size);
+    let texels = if to.projection().is_some() || to.is_cells() {
+        (w as u64).saturating_mul(h as u64)
+    } else {
+        (size as u64).saturating_mul(size as u64).saturating_mul(6)
+    };
+    limits.check_memory(
+        format_args!("--size {size} ({w}x{h} output)"),
+        texels.saturating_mul(32).saturating_add(input),
+    )
 }

@@ -53,7 +53,31 @@ pub struct Args {
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
     let mut stages = Stages::new(verbose);
+    if a.output == std::path::Path::new("-") {
+        return Err(cubeforge::Error::usage(format!(
+            "-o - (standard output) takes one file, and {} writes several (a specular chain, a diffuse map, tables): name a folder",
+            "ibl"
+        )));
+    }
     let read = a.input.read_options();
+    // The whole plan against the budget before any file is decoded: the input, the
+    // specular chain (and the sheen chain), the diffuse map.
+    let plan = convert::plan_input(&a.inputs, a.input.from, &read)?;
+    let defaults = ibl::engines::defaults(a.target);
+    let size = a.size.map_or(defaults.specular_size as u64, u64::from);
+    let diffuse = a
+        .diffuse_size
+        .map_or(defaults.diffuse_size as u64, u64::from);
+    let face = |n: u64| 6 * 16 * n * n;
+    // Each chain: the base faces, the chain (4/3 of them), a bordered sampler copy and the
+    // encoding; the diffuse map: its faces, the encoding and a sampler copy.
+    let chains = if a.sheen { 2 } else { 1 };
+    a.input.limits().check_memory(
+        format_args!("--size {size} and --diffuse-size {diffuse}"),
+        (chains * 4 * face(size))
+            .saturating_add(3 * face(diffuse))
+            .saturating_add(plan.working_bytes()),
+    )?;
     let loaded = convert::load(&a.inputs, a.input.from, &read)?;
     stages.done("decode");
     let opts = IblOptions {
@@ -67,13 +91,6 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         sheen: a.sheen,
         yaw: a.yaw,
     };
-    let size = opts
-        .specular_size
-        .unwrap_or(ibl::engines::defaults(a.target).specular_size) as u64;
-    // The base faces, the chain (4/3 of them), a bordered sampler copy and the encoding.
-    a.input
-        .limits()
-        .check_memory(format_args!("--size {size}"), 6 * size * size * 16 * 4)?;
     let stages_cell = std::sync::Mutex::new(&mut stages);
     let delivery = ibl::deliver(&loaded, a.target, &a.output, &opts, &|s| {
         if let Ok(mut st) = stages_cell.lock() {

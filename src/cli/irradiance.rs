@@ -15,7 +15,8 @@ pub struct Args {
     /// Anything `convert` reads: one image, six faces, or a folder of faces.
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
-    /// As for convert: a folder receives px.exr ...; a file gets a layout or container.
+    /// As for convert: a folder receives px.exr ... (replacing what it held whole); a file gets
+    /// a layout or container; - is standard output (with --format).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Output layout (default: from the output's name, as for convert).
@@ -46,10 +47,24 @@ pub struct Args {
     pub input: super::InputArgs,
 }
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
+pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     let mut stages = Stages::new(verbose);
+    let (output, to_stdout) = super::output_name(&a.output, Some(&a.format))?;
+    a.output = output;
+    if to_stdout && a.sh.is_some() {
+        return Err(Error::usage(
+            "-o - (standard output) takes one file: write the --sh coefficients with -o FILE",
+        ));
+    }
     let mut target = Target::new(&a.output, a.to, true)?;
-    target.face_format = output::face_format(&a.format)?;
+    if target.kind == Kind::Faces {
+        // Replaced whole: refuse a folder that is not cubeforge's before the work.
+        output::refuse_folder(&a.output, &a.inputs)?;
+        cubeforge::io::check_folder(&a.output, a.sh.as_slice())?;
+    }
+    if !to_stdout {
+        target.face_format = output::face_format(&a.format)?;
+    }
     target.write = WriteOptions {
         linear: a.input.linear,
         gpu_format: a.gpu_format,
@@ -68,6 +83,15 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         return Err(Error::usage(format!("--size {}: use 1 to 4096", a.size)));
     }
     let read = a.input.read_options();
+    // The whole plan against the budget before any file is decoded: the input, the base
+    // faces it is resampled to (256 at most), the map (faces, encoding, a sampler copy).
+    let plan = convert::plan_input(&a.inputs, a.input.from, &read)?;
+    let base = plan.face_size.unwrap_or(256).min(256) as u64;
+    let face = |n: u64| 6 * 16 * n * n;
+    a.input.limits().check_memory(
+        format_args!("--size {}", a.size),
+        (2 * face(base) + 3 * face(a.size as u64)).saturating_add(plan.working_bytes()),
+    )?;
     let loaded = convert::load(&a.inputs, a.input.from, &read)?;
     stages.done("decode");
     // 256 faces hold everything the integral and the SH can see.
@@ -99,6 +123,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         super::warn(w);
     }
     stages.quality(a.gpu_format, encoded.psnr);
+    let encoded_folders = encoded.folders;
     let mut files = encoded.files;
     if let Some(p) = &a.sh {
         let json = serde_json::to_vec_pretty(&sh::ShFile::new(&coeffs))
@@ -107,7 +132,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         files.push((p.clone(), json));
     }
     stages.done("encode");
-    super::write_files(&files)?;
+    super::deliver(&files, &encoded_folders, to_stdout)?;
     stages.done("write");
     let dc = coeffs[0].map(|v| v * sh::BASIS[0].3);
     super::report(format_args!(

@@ -204,7 +204,11 @@ pub fn quiet() -> bool {
 
 pub fn warn(msg: impl std::fmt::Display) {
     if !quiet() {
-        tell(format_args!("cubeforge: warning: {msg}"));
+        let text = msg.to_string();
+        tell(format_args!(
+            "cubeforge: warning: {}",
+            cubeforge::error::escape_text(&text)
+        ));
     }
 }
 
@@ -214,8 +218,16 @@ pub fn report(text: impl std::fmt::Display) -> cubeforge::Result<()> {
     if quiet() {
         return Ok(());
     }
+    // With `-o -` standard output carries the file: summaries go to standard error.
+    if DATA_ON_STDOUT.load(std::sync::atomic::Ordering::Relaxed) {
+        tell(text);
+        return Ok(());
+    }
     say(text)
 }
+
+/// Set when the command's output file goes to standard output (`-o -`).
+static DATA_ON_STDOUT: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// A progress bar on standard error for work counted in `total` units; none when standard
 /// error is not a terminal or with --quiet.
@@ -249,6 +261,8 @@ fn write_stdout(
     write: impl FnOnce(&mut std::io::StdoutLock<'static>) -> std::io::Result<()>,
 ) -> cubeforge::Result<()> {
     use std::io::Write;
+    // `cubeforge convert ... -o - >&-` must not exit 0 having written nothing.
+    stdout_open()?;
     let mut out = std::io::stdout().lock();
     match write(&mut out).and_then(|()| out.flush()) {
         Ok(()) => Ok(()),
@@ -268,7 +282,15 @@ pub fn tell(text: impl std::fmt::Display) {
 
 /// Writes a command's files, all or none (see [`cubeforge::io::atomic`]).
 pub fn write_files(files: &[(std::path::PathBuf, Vec<u8>)]) -> cubeforge::Result<()> {
-    let staged = cubeforge::io::stage(files)?;
+    write_output(files, &[])
+}
+
+/// [`write_files`], where each of `folders` (six faces, a chain) replaces its folder whole.
+pub fn write_output(
+    files: &[(std::path::PathBuf, Vec<u8>)],
+    folders: &[std::path::PathBuf],
+) -> cubeforge::Result<()> {
+    let staged = cubeforge::io::stage_with(files, folders)?;
     // Tests stop here to signal a command that has written its temporaries.
     if let Some(ms) = std::env::var("CUBEFORGE_TEST_PAUSE_BEFORE_COMMIT_MS")
         .ok()
@@ -288,18 +310,111 @@ pub fn output_name(
     if output != std::path::Path::new("-") {
         return Ok((output.to_path_buf(), false));
     }
-    match format.map(|f| (f, FileFormat::from_ext_str(f))) {
-        Some((f, Some(_))) => Ok((std::path::PathBuf::from(format!("-.{f}")), true)),
-        _ => Err(cubeforge::Error::usage(
-            "-o - (standard output) needs --format png, jpg, tga, hdr, exr, ktx2 or dds",
-        )),
+    match format.and_then(FileFormat::from_ext_str) {
+        Some(f) => {
+            stdout_for_data()?;
+            Ok((
+                std::path::PathBuf::from(format!("-.{}", f.extension())),
+                true,
+            ))
+        }
+        _ => {
+            let list: Vec<&str> = FileFormat::ALL.iter().map(|f| f.extension()).collect();
+            Err(cubeforge::Error::usage(format!(
+                "-o - (standard output) needs --format {}",
+                list.join(", ")
+            )))
+        }
     }
 }
 
-/// Writes a command's files, or its one file to standard output.
-pub fn deliver(files: &[(std::path::PathBuf, Vec<u8>)], to_stdout: bool) -> cubeforge::Result<()> {
+/// `-o -` for a command whose output may be several files (a chain, faces): one container
+/// to standard output, named by `format`; anything else is refused before the work.
+pub fn container_output(
+    output: &std::path::Path,
+    format: Option<&str>,
+) -> cubeforge::Result<(std::path::PathBuf, bool)> {
+    if output != std::path::Path::new("-") {
+        return Ok((output.to_path_buf(), false));
+    }
+    match format.and_then(FileFormat::from_ext_str) {
+        Some(f) if f.is_container() => {
+            stdout_for_data()?;
+            Ok((
+                std::path::PathBuf::from(format!("-.{}", f.extension())),
+                true,
+            ))
+        }
+        _ => {
+            let list: Vec<&str> = FileFormat::ALL
+                .iter()
+                .filter(|f| f.is_container())
+                .map(|f| f.extension())
+                .collect();
+            Err(cubeforge::Error::usage(format!(
+                "-o - (standard output) takes one file, a container: add --format {}",
+                list.join(", ")
+            )))
+        }
+    }
+}
+
+/// Whether the process started with standard output closed (`>&-`).
+static STDOUT_CLOSED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Run first: remembers whether the process started with standard output closed. Rust's
+/// start-up puts /dev/null on a closed standard stream (opened for reading and writing), so
+/// writes to it succeed and go nowhere: `cubeforge convert ... -o - >&-` would exit 0 having
+/// written nothing. A shell's `> /dev/null` opens it for writing only, so the two differ.
+pub fn guard_standard_streams() {
+    #[cfg(unix)]
+    // SAFETY: fcntl and fstat only read the descriptor's flags and status into `st`, and
+    // stat reads a NUL-terminated path.
+    unsafe {
+        let mut st: libc::stat = std::mem::zeroed();
+        let mut null: libc::stat = std::mem::zeroed();
+        let flags = libc::fcntl(1, libc::F_GETFL);
+        let closed = flags != -1
+            && flags & libc::O_ACCMODE == libc::O_RDWR
+            && libc::fstat(1, &mut st) == 0
+            && libc::stat(c"/dev/null".as_ptr(), &mut null) == 0
+            && (st.st_dev, st.st_ino) == (null.st_dev, null.st_ino);
+        STDOUT_CLOSED.store(closed, std::sync::atomic::Ordering::Relaxed);
+    }
+}
+
+/// Standard output will carry the output file: refused when closed (before any work), and
+/// from now on summaries go to standard error.
+fn stdout_for_data() -> cubeforge::Result<()> {
+    DATA_ON_STDOUT.store(true, std::sync::atomic::Ordering::Relaxed);
+    stdout_open()
+}
+
+/// Refuses a closed standard output.
+fn stdout_open() -> cubeforge::Result<()> {
+    if STDOUT_CLOSED.load(std::sync::atomic::Ordering::Relaxed) {
+        return Err(cubeforge::Error::usage(
+            "cannot write to standard output: it is closed",
+        ));
+    }
+    Ok(())
+}
+
+/// Writes a command's files (folder outputs replaced whole), or its one file to standard
+/// output.
+pub fn deliver(
+    files: &[(std::path::PathBuf, Vec<u8>)],
+    folders: &[std::path::PathBuf],
+    to_stdout: bool,
+) -> cubeforge::Result<()> {
     if !to_stdout {
-        return write_files(files);
+        return write_output(files, folders);
+    }
+    if files.len() != 1 {
+        return Err(cubeforge::Error::usage(format!(
+            "-o - (standard output) takes one file, and this output is {} files",
+            files.len()
+        )));
     }
     use std::io::{IsTerminal, Write};
     if std::io::stdout().is_terminal() {
@@ -431,6 +546,7 @@ fn how_to_raise(e: &cubeforge::Error) -> &'static str {
 }
 
 pub fn run() -> i32 {
+    use std::io::Write;
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
@@ -441,7 +557,16 @@ pub fn run() -> i32 {
                     ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
                 )
             {
-                // Help goes to stdout, as asked; a closed pipe is not an error.
+                // Help and the version go to standard output, as asked: a closed pipe is
+                // not an error, a full disk or a closed standard output is.
+                if !e.use_stderr() {
+                    let text = e.render().to_string();
+                    if let Err(e) = write_stdout(|out| out.write_all(text.as_bytes())) {
+                        tell(format_args!("cubeforge: error: {e}"));
+                        return 1;
+                    }
+                    return 0;
+                }
                 let _ = e.print();
                 return 0;
             }
@@ -467,8 +592,10 @@ pub fn run() -> i32 {
     match result {
         Ok(()) => 0,
         Err(e) => {
-            // One line, whatever the message holds (a file's text, a JSON error).
-            let line = e.to_string().replace(['\n', '\r'], " ");
+            // One line, whatever the message holds (a file's text, a JSON error, a name with
+            // a line break or an escape sequence), every control character written out.
+            let text = e.to_string();
+            let line = cubeforge::error::escape_text(&text);
             tell(format_args!("cubeforge: error: {line}{}", how_to_raise(&e)));
             1
         }

@@ -5,6 +5,7 @@ use cubeforge::chain::LevelsFile;
 use cubeforge::convert;
 use cubeforge::filter::{self, ChainOptions, FilterKind, LevelInfo, LightingModel};
 use cubeforge::io::{self, FileFormat, GpuFormat, WriteOptions};
+use cubeforge::output;
 use cubeforge::resample::Resampler;
 use cubeforge::{Error, Result};
 use std::path::PathBuf;
@@ -14,8 +15,9 @@ pub struct Args {
     /// Anything `convert` reads: one image, six faces, or a folder of faces.
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
-    /// A .ktx2 or .dds cube map with every level, or a folder that receives m{level}/{face}.EXT
-    /// and levels.json.
+    /// A .ktx2 or .dds cube map with every level, a folder that receives m{level}/{face}.EXT
+    /// and levels.json (replacing what it held whole), or - for standard output (with
+    /// --format ktx2, dds, ktx or env).
     #[arg(short, long)]
     pub output: PathBuf,
     /// box: plain mipmaps; gaussian: LOD-bias blur; cosine: Phong lobes (cmft); ggx: split-sum
@@ -46,7 +48,8 @@ pub struct Args {
     /// cosine: cmft's lighting model (phongbrdf: power + 1, blinn: power / 4, blinnbrdf: / 4 + 1).
     #[arg(long, value_enum, default_value_t = LightingModel::Phong)]
     pub lighting: LightingModel,
-    /// File type of the level images in a folder output (default exr).
+    /// File type of the level images in a folder output (default exr); with -o -, the
+    /// container written to standard output (ktx2, dds, ktx, env).
     #[arg(long, default_value = "exr")]
     pub format: String,
     /// Texel format of KTX2 and DDS output.
@@ -60,8 +63,13 @@ pub struct Args {
     pub input: super::InputArgs,
 }
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
+pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     let mut stages = Stages::new(verbose);
+    let (output, to_stdout) = super::container_output(&a.output, Some(&a.format))?;
+    a.output = output;
+    if to_stdout {
+        a.format = "exr".into();
+    }
     let container = FileFormat::from_extension(&a.output).filter(|f| f.is_container());
     if container.is_none() && a.output.extension().is_some() && !a.output.is_dir() {
         return Err(Error::file(
@@ -86,7 +94,20 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     if a.samples == 0 {
         return Err(Error::usage("--samples must be at least 1"));
     }
+    if container.is_none() {
+        // A folder output is replaced whole: refuse one that is not cubeforge's before the work.
+        output::refuse_folder(&a.output, &a.inputs)?;
+        io::check_folder(&a.output, &[])?;
+    }
     let read = a.input.read_options();
+    if let Some(size) = a.size.filter(|&n| n == 0 || n > 16384) {
+        return Err(Error::usage(format!("--size {size}: use 1 to 16384")));
+    }
+    // The whole plan against the budget before any file is decoded.
+    let plan = convert::plan_input(&a.inputs, a.input.from, &read)?;
+    if let Some(size) = a.size.or(plan.face_size) {
+        check_memory(&a.input.limits(), size, plan.working_bytes())?;
+    }
     let loaded = convert::load(&a.inputs, a.input.from, &read)?;
     stages.done("decode");
     if loaded.meta.replaced_values > 0 {
@@ -105,11 +126,12 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             "--min-size {min} is larger than level 0, whose faces are {size} px"
         )));
     }
-    // The base faces, the chain (4/3 of them), a bordered sampler copy and the encoding.
-    a.input.limits().check_memory(
-        format_args!("--size {size}"),
-        6 * (size as u64).pow(2) * 16 * 4,
-    )?;
+    let input: u64 = loaded
+        .images()
+        .iter()
+        .map(|i| i.pixels.len() as u64 * 16)
+        .sum();
+    check_memory(&a.input.limits(), size, input + input / 2)?;
     let base = convert::to_cube(&loaded, size, &Resampler::default());
     stages.done("resample");
 
@@ -163,7 +185,15 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     }
     stages.quality(a.gpu_format, encoded.psnr);
     stages.done("encode");
-    super::write_files(&encoded.files)?;
+    let mut files = encoded.files;
+    if to_stdout && files.len() > 1 {
+        // A DDS chain's description goes beside it: there is no beside on standard output.
+        super::warn(
+            "-o -: the DDS chain's levels description (NAME.dds.levels.json) is not written",
+        );
+        files.truncate(1);
+    }
+    super::deliver(&files, &encoded.folders, to_stdout)?;
     stages.done("write");
     for i in &description.levels {
         let what = match (i.roughness, i.power, i.sigma) {
@@ -193,4 +223,13 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     }
     stages.total();
     Ok(())
+}
+
+/// The plan's memory: the base faces, the chain (4/3 of them), a bordered sampler copy and
+/// the encoding, beside the input's texels and pyramid (`input` bytes).
+fn check_memory(limits: &io::Limits, size: usize, input: u64) -> Result<()> {
+    limits.check_memory(
+        format_args!("--size {size}"),
+        (6 * 16 * 4 * (size as u64).pow(2)).saturating_add(input),
+    )
 }

@@ -290,8 +290,24 @@ fn check(a: &Args, output: &Path) -> Result<Plan> {
             a.size, limits.max_pixels
         )));
     }
-    // Each cell's picture and its samples' buffers, RGBA f32.
-    limits.check_memory(format_args!("--size {}", a.size), pixels * 16 * 3)?;
+    // Each cell's picture and its samples' buffers, RGBA f32, beside the environment as its
+    // headers describe it (its decode's peak checked too): all before any file is decoded.
+    let input = match &a.env {
+        Some(env) => {
+            let read = ReadOptions {
+                limits,
+                linear: false,
+                as_stored: false,
+            };
+            cubeforge::convert::plan_input(std::slice::from_ref(env), a.from, &read)?
+                .working_bytes()
+        }
+        None => 0,
+    };
+    limits.check_memory(
+        format_args!("--size {}", a.size),
+        pixels.saturating_mul(16 * 3).saturating_add(input),
+    )?;
     Ok(Plan {
         output,
         to_stdout,
@@ -567,7 +583,7 @@ fn write(plan: &Plan, inputs: &[PathBuf], img: &Image, stages: &mut Stages) -> R
     }
     let bytes = io::encode_image(output, img, &WriteOptions::default())?;
     stages.done("encode");
-    super::deliver(&[(output.clone(), bytes)], plan.to_stdout)?;
+    super::deliver(&[(output.clone(), bytes)], &[], plan.to_stdout)?;
     stages.done("write");
     Ok(())
 }

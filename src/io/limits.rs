@@ -1,7 +1,52 @@
 //! Size and memory limits, checked from a file's header before any pixel memory is spent.
 
 use crate::error::{Error, LimitKind, Result};
+use std::cell::Cell;
 use std::path::Path;
+
+/// What a file's header says decoding it takes: read before any file of a command is
+/// decoded, so the whole input (six faces, a chain's levels) is checked against the budget
+/// at once ([`crate::io::claim`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Claim {
+    /// Width in pixels (a face's, for a cube map).
+    pub width: u64,
+    /// Height in pixels.
+    pub height: u64,
+    /// Six faces with their mip levels (a KTX2, DDS, KTX or .env cube map).
+    pub cube: bool,
+    /// Bytes in use at the peak of decoding it: the file's bytes, the texels and, at worst,
+    /// a decoder's buffer of the same size.
+    pub decode_bytes: u64,
+    /// Bytes its decoded texels keep (RGBA f32, with every mip level of a cube map).
+    pub held_bytes: u64,
+}
+
+thread_local! {
+    /// Set while [`crate::io::claim`] runs a decoder up to its size check: the check
+    /// records what it was asked (`CLAIMED`) and stops the decoder there.
+    static PROBING: Cell<bool> = const { Cell::new(false) };
+    static CLAIMED: Cell<Option<(u64, u64, bool)>> = const { Cell::new(None) };
+}
+
+/// Runs `decode` with the size checks recording their sizes and stopping it: the header's
+/// claim, if a check was reached, and what `decode` returned.
+pub(crate) fn probing<T>(decode: impl FnOnce() -> T) -> (T, Option<(u64, u64, bool)>) {
+    PROBING.with(|p| p.set(true));
+    CLAIMED.with(|c| c.set(None));
+    let out = decode();
+    PROBING.with(|p| p.set(false));
+    (out, CLAIMED.with(|c| c.take()))
+}
+
+/// In a probe, records the size a decoder checks and stops it (an error no one sees).
+fn probed(path: &Path, w: u64, h: u64, cube: bool) -> Result<()> {
+    if !PROBING.with(|p| p.get()) {
+        return Ok(());
+    }
+    CLAIMED.with(|c| c.set(Some((w, h, cube))));
+    Err(Error::file(path, "size read from the header"))
+}
 
 /// Refuses images larger than this before any pixel memory is allocated.
 #[derive(Clone, Copy, Debug)]
@@ -54,6 +99,11 @@ impl Default for Limits {
 impl Limits {
     /// Checks a declared size (from a header) against the limit.
     pub fn check(&self, path: &Path, w: u64, h: u64) -> Result<()> {
+        self.check_image(path, w, h)?;
+        probed(path, w, h, false)
+    }
+
+    fn check_image(&self, path: &Path, w: u64, h: u64) -> Result<()> {
         if w == 0 || h == 0 {
             return Err(Error::file(path, format!("image is empty ({w}x{h})")));
         }
@@ -112,7 +162,7 @@ impl Limits {
 impl Limits {
     /// Checks a cube map's declared face size: all six faces count against the pixel limit.
     pub(crate) fn check_cube(&self, path: &Path, w: u64, h: u64) -> Result<()> {
-        self.check(path, w, h)?;
+        self.check_image(path, w, h)?;
         if w.saturating_mul(h).saturating_mul(6) > self.max_pixels {
             return Err(Error::limit(
                 Some(path),
@@ -129,6 +179,7 @@ impl Limits {
             path,
             format_args!("cube map claims six {w}x{h} faces"),
             needs,
-        )
+        )?;
+        probed(path, w, h, true)
     }
 }

@@ -22,12 +22,15 @@ use crate::error::{Error, Result};
 use crate::image::{ColorSpace, Image};
 use std::path::Path;
 
-pub use atomic::{remove_temporaries, stage, write_all_atomic, Staged};
+pub use atomic::{
+    check_folder, remove_temporaries, stage, stage_with, write_all_atomic, write_all_atomic_with,
+    Staged,
+};
 pub use gpu::{finite, unorm8, GpuFormat, HALF_MAX};
 use input::read_input;
 pub(crate) use input::{read_file, regular_file};
 pub(crate) use limits::human_bytes;
-pub use limits::Limits;
+pub use limits::{Claim, Limits};
 
 /// File formats, told apart by their content (TGA, which has no signature, by its name).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -54,6 +57,34 @@ pub enum FileFormat {
 }
 
 impl FileFormat {
+    /// Every format, in the order messages list them.
+    pub const ALL: [FileFormat; 9] = [
+        FileFormat::Png,
+        FileFormat::Jpeg,
+        FileFormat::Tga,
+        FileFormat::Hdr,
+        FileFormat::Exr,
+        FileFormat::Ktx2,
+        FileFormat::Dds,
+        FileFormat::Ktx1,
+        FileFormat::Env,
+    ];
+
+    /// The extension cubeforge writes for the format (without the dot).
+    pub fn extension(self) -> &'static str {
+        match self {
+            FileFormat::Png => "png",
+            FileFormat::Jpeg => "jpg",
+            FileFormat::Tga => "tga",
+            FileFormat::Hdr => "hdr",
+            FileFormat::Exr => "exr",
+            FileFormat::Ktx2 => "ktx2",
+            FileFormat::Dds => "dds",
+            FileFormat::Ktx1 => "ktx",
+            FileFormat::Env => "env",
+        }
+    }
+
     /// The format a file's name says (extension, any case); None for unknown ones.
     pub fn from_extension(path: &Path) -> Option<FileFormat> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
@@ -347,11 +378,69 @@ pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
 /// `sanitize` is set.
 fn read_with(path: &Path, opts: &ReadOptions, sanitize: bool) -> Result<(Decoded, Meta)> {
     let (bytes, path) = read_input(path, &opts.limits)?;
+    decode_bytes(&bytes, path, opts, sanitize)
+}
+
+/// What decoding `path` will take, from its header alone (None for standard input, which
+/// can be read only once): a command checks its whole input against the budget before it
+/// decodes any of it. A file that is not one cubeforge reads gets its error here, before any
+/// work.
+pub fn claim(path: &Path, opts: &ReadOptions) -> Result<Option<Claim>> {
+    if path == Path::new("-") {
+        return Ok(None);
+    }
+    input::regular_file(path)?;
+    let len = std::fs::metadata(path)
+        .map_err(|e| Error::io(path, e))?
+        .len();
+    // Every header cubeforge reads fits in its first MiB; one that does not (a JPEG's size
+    // after large metadata) is read whole.
+    const HEAD: u64 = 1 << 20;
+    let probe = |bytes: &[u8]| limits::probing(|| decode_bytes(bytes, path, opts, false));
+    let head = if len > HEAD {
+        use std::io::Read;
+        let mut head = Vec::with_capacity(HEAD as usize);
+        std::fs::File::open(path)
+            .and_then(|f| f.take(HEAD).read_to_end(&mut head))
+            .map_err(|e| Error::io(path, e))?;
+        head
+    } else {
+        read_file(path)?
+    };
+    let (mut out, mut claimed) = probe(&head);
+    if claimed.is_none() && out.is_err() && len > HEAD {
+        drop(head);
+        (out, claimed) = probe(&read_file(path)?);
+    }
+    let (w, h, cube) = match (claimed, out) {
+        (Some(c), _) => c,
+        // A decoder that never checked a size decoded the whole (small) file.
+        (None, Ok((Decoded::Image(img), _))) => (img.width as u64, img.height as u64, false),
+        (None, Ok((Decoded::Cube(c), _))) => (c.size() as u64, c.size() as u64, true),
+        (None, Err(e)) => return Err(e),
+    };
+    let texels = w.saturating_mul(h).saturating_mul(if cube { 8 } else { 1 });
+    Ok(Some(Claim {
+        width: w,
+        height: h,
+        cube,
+        decode_bytes: len.saturating_add(texels.saturating_mul(32)),
+        held_bytes: texels.saturating_mul(16),
+    }))
+}
+
+/// Decodes a file's bytes by their content (its name only where the content cannot say).
+fn decode_bytes(
+    bytes: &[u8],
+    path: &Path,
+    opts: &ReadOptions,
+    sanitize: bool,
+) -> Result<(Decoded, Meta)> {
     if bytes.is_empty() {
         return Err(Error::file(path, "file is empty"));
     }
     let by_name = FileFormat::from_extension(path);
-    let format = match (FileFormat::from_magic(&bytes), by_name) {
+    let format = match (FileFormat::from_magic(bytes), by_name) {
         (Some(m), Some(n)) if m != n && !(m == FileFormat::Jpeg && n == FileFormat::Jpeg) => {
             return Err(Error::file(
                 path,
@@ -376,16 +465,16 @@ fn read_with(path: &Path, opts: &ReadOptions, sanitize: bool) -> Result<(Decoded
         )),
     };
     match format {
-        FileFormat::Exr => exr::decode_with(&bytes, path, &opts.limits, sanitize),
-        FileFormat::Ktx2 => ktx2::decode(&bytes, path, &opts.limits),
-        FileFormat::Dds => dds::decode(&bytes, path, &opts.limits),
-        FileFormat::Ktx1 => ktx1::decode(&bytes, path, &opts.limits),
-        FileFormat::Env => babylon_env::decode(&bytes, path, &opts.limits),
-        FileFormat::Hdr => match rgbe::decode(&bytes, path, opts) {
+        FileFormat::Exr => exr::decode_with(bytes, path, &opts.limits, sanitize),
+        FileFormat::Ktx2 => ktx2::decode(bytes, path, &opts.limits),
+        FileFormat::Dds => dds::decode(bytes, path, &opts.limits),
+        FileFormat::Ktx1 => ktx1::decode(bytes, path, &opts.limits),
+        FileFormat::Env => babylon_env::decode(bytes, path, &opts.limits),
+        FileFormat::Hdr => match rgbe::decode(bytes, path, opts) {
             Some(result) => result.map(|(img, meta)| (Decoded::Image(img), meta)),
-            None => raster::decode(&bytes, FileFormat::Hdr, path, opts),
+            None => raster::decode(bytes, FileFormat::Hdr, path, opts),
         },
-        f => raster::decode(&bytes, f, path, opts),
+        f => raster::decode(bytes, f, path, opts),
     }
 }
 

@@ -13,6 +13,7 @@ mod containers;
 mod control;
 mod conversions;
 mod engine_containers;
+mod fault_campaign;
 mod finite;
 mod flux;
 mod formats;

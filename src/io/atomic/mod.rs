@@ -1,34 +1,74 @@
-//! Writes that land whole or not at all. Every file is first written under a temporary name:
-//! files whose folder exists go beside their target (`.NAME.cubeforge-PID.tmp`), and a folder
-//! that does not exist yet is built whole as `.NAME.cubeforge-PID.tmp/` and renamed into place,
-//! so a new faces folder or prefilter chain appears complete or not at all, and a failed
-//! command leaves no empty folders behind. Renames into existing folders happen under an
-//! advisory lock on each folder, so two processes writing one folder never interleave their
-//! files: the last one to finish wins, whole. Temporaries are registered so that a signal
-//! handler ([`remove_temporaries`]) can take them back.
+//! Writes that land whole or not at all. Every file is first written under a temporary name
+//! beside its target (`.NAME.cubeforge-PID-N.tmp`, the name cut short where it would pass
+//! the file system's 255 bytes), and a folder that does not exist yet is built whole under
+//! such a name and renamed into place, so a new faces folder or prefilter chain appears
+//! complete or not at all, and a failed command leaves no empty folders behind.
+//!
+//! A folder that is an output in its own right (six faces, a chain's `m0/ m1/ ...`: see
+//! [`stage_with`]) is replaced whole: the new one is built beside it and exchanged with it in
+//! one step, so the old contents never mix with the new (a stale `m4/` of a longer chain,
+//! faces of another format), and of two writers one ends with its whole result in place. A
+//! folder that holds anything cubeforge did not write is refused, never emptied
+//! ([`folder`]). Files into existing folders are renamed under an advisory lock on each
+//! folder, so two processes writing one folder never interleave their files.
+//!
+//! Temporaries are registered, and every step that makes or moves one happens under the
+//! registry's lock, so a signal handler ([`remove_temporaries`]) that takes them back never
+//! races a thread still making one: after it, nothing new appears.
 
 #![warn(missing_docs)]
 
+mod folder;
+
 use crate::error::{Error, Result};
+pub use folder::check_folder;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
-/// Temporary files and folders that exist now, for [`remove_temporaries`].
-static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// Temporary files and folders that exist now, for [`remove_temporaries`]; `stopping` once
+/// it ran (the process is ending on a signal: no temporary may be made after it).
+struct Pending {
+    paths: Vec<PathBuf>,
+    stopping: bool,
+}
 
-fn pending() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+static PENDING: Mutex<Pending> = Mutex::new(Pending {
+    paths: Vec::new(),
+    stopping: false,
+});
+
+fn pending() -> std::sync::MutexGuard<'static, Pending> {
     PENDING.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-fn register(p: &Path) {
-    pending().push(p.to_path_buf());
+fn interrupted() -> std::io::Error {
+    std::io::Error::new(
+        std::io::ErrorKind::Interrupted,
+        "interrupted by a signal: the command is stopping",
+    )
+}
+
+/// Runs `step` (which makes or moves temporaries) under the registry's lock, unless the
+/// process is stopping; `track` says what the registry gains and loses when it succeeds.
+fn guarded<T>(
+    step: impl FnOnce() -> std::io::Result<T>,
+    track: impl FnOnce(&mut Vec<PathBuf>),
+) -> std::io::Result<T> {
+    let mut p = pending();
+    if p.stopping {
+        return Err(interrupted());
+    }
+    let out = step()?;
+    track(&mut p.paths);
+    Ok(out)
 }
 
 fn forget(p: &Path) {
-    pending().retain(|q| q != p);
+    pending().paths.retain(|q| q != p);
 }
 
-fn remove_any(p: &Path) {
+pub(super) fn remove_any(p: &Path) {
     if p.is_dir() && !p.is_symlink() {
         let _ = std::fs::remove_dir_all(p);
     } else {
@@ -36,12 +76,14 @@ fn remove_any(p: &Path) {
     }
 }
 
-/// Removes every temporary file and folder not yet renamed into place: what a SIGINT or
-/// SIGTERM handler calls before the process ends.
+/// Removes every temporary file and folder not yet in place: what a SIGINT, SIGTERM or
+/// SIGHUP handler calls before the process ends. From then on every write of this process
+/// fails (the registry's lock is held while they go, and no temporary is made after it).
 pub fn remove_temporaries() {
-    let list = std::mem::take(&mut *pending());
-    for p in &list {
-        remove_any(p);
+    let mut p = pending();
+    p.stopping = true;
+    for t in std::mem::take(&mut p.paths) {
+        remove_any(&t);
     }
 }
 
@@ -49,22 +91,38 @@ pub fn remove_temporaries() {
 /// it removes them.
 #[derive(Debug)]
 pub struct Staged {
-    /// Folders built whole: (temporary, target).
-    trees: Vec<(PathBuf, PathBuf)>,
+    /// Folders built whole: (temporary, target, replaced whole when it exists).
+    trees: Vec<(PathBuf, PathBuf, bool)>,
+    /// Folders that are outputs in their own right (replaced whole), as given.
+    folders: Vec<PathBuf>,
     /// Files in folders that exist: (temporary, target).
     files: Vec<(PathBuf, PathBuf)>,
 }
 
-fn temp_name(path: &Path) -> PathBuf {
-    let dir = parent(path);
+/// The longest file name the common file systems take (ext4, XFS, Btrfs, APFS, NTFS).
+const NAME_MAX: usize = 255;
+
+/// A temporary name beside `path`: hidden, unique in this process, and no longer than the
+/// file system allows whatever the target's name (the name is cut short to fit).
+pub(super) fn temp_name(path: &Path) -> PathBuf {
+    static SERIAL: AtomicU64 = AtomicU64::new(0);
+    let suffix = format!(
+        ".cubeforge-{}-{}.tmp",
+        std::process::id(),
+        SERIAL.fetch_add(1, Ordering::Relaxed)
+    );
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    dir.join(format!(".{name}.cubeforge-{}.tmp", std::process::id()))
+    let mut keep = NAME_MAX - 1 - suffix.len();
+    while keep < name.len() && !name.is_char_boundary(keep) {
+        keep -= 1;
+    }
+    parent(path).join(format!(".{}{suffix}", &name[..keep.min(name.len())]))
 }
 
-fn parent(path: &Path) -> &Path {
+pub(super) fn parent(path: &Path) -> &Path {
     path.parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."))
@@ -86,42 +144,80 @@ fn missing_top(path: &Path) -> Option<PathBuf> {
 
 /// Writes every file under a temporary name; nothing is visible under the real names yet.
 pub fn stage(files: &[(PathBuf, Vec<u8>)]) -> Result<Staged> {
+    stage_with(files, &[])
+}
+
+/// [`stage`], where each of `folders` is an output in its own right (a faces folder, a
+/// chain folder): every file under it is staged in a new folder that replaces it whole on
+/// [`Staged::commit`]. Refuses a folder that holds what cubeforge did not write
+/// ([`check_folder`]).
+pub fn stage_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> Result<Staged> {
+    // `-` names standard output: a command that cannot write there must not make a file or
+    // a folder of that name.
+    let dash = |p: &Path| p.components().any(|c| c.as_os_str() == "-");
+    if let Some((path, _)) = files.iter().find(|(p, _)| dash(p)) {
+        return Err(Error::file(
+            path,
+            "`-` stands for standard output, which this output cannot go to: name a file or folder",
+        ));
+    }
+    // A folder output behind a symbolic link is replaced where the link points.
+    let mut folders = folders.to_vec();
+    let mut paths: Vec<PathBuf> = files.iter().map(|(p, _)| p.clone()).collect();
+    for f in &mut folders {
+        if std::fs::symlink_metadata(&*f).is_ok_and(|m| m.file_type().is_symlink()) {
+            let real = std::fs::canonicalize(&*f).map_err(|e| Error::io(&*f, e))?;
+            for p in &mut paths {
+                if let Ok(rel) = p.strip_prefix(&*f) {
+                    *p = real.join(rel);
+                }
+            }
+            *f = real;
+        }
+    }
     // A rename onto a folder fails: find that out before anything is written.
-    if let Some((path, _)) = files.iter().find(|(p, _)| p.is_dir()) {
+    if let Some(path) = paths.iter().find(|p| p.is_dir()) {
         return Err(Error::file(path, "a folder of that name is in the way"));
+    }
+    for f in &folders {
+        check_folder(f, &paths)?;
     }
     let mut staged = Staged {
         trees: Vec::new(),
+        folders: folders.clone(),
         files: Vec::new(),
     };
     let mut tmps = Vec::with_capacity(files.len());
-    for (path, _) in files {
-        let tmp = match missing_top(path) {
-            Some(top) => {
-                let root = match staged.trees.iter().find(|(_, t)| *t == top) {
-                    Some((root, _)) => root.clone(),
+    for path in &paths {
+        let whole = folders.iter().find(|f| path.starts_with(f));
+        // The folder built whole for this file: a folder output, or the highest missing one.
+        let top = match whole {
+            Some(f) if parent(f).exists() => Some((f.clone(), true)),
+            _ => missing_top(path).map(|t| (t, false)),
+        };
+        let tmp = match top {
+            Some((top, replace)) => {
+                let root = match staged.trees.iter().find(|(_, t, _)| *t == top) {
+                    Some((root, _, _)) => root.clone(),
                     None => {
-                        if let Some(p) = top.parent().filter(|p| !p.as_os_str().is_empty()) {
-                            if !p.is_dir() {
-                                return Err(Error::file(path, "its folder is not a folder"));
-                            }
+                        if !parent(&top).is_dir() {
+                            return Err(Error::file(path, "its folder is not a folder"));
                         }
                         let root = temp_name(&top);
-                        register(&root);
-                        staged.trees.push((root.clone(), top.clone()));
-                        std::fs::create_dir(&root).map_err(|e| Error::io(&top, e))?;
+                        guarded(|| std::fs::create_dir(&root), |p| p.push(root.clone()))
+                            .map_err(|e| Error::io(&top, e))?;
+                        staged.trees.push((root.clone(), top.clone(), replace));
                         root
                     }
                 };
                 // Within the new tree, the file keeps its place relative to the top.
                 let rel = path.strip_prefix(&top).unwrap_or(path);
                 let tmp = root.join(rel);
-                std::fs::create_dir_all(parent(&tmp)).map_err(|e| Error::io(path, e))?;
+                make_dirs(&root, parent(&tmp)).map_err(|e| Error::io(path, e))?;
                 tmp
             }
             None => {
                 let tmp = temp_name(path);
-                register(&tmp);
                 staged.files.push((tmp.clone(), path.clone()));
                 tmp
             }
@@ -131,20 +227,63 @@ pub fn stage(files: &[(PathBuf, Vec<u8>)]) -> Result<Staged> {
     // The writes in parallel (six faces of 3 MB each, say); the first failure in file order
     // is the one reported.
     use rayon::prelude::*;
+    let in_trees: Vec<bool> = tmps
+        .iter()
+        .map(|t| staged.trees.iter().any(|(r, _, _)| t.starts_with(r)))
+        .collect();
     let written: Vec<Result<()>> = files
         .par_iter()
         .zip(&tmps)
-        .map(|((path, bytes), tmp)| write_file(tmp, bytes).map_err(|e| Error::io(path, e)))
+        .zip(&in_trees)
+        .map(|(((path, bytes), tmp), &in_tree)| {
+            write_file(tmp, bytes, !in_tree).map_err(|e| Error::io(path, e))
+        })
         .collect();
     written.into_iter().collect::<Result<()>>()?;
     Ok(staged)
 }
 
-/// Writes `bytes` to `tmp`, to be put in place later. Its blocks are left for the kernel to
-/// write out when it likes: the exchange that puts it in place (`replace`) waits for none.
-fn write_file(tmp: &Path, bytes: &[u8]) -> std::io::Result<()> {
+/// Makes the folders from `root` (a registered temporary) down to `dir`, one at a time and
+/// each under the registry's lock: a tree the signal handler removed is never made again.
+fn make_dirs(root: &Path, dir: &Path) -> std::io::Result<()> {
+    let Ok(rel) = dir.strip_prefix(root) else {
+        return Ok(());
+    };
+    let mut at = root.to_path_buf();
+    for part in rel.components() {
+        at.push(part);
+        let here = at.clone();
+        guarded(
+            || match std::fs::create_dir(&here) {
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && here.is_dir() => Ok(()),
+                r => r,
+            },
+            |_| {},
+        )?;
+    }
+    Ok(())
+}
+
+/// Writes `bytes` to `tmp`, to be put in place later (registered when `register`: a file
+/// outside a registered tree). Its blocks are left for the kernel to write out when it
+/// likes: the exchange that puts it in place (`replace`) waits for none.
+fn write_file(tmp: &Path, bytes: &[u8], register: bool) -> std::io::Result<()> {
     use std::io::Write;
-    let mut f = std::fs::File::create(tmp)?;
+    // Made under the lock (a handler that ran first makes this fail, one that runs after
+    // finds the name registered); written outside it.
+    let mut f = guarded(
+        || {
+            std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(tmp)
+        },
+        |p| {
+            if register {
+                p.push(tmp.to_path_buf())
+            }
+        },
+    )?;
     f.write_all(bytes)
 }
 
@@ -163,6 +302,11 @@ fn lock_dirs(dirs: &mut Vec<PathBuf>) -> Vec<std::fs::File> {
         .collect()
 }
 
+/// Moves `from` to `to` under the registry's lock, `from` forgotten once it has moved.
+fn move_registered(from: &Path, to: &Path) -> std::io::Result<()> {
+    guarded(|| std::fs::rename(from, to), |p| p.retain(|q| q != from))
+}
+
 impl Staged {
     /// Puts every file in place. Files are renamed, never copied; if a rename fails, the
     /// files and folders this call created are taken back (files it replaced stay replaced).
@@ -173,30 +317,37 @@ impl Staged {
 
     fn put_in_place(&mut self) -> Result<()> {
         let mut created: Vec<PathBuf> = Vec::new();
+        // Temporary names that hold what was replaced, removed at the end.
+        let mut old: Vec<PathBuf> = Vec::new();
         let rollback = |created: &[PathBuf]| created.iter().for_each(|p| remove_any(p));
-        // A new folder goes in with one rename. If another process made it meanwhile, its
-        // files join the others, moved one by one under the lock.
         let trees = std::mem::take(&mut self.trees);
-        for (i, (root, top)) in trees.iter().enumerate() {
-            match std::fs::rename(root, top) {
-                Ok(()) => {
-                    forget(root);
-                    created.push(top.clone());
+        for (i, (root, top, replace)) in trees.iter().enumerate() {
+            let placed: Result<()> = if *replace {
+                folder::put(root, top).map(|replaced| old.extend(replaced))
+            } else {
+                // A new folder goes in with one rename. If another process made it
+                // meanwhile, its files join the others, moved one by one under the lock
+                // (folder outputs within it replace theirs whole).
+                match move_registered(root, top) {
+                    Ok(()) => {
+                        created.push(top.clone());
+                        Ok(())
+                    }
+                    Err(_) if top.is_dir() => self.join_existing(root, top, &mut old),
+                    Err(e) => Err(Error::io(top, e)),
                 }
-                Err(_) if top.is_dir() => {
-                    collect_files(root, root, top, &mut self.files);
-                    self.trees.push((root.clone(), top.clone()));
-                }
-                Err(e) => {
-                    self.trees.extend(trees[i..].iter().cloned());
-                    rollback(&created);
-                    return Err(Error::io(top, e));
-                }
+            };
+            if let Err(e) = placed {
+                self.trees.extend(trees[i..].iter().cloned());
+                rollback(&created);
+                remove_all(&old);
+                return Err(e);
             }
         }
         for (_, p) in &self.files {
             if let Err(e) = std::fs::create_dir_all(parent(p)) {
                 rollback(&created);
+                remove_all(&old);
                 return Err(Error::io(p, e));
             }
         }
@@ -208,8 +359,6 @@ impl Staged {
         let locks = lock_dirs(&mut dirs);
         let files = std::mem::take(&mut self.files);
         let existed: Vec<bool> = files.iter().map(|(_, p)| p.exists()).collect();
-        // Temporary names that hold a replaced file after its exchange, removed at the end.
-        let mut old: Vec<PathBuf> = Vec::new();
         for (i, (tmp, path)) in files.iter().enumerate() {
             match replace(tmp, path) {
                 Ok(true) => old.push(tmp.clone()),
@@ -229,8 +378,31 @@ impl Staged {
         remove_all(&old);
         Ok(())
     }
-}
 
+    /// A staged tree whose target another process made meanwhile: its folder outputs
+    /// replace theirs whole, its other files are moved in one by one (after this, the
+    /// tree's temporary holds nothing of value and is removed).
+    fn join_existing(&mut self, root: &Path, top: &Path, old: &mut Vec<PathBuf>) -> Result<()> {
+        for f in self.folders.clone() {
+            let Ok(rel) = f.strip_prefix(top) else {
+                continue;
+            };
+            let sub = root.join(rel);
+            if !sub.is_dir() {
+                continue;
+            }
+            std::fs::create_dir_all(parent(&f)).map_err(|e| Error::io(&f, e))?;
+            let moved = temp_name(&f);
+            guarded(|| std::fs::rename(&sub, &moved), |p| p.push(moved.clone()))
+                .map_err(|e| Error::io(&f, e))?;
+            old.extend(folder::put(&moved, &f)?);
+        }
+        collect_files(root, root, top, &mut self.files);
+        self.trees
+            .push((root.to_path_buf(), top.to_path_buf(), false));
+        Ok(())
+    }
+}
 /// Puts `tmp` in place as `path`; true when the file it replaced is now named `tmp`.
 ///
 /// A regular file is exchanged with its replacement (Linux's `renameat2(RENAME_EXCHANGE)`):
@@ -254,7 +426,15 @@ fn replace(tmp: &Path, path: &Path) -> std::io::Result<bool> {
     std::fs::rename(tmp, path).map(|()| false)
 }
 
-/// Swaps the names of two existing files, atomically.
+/// Swaps two folders, atomically, where the system can.
+fn exchange_folders(a: &Path, b: &Path) -> std::io::Result<()> {
+    #[cfg(target_os = "linux")]
+    return exchange(a, b);
+    #[cfg(not(target_os = "linux"))]
+    Err(std::io::Error::from(std::io::ErrorKind::Unsupported))
+}
+
+/// Swaps the names of two existing files or folders, atomically.
 #[cfg(target_os = "linux")]
 fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
     use std::os::unix::ffi::OsStrExt;
@@ -279,11 +459,11 @@ fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
     }
 }
 
-/// Removes the replaced files (under their temporary names), in parallel.
+/// Removes what was replaced (under temporary names), in parallel.
 fn remove_all(names: &[PathBuf]) {
     use rayon::prelude::*;
     names.par_iter().for_each(|p| {
-        let _ = std::fs::remove_file(p);
+        remove_any(p);
         forget(p);
     });
 }
@@ -306,7 +486,12 @@ fn collect_files(dir: &Path, root: &Path, top: &Path, out: &mut Vec<(PathBuf, Pa
 
 impl Drop for Staged {
     fn drop(&mut self) {
-        for (tmp, _) in self.trees.iter().chain(&self.files) {
+        for tmp in self
+            .trees
+            .iter()
+            .map(|(t, _, _)| t)
+            .chain(self.files.iter().map(|(t, _)| t))
+        {
             remove_any(tmp);
             forget(tmp);
         }
@@ -316,4 +501,9 @@ impl Drop for Staged {
 /// Writes several files so that either all of them land or none does (see the module).
 pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
     stage(files)?.commit()
+}
+
+/// [`write_all_atomic`] with folder outputs replaced whole ([`stage_with`]).
+pub fn write_all_atomic_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> Result<()> {
+    stage_with(files, folders)?.commit()
 }
