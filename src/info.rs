@@ -5,7 +5,7 @@
 
 use crate::chain::{self, LevelsFile};
 use crate::convert::{self, Source};
-use crate::cube::{CubeMap, Faces, FACE_LONG_NAMES, FACE_NAMES};
+use crate::cube::{Faces, FACE_LONG_NAMES, FACE_NAMES};
 use crate::error::{param, Error, Result};
 use crate::flux;
 use crate::image::{luminance, Image};
@@ -32,7 +32,28 @@ pub struct Stats {
     pub negative: u64,
 }
 
+/// Bad channel values in one mip level of a container or chain.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct LevelBad {
+    /// The level, 0 the largest.
+    pub level: usize,
+    /// Channel values that are NaN.
+    pub nan: u64,
+    /// Channel values that are infinite.
+    pub inf: u64,
+    /// Channel values below 0.
+    pub negative: u64,
+}
+
 /// What `cubeforge info` says about one file or folder (also its `--json`).
+///
+/// `stats` counts bad values (NaN, Inf, negative) over every decoded level, so a bad mip
+/// cannot pass unseen, while its luminance and `flux` describe level 0 only (the image a
+/// viewer shows; the other levels are its filtered copies). `bad_levels` (JSON
+/// `"bad_levels": [{"level": 3, "nan": 2, "inf": 0, "negative": 5}]`) names each level that
+/// holds bad values, for inputs of several levels (containers, chain folders); it is left out
+/// when every level is clean or there is one level. A 2D texture's levels past 0 are not
+/// decoded, so not counted.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
     /// The path as given.
@@ -56,8 +77,11 @@ pub struct Report {
     pub pixel_format: String,
     /// How stored values map to linear light.
     pub color_space: crate::image::ColorSpace,
-    /// Statistics over level 0, over the layout's texels only.
+    /// Luminance over level 0, over the layout's texels only; bad values over every level.
     pub stats: Stats,
+    /// The levels that hold bad values, when there are several levels (see above).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bad_levels: Vec<LevelBad>,
     /// Solid-angle-weighted mean radiance per channel (R, G, B) over the sphere: what every
     /// conversion keeps (see [`crate::flux`]). None where the layout is unknown.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -133,6 +157,56 @@ fn stats_of<'a>(pixels: impl Iterator<Item = &'a Vec4>) -> Stats {
     s
 }
 
+/// Bad values of one face, counted as [`stats_of`] counts them.
+fn face_bad(img: &Image) -> LevelBad {
+    let mut b = LevelBad::default();
+    for c in img.pixels.iter().flat_map(|p| p.to_array()) {
+        if c.is_nan() {
+            b.nan += 1;
+        } else if c.is_infinite() {
+            b.inf += 1;
+        } else if c < 0.0 {
+            b.negative += 1;
+        }
+    }
+    b
+}
+
+/// Adds the bad values of every level past 0 to `stats` (which counted level 0 with its
+/// luminance) and lists the levels that hold any. The faces are counted in parallel: a 4K
+/// chain's levels past 0 are a third of level 0's texels, so this stays cheap.
+fn count_levels(levels: &[Faces], stats: &mut Stats) -> Vec<LevelBad> {
+    use rayon::prelude::*;
+    if levels.len() < 2 {
+        return Vec::new();
+    }
+    let faces: Vec<(usize, &Image)> = (1..levels.len())
+        .flat_map(|l| levels[l].iter().map(move |f| (l, f)))
+        .collect();
+    let counted: Vec<(usize, LevelBad)> =
+        faces.par_iter().map(|&(l, f)| (l, face_bad(f))).collect();
+    let mut per_level: Vec<LevelBad> = (0..levels.len())
+        .map(|level| LevelBad {
+            level,
+            ..LevelBad::default()
+        })
+        .collect();
+    per_level[0].nan = stats.nan;
+    per_level[0].inf = stats.inf;
+    per_level[0].negative = stats.negative;
+    for (l, b) in counted {
+        let p = &mut per_level[l];
+        p.nan += b.nan;
+        p.inf += b.inf;
+        p.negative += b.negative;
+        stats.nan += b.nan;
+        stats.inf += b.inf;
+        stats.negative += b.negative;
+    }
+    per_level.retain(|b| b.nan + b.inf + b.negative > 0);
+    per_level
+}
+
 /// The flux of a single image laid out as `kind`: a panorama, ball, angular or octahedral map
 /// as it is, a cross or strip through its faces.
 fn image_flux(kind: Kind, img: &Image) -> Option<[f64; 3]> {
@@ -191,6 +265,8 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 ));
             }
             let n = cube.size();
+            let mut stats = stats(cube.levels[0].iter());
+            let bad_levels = count_levels(&cube.levels, &mut stats);
             Report {
                 file,
                 file_format: meta.file_format,
@@ -202,7 +278,8 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 mip_levels: cube.levels.len(),
                 pixel_format: meta.pixel_format,
                 color_space: meta.color_space,
-                stats: stats(cube.levels[0].iter()),
+                stats,
+                bad_levels,
                 flux: Some(cube_flux(&cube.levels[0])),
                 levels: chain::container_levels(path, meta.file_format),
             }
@@ -246,6 +323,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 pixel_format: meta.pixel_format,
                 color_space: meta.color_space,
                 stats: layout_stats(kind, &img),
+                bad_levels: Vec::new(),
                 flux: kind.and_then(|k| image_flux(k, &img)),
                 levels: None,
             }
@@ -266,11 +344,9 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
             ),
         ));
     }
-    let (base, meta, mip_levels, levels) = if chain::is_chain_dir(dir) {
+    let (cube, meta, levels) = if chain::is_chain_dir(dir) {
         let c = chain::read_dir(dir, opts)?;
-        let count = c.cube.levels.len();
-        let CubeMap { mut levels } = c.cube;
-        (levels.swap_remove(0), c.meta, count, c.levels)
+        (c.cube, c.meta, c.levels)
     } else {
         if !holds_a_face(dir) {
             // Say what a folder may hold when it holds none of it.
@@ -280,12 +356,16 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
             ));
         }
         let loaded = convert::load(&[dir.to_path_buf()], None, opts)?;
-        let Source::Cube(CubeMap { mut levels }) = loaded.source else {
+        let Source::Cube(mut cube) = loaded.source else {
             return Err(Error::file(dir, "a folder must hold six faces"));
         };
-        (levels.swap_remove(0), loaded.meta, 1, None)
+        cube.levels.truncate(1);
+        (cube, loaded.meta, None)
     };
+    let base = &cube.levels[0];
     let n = base[0].width;
+    let mut stats = stats(base.iter());
+    let bad_levels = count_levels(&cube.levels, &mut stats);
     Ok(Report {
         file: dir.display().to_string(),
         file_format: meta.file_format,
@@ -294,11 +374,12 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
         width: n,
         height: n,
         face_size: Some(n),
-        mip_levels,
+        mip_levels: cube.levels.len(),
         pixel_format: meta.pixel_format,
         color_space: meta.color_space,
-        stats: stats(base.iter()),
-        flux: Some(cube_flux(&base)),
+        stats,
+        bad_levels,
+        flux: Some(cube_flux(base)),
         levels,
     })
 }
@@ -363,6 +444,17 @@ impl std::fmt::Display for Report {
             "  bad values:   {} NaN, {} Inf, {} negative",
             s.nan, s.inf, s.negative
         )?;
+        // One line per level that holds any, aligned with the lines above.
+        for b in &self.bad_levels {
+            write!(
+                f,
+                "\n  {:<14}{} NaN, {} Inf, {} negative",
+                format!("bad level {}:", b.level),
+                b.nan,
+                b.inf,
+                b.negative
+            )?;
+        }
         if let Some([r, g, b]) = self.flux {
             write!(
                 f,

@@ -346,3 +346,180 @@ fn real_folders_and_balls() {
         assert!(v["flux"][0].as_f64().unwrap() > 0.0, "{v}");
     }
 }
+
+/// A 16 px cube with its 5 box levels, every value in [0.1, 3.1]: nothing bad anywhere.
+fn clean_chain() -> cubeforge::cube::CubeMap {
+    cubeforge::cube::CubeMap::from_fn(16, |d| {
+        Vec4::new(d.x.abs() * 3.0 + 0.1, d.y * 0.5 + 0.6, d.z.abs() + 0.1, 1.0)
+    })
+    .with_box_mips(None)
+}
+
+/// The bad values put in a chain: (level, face, texel, channel, value). Level 0 stays clean;
+/// level 1 gets 1 negative, level 3 2 NaN, 1 Inf (negative infinity) and 1 negative.
+const BAD: [(usize, usize, usize, usize, f32); 5] = [
+    (1, 5, 0, 0, -2.0),
+    (3, 0, 0, 0, f32::NAN),
+    (3, 0, 1, 1, f32::NAN),
+    (3, 1, 2, 2, f32::NEG_INFINITY),
+    (3, 2, 3, 1, -1.0),
+];
+
+/// `info` counts a container's or chain's every level and names the bad ones, in its text and
+/// in `--json`; level 0's luminance is what it was.
+fn assert_bad_levels_reported(path: &Path) {
+    let r = describe(path, None).unwrap();
+    assert_eq!(
+        (r.stats.nan, r.stats.inf, r.stats.negative),
+        (2, 1, 2),
+        "{r:?}"
+    );
+    let levels: Vec<(usize, u64, u64, u64)> = r
+        .bad_levels
+        .iter()
+        .map(|b| (b.level, b.nan, b.inf, b.negative))
+        .collect();
+    assert_eq!(levels, [(1, 0, 0, 1), (3, 2, 1, 1)]);
+    assert!(r.stats.min_luminance > 0.0, "{:?}", r.stats);
+
+    let t = text(&[path.as_os_str()]);
+    assert!(
+        t.contains("bad values:   2 NaN, 1 Inf, 2 negative\n"),
+        "{t}"
+    );
+    assert!(
+        t.contains("\n  bad level 1:  0 NaN, 0 Inf, 1 negative\n"),
+        "{t}"
+    );
+    assert!(
+        t.contains("\n  bad level 3:  2 NaN, 1 Inf, 1 negative\n"),
+        "{t}"
+    );
+    assert!(
+        !t.contains("bad level 0") && !t.contains("bad level 2"),
+        "{t}"
+    );
+
+    let v = json(&[path.as_os_str()]);
+    assert_eq!(
+        (
+            &v["stats"]["nan"],
+            &v["stats"]["inf"],
+            &v["stats"]["negative"]
+        ),
+        (&2.into(), &1.into(), &2.into()),
+        "{v}"
+    );
+    assert_eq!(
+        v["bad_levels"],
+        serde_json::json!([
+            {"level": 1, "nan": 0, "inf": 0, "negative": 1},
+            {"level": 3, "nan": 2, "inf": 1, "negative": 1}
+        ]),
+        "{v}"
+    );
+}
+
+/// A clean chain says so: no per-level lines, no `bad_levels` in its JSON.
+fn assert_clean(path: &Path) {
+    let r = describe(path, None).unwrap();
+    assert!(r.bad_levels.is_empty(), "{r:?}");
+    assert_eq!((r.stats.nan, r.stats.inf, r.stats.negative), (0, 0, 0));
+    assert!(!text(&[path.as_os_str()]).contains("bad level"));
+    assert!(json(&[path.as_os_str()]).get("bad_levels").is_none());
+}
+
+/// The encoders make every value finite (and the half float ones clamp), so the bad values
+/// are patched into the encoded bytes: `at(level, face, texel)` is where that texel starts,
+/// read from the container's own header; a channel is 2 bytes (half) or 4 (f32) after it.
+fn patch(bytes: &mut [u8], half: bool, at: impl Fn(usize, usize, usize) -> usize) {
+    for (level, face, texel, channel, v) in BAD {
+        let texel_at = at(level, face, texel);
+        if half {
+            let o = texel_at + 2 * channel;
+            bytes[o..o + 2].copy_from_slice(&half::f16::from_f32(v).to_le_bytes());
+        } else {
+            let o = texel_at + 4 * channel;
+            bytes[o..o + 4].copy_from_slice(&v.to_le_bytes());
+        }
+    }
+}
+
+#[test]
+fn a_bad_mip_in_a_ktx2_chain_is_counted_and_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = clean_chain();
+    let mut b = cubeforge::io::ktx2::encode(&cube, cubeforge::io::GpuFormat::Rgba16f);
+    let clean = dir.path().join("clean.ktx2");
+    std::fs::write(&clean, &b).unwrap();
+    assert_clean(&clean);
+    // KTX2's level index (from byte 80, 24 bytes a level) gives each level's byteOffset; a
+    // level holds its six faces in order, 8 bytes a texel.
+    let u64_at = |b: &[u8], at: usize| u64::from_le_bytes(b[at..at + 8].try_into().unwrap());
+    let offsets: Vec<usize> = (0..5).map(|l| u64_at(&b, 80 + 24 * l) as usize).collect();
+    patch(&mut b, true, |l, f, t| {
+        let n = 16 >> l;
+        offsets[l] + (f * n * n + t) * 8
+    });
+    let p = dir.path().join("bad.ktx2");
+    std::fs::write(&p, &b).unwrap();
+    assert_bad_levels_reported(&p);
+}
+
+#[test]
+fn a_bad_mip_in_a_dds_chain_is_counted_and_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = clean_chain();
+    let mut b = cubeforge::io::dds::encode(&cube, cubeforge::io::GpuFormat::Rgba32f).unwrap();
+    let clean = dir.path().join("clean.dds");
+    std::fs::write(&clean, &b).unwrap();
+    assert_clean(&clean);
+    // DDS: magic and header (128 bytes), DX10 header (20), then face-major: each face's
+    // levels, largest first, 16 bytes a texel. The edge and level count are header words.
+    let word = |at: usize| u32::from_le_bytes(b[at..at + 4].try_into().unwrap()) as usize;
+    let (edge, levels) = (word(16), word(28));
+    assert_eq!((edge, levels), (16, 5));
+    let level_len = |l: usize| (edge >> l).pow(2) * 16;
+    let face_len: usize = (0..levels).map(level_len).sum();
+    patch(&mut b, false, |l, f, t| {
+        148 + f * face_len + (0..l).map(level_len).sum::<usize>() + t * 16
+    });
+    let p = dir.path().join("bad.dds");
+    std::fs::write(&p, &b).unwrap();
+    assert_bad_levels_reported(&p);
+}
+
+/// A chain folder whose m2/px.exr holds a NaN (an f32 EXR the exr crate writes: cubeforge's
+/// own encoder never writes one): `info` names level 2.
+#[test]
+fn a_bad_mip_in_a_chain_folder_is_counted_and_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let chain = prefilter_folder(dir.path());
+    assert_clean(&chain);
+    let face = chain.join("m2/px.exr");
+    assert!(face.is_file());
+    exr::prelude::write_rgba_file(&face, 2, 2, |x, y| {
+        let v = if (x, y) == (1, 0) { f32::NAN } else { 0.5 };
+        (v, 0.5, 0.5, 1.0)
+    })
+    .unwrap();
+    let r = describe(&chain, None).unwrap();
+    assert_eq!((r.stats.nan, r.stats.inf, r.stats.negative), (1, 0, 0));
+    assert_eq!(r.bad_levels.len(), 1, "{r:?}");
+    assert_eq!((r.bad_levels[0].level, r.bad_levels[0].nan), (2, 1));
+    let t = text(&[chain.as_os_str()]);
+    assert!(
+        t.contains("bad values:   1 NaN, 0 Inf, 0 negative\n"),
+        "{t}"
+    );
+    assert!(
+        t.contains("\n  bad level 2:  1 NaN, 0 Inf, 0 negative\n"),
+        "{t}"
+    );
+    let v = json(&[chain.as_os_str()]);
+    assert_eq!(
+        v["bad_levels"],
+        serde_json::json!([{"level": 2, "nan": 1, "inf": 0, "negative": 0}]),
+        "{v}"
+    );
+}
