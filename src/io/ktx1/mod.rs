@@ -32,6 +32,8 @@ pub const IDENTIFIER: [u8; 12] = [
 const ENDIANNESS: u32 = 0x0403_0201;
 /// Identifier plus thirteen UInt32 fields.
 const HEADER_LEN: usize = 64;
+/// The formats read, as every refusal of another names them (one list, so they agree).
+const READS: &str = "RGBA16F, RGB16F, RGBA32F, RGBA8 and R11F_G11F_B10F";
 
 mod format;
 mod sh;
@@ -210,13 +212,13 @@ pub fn read(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Ktx1> {
     if gl_type == 0 {
         return Err(Error::unsupported(
             path,
-            format!("compressed KTX (glInternalFormat {internal:#06x}) is not supported: cubeforge reads RGBA16F, RGB16F, RGBA32F and RGBA8 KTX files"),
+            format!("compressed KTX (glInternalFormat {internal:#06x}) is not supported: cubeforge reads {READS} KTX files"),
         ));
     }
     let format = Ktx1Format::from_gl(internal, gl_type).ok_or_else(|| {
         Error::unsupported(
             path,
-            format!("unsupported KTX format (glInternalFormat {internal:#06x}, glType {gl_type:#06x}): cubeforge reads RGBA16F, RGB16F, RGBA32F, RGBA8 and R11F_G11F_B10F"),
+            format!("unsupported KTX format (glInternalFormat {internal:#06x}, glType {gl_type:#06x}): cubeforge reads {READS}"),
         )
     })?;
     let gl = format.gl();
@@ -521,6 +523,17 @@ mod tests {
             panic!("cubes")
         };
         assert_eq!(a, b);
+    }
+
+    /// Both refusals of a format name every format read (the compressed one left out R11F).
+    #[test]
+    fn refusals_name_every_format_read() {
+        let mut b = encode(&cube(2, 1), Ktx1Format::Rgba16f, &[]).unwrap();
+        for (at, v) in [(16, 0u32), (16, 0x1234)] {
+            b[at..at + 4].copy_from_slice(&v.to_le_bytes());
+            let e = read(&b, Path::new("t.ktx"), &Limits::default()).unwrap_err();
+            assert!(e.to_string().contains(READS), "{e}");
+        }
     }
 
     #[test]
