@@ -1,7 +1,11 @@
 //! Reading input files: regular files only (never a FIFO or a device), large ones in
-//! parallel pieces; standard input up to the memory budget.
+//! parallel pieces; standard input up to the memory budget; the decoder picked by content;
+//! and what a file's header claims, read before any file of a command is decoded.
 
-use super::{human_bytes, Limits};
+use super::{
+    babylon_env, dds, exr, human_bytes, ktx1, ktx2, limits, raster, rgbe, Claim, Decoded,
+    FileFormat, Limits, Meta, ReadOptions,
+};
 use crate::error::{Error, LimitKind, Result};
 use std::path::Path;
 
@@ -93,6 +97,114 @@ pub(super) fn read_input<'a>(path: &'a Path, limits: &Limits) -> Result<(Vec<u8>
         ));
     }
     Ok((bytes, name))
+}
+
+/// `read_raw`, but an OpenEXR file is sanitized (as `read` does) while it decodes when
+/// `sanitize` is set.
+pub(super) fn read_with(
+    path: &Path,
+    opts: &ReadOptions,
+    sanitize: bool,
+) -> Result<(Decoded, Meta)> {
+    let (bytes, path) = read_input(path, &opts.limits)?;
+    decode_bytes(&bytes, path, opts, sanitize)
+}
+
+/// What decoding `path` will take, from its header alone (None for standard input, which
+/// can be read only once): a command checks its whole input against the budget before it
+/// decodes any of it. A file that is not one cubeforge reads gets its error here, before any
+/// work.
+pub fn claim(path: &Path, opts: &ReadOptions) -> Result<Option<Claim>> {
+    if path == Path::new("-") {
+        return Ok(None);
+    }
+    regular_file(path)?;
+    let len = std::fs::metadata(path)
+        .map_err(|e| Error::io(path, e))?
+        .len();
+    // Every header cubeforge reads fits in its first MiB; one that does not (a JPEG's size
+    // after large metadata) is read whole.
+    const HEAD: u64 = 1 << 20;
+    let probe = |bytes: &[u8]| limits::probing(|| decode_bytes(bytes, path, opts, false));
+    let head = if len > HEAD {
+        use std::io::Read;
+        let mut head = Vec::with_capacity(HEAD as usize);
+        std::fs::File::open(path)
+            .and_then(|f| f.take(HEAD).read_to_end(&mut head))
+            .map_err(|e| Error::io(path, e))?;
+        head
+    } else {
+        read_file(path)?
+    };
+    let (mut out, mut claimed) = probe(&head);
+    if claimed.is_none() && out.is_err() && len > HEAD {
+        drop(head);
+        (out, claimed) = probe(&read_file(path)?);
+    }
+    let (w, h, cube) = match (claimed, out) {
+        (Some(c), _) => c,
+        // A decoder that never checked a size decoded the whole (small) file.
+        (None, Ok((Decoded::Image(img), _))) => (img.width as u64, img.height as u64, false),
+        (None, Ok((Decoded::Cube(c), _))) => (c.size() as u64, c.size() as u64, true),
+        (None, Err(e)) => return Err(e),
+    };
+    let texels = w.saturating_mul(h).saturating_mul(if cube { 8 } else { 1 });
+    Ok(Some(Claim {
+        width: w,
+        height: h,
+        cube,
+        decode_bytes: len.saturating_add(texels.saturating_mul(32)),
+        held_bytes: texels.saturating_mul(16),
+    }))
+}
+
+/// Decodes a file's bytes by their content (its name only where the content cannot say).
+fn decode_bytes(
+    bytes: &[u8],
+    path: &Path,
+    opts: &ReadOptions,
+    sanitize: bool,
+) -> Result<(Decoded, Meta)> {
+    if bytes.is_empty() {
+        return Err(Error::file(path, "file is empty"));
+    }
+    let by_name = FileFormat::from_extension(path);
+    let format = match (FileFormat::from_magic(bytes), by_name) {
+        (Some(m), Some(n)) if m != n && !(m == FileFormat::Jpeg && n == FileFormat::Jpeg) => {
+            return Err(Error::file(
+                path,
+                format!(
+                    "the file holds {} data but its name says {}: rename it or re-export it",
+                    m.name(),
+                    n.name()
+                ),
+            ))
+        }
+        (Some(m), _) => m,
+        (None, Some(FileFormat::Tga)) => FileFormat::Tga,
+        (None, Some(n)) => {
+            return Err(Error::file(
+                path,
+                format!("not a valid {} file (its signature is missing)", n.name()),
+            ))
+        }
+        (None, None) => return Err(Error::unsupported(
+            path,
+            "not a recognised image file (cubeforge reads PNG, JPEG, TGA, HDR, EXR, KTX2, DDS, KTX and Babylon env)",
+        )),
+    };
+    match format {
+        FileFormat::Exr => exr::decode_with(bytes, path, &opts.limits, sanitize),
+        FileFormat::Ktx2 => ktx2::decode(bytes, path, &opts.limits),
+        FileFormat::Dds => dds::decode(bytes, path, &opts.limits),
+        FileFormat::Ktx1 => ktx1::decode(bytes, path, &opts.limits),
+        FileFormat::Env => babylon_env::decode(bytes, path, &opts.limits),
+        FileFormat::Hdr => match rgbe::decode(bytes, path, opts) {
+            Some(result) => result.map(|(img, meta)| (Decoded::Image(img), meta)),
+            None => raster::decode(bytes, FileFormat::Hdr, path, opts),
+        },
+        f => raster::decode(bytes, f, path, opts),
+    }
 }
 
 #[cfg(test)]

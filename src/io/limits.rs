@@ -32,10 +32,19 @@ thread_local! {
 /// Runs `decode` with the size checks recording their sizes and stopping it: the header's
 /// claim, if a check was reached, and what `decode` returned.
 pub(crate) fn probing<T>(decode: impl FnOnce() -> T) -> (T, Option<(u64, u64, bool)>) {
+    /// Ends the probe however `decode` ends (a panic too): a later decode on this thread
+    /// must not stop at its size check.
+    struct Ends;
+    impl Drop for Ends {
+        fn drop(&mut self) {
+            PROBING.with(|p| p.set(false));
+        }
+    }
     PROBING.with(|p| p.set(true));
     CLAIMED.with(|c| c.set(None));
+    let ends = Ends;
     let out = decode();
-    PROBING.with(|p| p.set(false));
+    drop(ends);
     (out, CLAIMED.with(|c| c.take()))
 }
 

@@ -14,6 +14,7 @@ mod control;
 mod conversions;
 mod engine_containers;
 mod fault_campaign;
+mod fault_outputs;
 mod finite;
 mod flux;
 mod formats;
