@@ -35,7 +35,7 @@ pub struct Args {
     #[arg(long, default_value_t = Limits::default().max_pixels)]
     pub max_pixels: u64,
     /// Memory a command may plan to use, in bytes or with K, M, G (default: half the
-    /// machine's memory).
+    /// machine's memory, or of a container's limit or ulimit -v).
     #[arg(long, value_parser = super::bytes)]
     pub max_memory: Option<u64>,
 }

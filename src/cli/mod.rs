@@ -81,7 +81,7 @@ pub struct InputArgs {
     #[arg(long, default_value_t = cubeforge::io::Limits::default().max_pixels)]
     pub max_pixels: u64,
     /// Memory a command may plan to use, in bytes or with K, M, G (default: half the
-    /// machine's memory); a bigger plan is refused before it starts.
+    /// machine's memory, or of a container's limit or ulimit -v); a bigger plan is refused before it starts.
     #[arg(long, value_parser = bytes)]
     pub max_memory: Option<u64>,
 }

@@ -64,26 +64,49 @@ pub struct Limits {
     pub max_pixels: u64,
     /// Longest edge in pixels.
     pub max_dimension: u32,
-    /// Bytes a command may plan to use (default: half the machine's memory).
+    /// Bytes a command may plan to use (default: half of what this process may use: the
+    /// machine's memory, a container's limit or an address-space cap, whichever is least).
     pub max_memory: u64,
 }
 
-/// Half the machine's physical memory: the default memory budget.
+/// Half the memory this process may have: the default memory budget. That is the machine's
+/// physical memory, or less where a limit says so: a container's cgroup (`memory.max`) or an
+/// address-space cap (`ulimit -v`, where an allocation past it aborts the process).
 pub(crate) fn default_memory_budget() -> u64 {
+    let mut most = 16u64 << 30;
     #[cfg(unix)]
     {
-        // SAFETY: sysconf only reads system constants.
-        let (pages, size) = unsafe {
+        // SAFETY: sysconf only reads system constants; getrlimit fills the struct it is given.
+        let (pages, size, cap) = unsafe {
+            let mut r: libc::rlimit = std::mem::zeroed();
+            let cap = if libc::getrlimit(libc::RLIMIT_AS, &mut r) == 0
+                && r.rlim_cur != libc::RLIM_INFINITY
+            {
+                Some(r.rlim_cur as u64)
+            } else {
+                None
+            };
             (
                 libc::sysconf(libc::_SC_PHYS_PAGES),
                 libc::sysconf(libc::_SC_PAGESIZE),
+                cap,
             )
         };
         if pages > 0 && size > 0 {
-            return (pages as u64).saturating_mul(size as u64) / 2;
+            most = (pages as u64).saturating_mul(size as u64);
+        }
+        if let Some(cap) = cap {
+            most = most.min(cap);
         }
     }
-    8 << 30
+    #[cfg(target_os = "linux")]
+    if let Some(max) = std::fs::read_to_string("/sys/fs/cgroup/memory.max")
+        .ok()
+        .and_then(|t| t.trim().parse::<u64>().ok())
+    {
+        most = most.min(max);
+    }
+    most / 2
 }
 
 /// Bytes as people read them (3.2 GiB, 512 MiB).
@@ -158,11 +181,20 @@ impl Limits {
     /// Refuses a plan that needs more than the memory budget, naming what needs it.
     pub fn check_memory(&self, what: impl std::fmt::Display, bytes: u64) -> Result<()> {
         if bytes > self.max_memory {
-            return Err(Error::limit(None, LimitKind::Memory, format!(
-                "{what} needs about {} of memory, over the budget of {} (half this machine's memory by default)",
-                human_bytes(bytes),
-                human_bytes(self.max_memory)
-            )));
+            let default = if self.max_memory == default_memory_budget() {
+                " (the default: half of what this process may use)"
+            } else {
+                ""
+            };
+            return Err(Error::limit(
+                None,
+                LimitKind::Memory,
+                format!(
+                    "{what} needs about {} of memory, over the budget of {}{default}",
+                    human_bytes(bytes),
+                    human_bytes(self.max_memory)
+                ),
+            ));
         }
         Ok(())
     }

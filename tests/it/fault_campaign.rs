@@ -424,3 +424,23 @@ fn claims_match_what_decoding_gives() {
     let e = io::claim(&bad, &opts).unwrap_err().to_string();
     assert!(e.contains("bad.exr"), "{e}");
 }
+
+/// Item 2: under an address-space cap (`ulimit -v`), where an allocation past it aborts the
+/// process, the default budget is half the cap: a plan over it is one line, exit 1, never
+/// "memory allocation failed" and SIGABRT.
+#[cfg(unix)]
+#[test]
+fn an_address_space_cap_lowers_the_default_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("big.exr");
+    let capped = Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 1000000 && exec \"$0\" convert \"$1\" -o \"$2\" --size 2048")
+        .arg(BIN)
+        .arg(SKY)
+        .arg(&out)
+        .output()
+        .unwrap();
+    refused(&capped, &["over the budget of", "--max-memory"]);
+    assert!(!out.exists());
+}
