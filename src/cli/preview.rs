@@ -188,7 +188,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let plan = check(&a, output)?;
     let env = load_env(env_path, a.from, plan.limits)?;
     let mut inputs: Vec<PathBuf> = env.files.clone();
-    let textures = load_textures(&a, &plan.materials, verbose, &mut inputs)?;
+    let textures = load_textures(&a, &plan.materials, verbose, &mut inputs, &plan.limits)?;
     stages.done("decode");
     let split_sum = if plan.materials.iter().any(|m| m.model == Model::Pbr) {
         let setup = pbr::prepare(&env, env_path, a.target)?;
@@ -292,18 +292,32 @@ fn check(a: &Args, output: &Path) -> Result<Plan> {
     }
     // Each cell's picture and its samples' buffers, RGBA f32, beside the environment as its
     // headers describe it (its decode's peak checked too): all before any file is decoded.
-    let input = match &a.env {
-        Some(env) => {
-            let read = ReadOptions {
-                limits,
-                linear: false,
-                as_stored: false,
-            };
-            cubeforge::convert::plan_input(std::slice::from_ref(env), a.from, &read)?
-                .working_bytes()
-        }
+    let read = ReadOptions {
+        limits,
+        linear: false,
+        as_stored: false,
+    };
+    let mut input = match &a.env {
+        Some(env) => cubeforge::convert::plan_input(std::slice::from_ref(env), a.from, &read)?
+            .working_bytes(),
         None => 0,
     };
+    // The textures on the sphere, kept while it renders: the decal, the control map, the
+    // materials' own decals (the largest one's decode on top).
+    let mut textures: Vec<&PathBuf> = a.decal.iter().chain(&a.control).collect();
+    if a.decal.is_none() {
+        textures.extend(materials.iter().filter_map(|m| m.decal.as_ref()));
+    }
+    textures.sort();
+    textures.dedup();
+    let mut peak = 0u64;
+    for t in textures {
+        if let Some(c) = io::claim(t, &read)? {
+            input = input.saturating_add(c.held_bytes);
+            peak = peak.max(c.decode_bytes - c.held_bytes.min(c.decode_bytes));
+        }
+    }
+    input = input.saturating_add(peak);
     limits.check_memory(
         format_args!("--size {}", a.size),
         pixels.saturating_mul(16 * 3).saturating_add(input),
@@ -392,16 +406,17 @@ fn load_textures(
     materials: &[Material],
     verbose: bool,
     inputs: &mut Vec<PathBuf>,
+    limits: &Limits,
 ) -> Result<Textures> {
     let decal_img = a
         .decal
         .as_ref()
-        .map(|p| preview::read_texture(p, false))
+        .map(|p| preview::read_texture(p, false, limits))
         .transpose()?;
     inputs.extend(a.decal.iter().cloned());
     let control = match &a.control {
         Some(p) => {
-            let (img, max, side) = preview::read_control(p, a.max_lod_bias)?;
+            let (img, max, side) = preview::read_control(p, a.max_lod_bias, limits)?;
             inputs.push(p.clone());
             if verbose {
                 match &side {
@@ -424,7 +439,7 @@ fn load_textures(
         for m in materials {
             if let Some(p) = &m.decal {
                 if !file_decals.iter().any(|(q, _)| q == p) {
-                    file_decals.push((p.clone(), preview::read_texture(p, false)?));
+                    file_decals.push((p.clone(), preview::read_texture(p, false, limits)?));
                     inputs.push(p.clone());
                 }
             }

@@ -7,7 +7,7 @@ use crate::convert::{self, Source};
 use crate::cube::{CubeSampler, Environment};
 use crate::error::{Error, Result};
 use crate::image::Image;
-use crate::io::{self, Decoded, ReadOptions};
+use crate::io::{self, Decoded, Limits, ReadOptions};
 use crate::layout::Kind;
 use crate::resample::Resampler;
 use std::path::{Path, PathBuf};
@@ -78,11 +78,13 @@ fn load_chain_dir(dir: &Path, opts: &ReadOptions) -> Result<LoadedEnv> {
     })
 }
 
-/// Reads a 2D texture for the sphere (decal: colour, sRGB-decoded; control map: `linear`).
-pub fn read_texture(path: &Path, linear: bool) -> Result<Image> {
+/// Reads a 2D texture for the sphere (decal: colour, sRGB-decoded; control map: `linear`)
+/// within the command's `limits`.
+pub fn read_texture(path: &Path, linear: bool, limits: &Limits) -> Result<Image> {
     let opts = ReadOptions {
         linear,
-        ..ReadOptions::default()
+        limits: *limits,
+        as_stored: false,
     };
     match io::read(path, &opts)?.0 {
         Decoded::Image(img) => Ok(img),
@@ -105,8 +107,12 @@ pub(crate) fn control_sidecar(map: &Path) -> Option<PathBuf> {
 
 /// Reads a control map (linear data) and its `max_lod_bias`: from the sidecar when there is
 /// one, else `default_max`. Returns the map, the value and the sidecar used.
-pub fn read_control(path: &Path, default_max: f32) -> Result<(Image, f32, Option<PathBuf>)> {
-    let img = read_texture(path, true)?;
+pub fn read_control(
+    path: &Path,
+    default_max: f32,
+    limits: &Limits,
+) -> Result<(Image, f32, Option<PathBuf>)> {
+    let img = read_texture(path, true, limits)?;
     let Some(side) = control_sidecar(path) else {
         return Ok((img, default_max, None));
     };

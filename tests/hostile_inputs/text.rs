@@ -96,7 +96,7 @@ fn sidecar_mutations() {
         "map.png.json",
         &|b| {
             std::fs::write(&side, b).unwrap();
-            match cubeforge::preview::read_control(&map, 4.0) {
+            match cubeforge::preview::read_control(&map, 4.0, &Default::default()) {
                 // A bad sidecar must be named, not the map.
                 Err(e) if !e.to_string().contains("map.png.json") => Err(cubeforge::Error::file(
                     &side,

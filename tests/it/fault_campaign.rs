@@ -444,3 +444,31 @@ fn an_address_space_cap_lowers_the_default_budget() {
     refused(&capped, &["over the budget of", "--max-memory"]);
     assert!(!out.exists());
 }
+
+/// Item 2: a preview's textures (decal, control map, a material's decal) are read within the
+/// command's budget and counted in its estimate (they were read with the default limits).
+#[test]
+fn preview_textures_are_inside_the_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let decal = dir.path().join("decal.png");
+    let img = Image::from_fn(2048, 2048, |_, _| Vec4::new(0.5, 0.4, 0.3, 1.0));
+    crate::common::write_image(&decal, &img);
+    let out = dir.path().join("p.png");
+    for flag in ["--decal", "--control"] {
+        let args = [
+            "preview".as_ref(),
+            SKY.as_ref(),
+            "-o".as_ref(),
+            out.as_os_str(),
+            "--size".as_ref(),
+            "32".as_ref(),
+            flag.as_ref(),
+            decal.as_os_str(),
+            "--max-memory".as_ref(),
+            "100M".as_ref(),
+        ];
+        refused(&run(args), &["decal.png", "--max-memory"]);
+        ok(&run(&args[..8]));
+    }
+    assert!(out.exists());
+}

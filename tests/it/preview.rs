@@ -830,17 +830,19 @@ fn control_map_sidecar_gives_max_lod_bias() {
         .unwrap(),
     )
     .unwrap();
-    let (read, max, side) = preview::read_control(&map, 4.0).unwrap();
+    let (read, max, side) = preview::read_control(&map, 4.0, &Default::default()).unwrap();
     assert_eq!(max, 4.0);
     assert!(side.is_none());
     // Linear data: 0.5 stays 0.5 (no sRGB decode), to 8-bit precision.
     assert!((read.get(0, 0).x - 0.5).abs() < 0.003);
     std::fs::write(dir.path().join("mask.png.json"), r#"{"max_lod_bias": 6.5}"#).unwrap();
-    let (_, max, side) = preview::read_control(&map, 4.0).unwrap();
+    let (_, max, side) = preview::read_control(&map, 4.0, &Default::default()).unwrap();
     assert_eq!(max, 6.5);
     assert!(side.is_some());
     std::fs::write(dir.path().join("mask.png.json"), "{oops").unwrap();
-    let e = preview::read_control(&map, 4.0).unwrap_err().to_string();
+    let e = preview::read_control(&map, 4.0, &Default::default())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("mask.png.json") && !e.contains('\n'), "{e}");
 }
 
