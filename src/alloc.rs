@@ -63,7 +63,7 @@ fn raw<T>(n: usize, zero: bool) -> Vec<std::mem::MaybeUninit<T>> {
                 if p.is_null() {
                     panic!(
                         "out of memory: cannot allocate {}",
-                        crate::io::human_bytes(layout.size() as u64)
+                        human_bytes(layout.size() as u64)
                     );
                 }
                 Vec::from_raw_parts(p, n, n)
@@ -90,6 +90,15 @@ fn raw<T>(n: usize, zero: bool) -> Vec<std::mem::MaybeUninit<T>> {
         }
     }
     v
+}
+
+/// Bytes as people read them (3.2 GiB, 512 MiB).
+pub(crate) fn human_bytes(b: u64) -> String {
+    if b >= 1 << 30 {
+        format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
+    } else {
+        format!("{:.0} MiB", (b as f64 / (1u64 << 20) as f64).ceil())
+    }
 }
 
 #[cfg(test)]

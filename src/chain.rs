@@ -100,6 +100,69 @@ pub(crate) fn container_levels(path: &Path, format: FileFormat) -> Option<Levels
     LevelsFile::from_json(&bytes, path).ok()
 }
 
+/// [`convert::plan_input`], where a chain folder counts all its levels: what loading `inputs`
+/// will take, checked against the memory budget before any file is decoded.
+pub fn plan(
+    inputs: &[PathBuf],
+    from: Option<crate::layout::Kind>,
+    opts: &ReadOptions,
+) -> Result<convert::InputPlan> {
+    match inputs {
+        [dir] if is_chain_dir(dir) => {
+            let mut files = Vec::new();
+            for k in 0.. {
+                let sub = level_dir(dir, k);
+                if !sub.is_dir() {
+                    break;
+                }
+                files.extend(convert::find_faces(&sub)?);
+            }
+            convert::plan_files(&files, from, opts)
+        }
+        _ => convert::plan_input(inputs, from, opts),
+    }
+}
+
+/// [`plan`] for [`load_level`]: a chain folder's level `level` is read alone.
+pub fn plan_level(
+    inputs: &[PathBuf],
+    from: Option<crate::layout::Kind>,
+    opts: &ReadOptions,
+    level: usize,
+) -> Result<convert::InputPlan> {
+    match inputs {
+        [dir] if is_chain_dir(dir) && level_dir(dir, level).is_dir() => {
+            convert::plan_input(&[level_dir(dir, level)], from, opts)
+        }
+        _ => plan(inputs, from, opts),
+    }
+}
+
+/// Loads the inputs ([`convert::load`]), then keeps only level `level` of a mip chain. A
+/// prefiltered chain's folder (m0, m1, ...) gives its `mN` folder.
+pub fn load_level(
+    inputs: &[PathBuf],
+    from: Option<crate::layout::Kind>,
+    read: &ReadOptions,
+    level: usize,
+) -> Result<convert::Loaded> {
+    if let [dir] = inputs {
+        let sub = level_dir(dir, level);
+        if is_chain_dir(dir) {
+            if !sub.is_dir() {
+                return Err(Error::file(
+                    dir,
+                    format!("no level {level}: no m{level} folder"),
+                ));
+            }
+            return convert::load(&[sub], from, read);
+        }
+    }
+    let mut loaded = convert::load(inputs, from, read)?;
+    loaded.keep_level(level)?;
+    Ok(loaded)
+}
+
 /// A chain folder as read.
 pub(crate) struct ChainDir {
     pub cube: CubeMap,
@@ -115,7 +178,7 @@ pub(crate) struct ChainDir {
 /// and `levels.json` if present (it must list as many levels).
 pub(crate) fn read_dir(dir: &Path, opts: &ReadOptions) -> Result<ChainDir> {
     // Every level's faces within the budget together, before any is decoded.
-    convert::plan_input(std::slice::from_ref(&dir.to_path_buf()), None, opts)?;
+    plan(std::slice::from_ref(&dir.to_path_buf()), None, opts)?;
     let mut levels: Vec<Faces> = Vec::new();
     let mut files = Vec::new();
     let mut meta: Option<Meta> = None;

@@ -186,46 +186,27 @@ impl InputPlan {
     }
 }
 
-/// [`plan_input`] for [`load_level`]: a chain folder's level `level` is read alone.
-pub fn plan_level(
-    inputs: &[PathBuf],
-    from: Option<Kind>,
-    opts: &ReadOptions,
-    level: usize,
-) -> Result<InputPlan> {
-    match inputs {
-        [dir]
-            if crate::chain::is_chain_dir(dir) && crate::chain::level_dir(dir, level).is_dir() =>
-        {
-            plan_input(&[crate::chain::level_dir(dir, level)], from, opts)
-        }
-        _ => plan_input(inputs, from, opts),
-    }
-}
-
 /// Plans loading `inputs` as [`load`] would read them (one image, six faces, a folder of
-/// faces, a chain folder's every level), checking the decode's peak against the memory
-/// budget before any file is decoded: six faces each within the budget are refused when
-/// together they are not.
+/// faces), checking the decode's peak against the memory budget before any file is decoded:
+/// six faces each within the budget are refused when together they are not. A chain
+/// folder's every level: [`crate::chain::plan`].
 pub fn plan_input(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Result<InputPlan> {
     let files: Vec<PathBuf> = match inputs {
-        [dir] if dir.is_dir() && crate::chain::is_chain_dir(dir) => {
-            let mut all = Vec::new();
-            for k in 0.. {
-                let sub = crate::chain::level_dir(dir, k);
-                if !sub.is_dir() {
-                    break;
-                }
-                all.extend(find_faces(&sub)?);
-            }
-            all
-        }
         [dir] if dir.is_dir() => find_faces(dir)?,
         files => files.to_vec(),
     };
+    plan_files(&files, from, opts)
+}
+
+/// [`plan_input`] for the files themselves, decoded one after another.
+pub(crate) fn plan_files(
+    files: &[PathBuf],
+    from: Option<Kind>,
+    opts: &ReadOptions,
+) -> Result<InputPlan> {
     let mut plan = InputPlan::default();
     let mut first = None;
-    for f in &files {
+    for f in files {
         let Some(c) = io::claim(f, opts)? else {
             continue; // standard input: checked by its reader as it arrives
         };
@@ -249,7 +230,7 @@ pub fn plan_input(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) ->
         (kind != Kind::Faces && !kind.is_container() && kind.fits(w, h))
             .then(|| kind.face_size(w, h))
     });
-    let what = match &files[..] {
+    let what = match files {
         [one] => one.display().to_string(),
         [first, ..] => format!(
             "{} input files ({} and the others)",
@@ -288,31 +269,6 @@ pub(crate) fn load_planned(
             files.len()
         ))),
     }
-}
-
-/// Loads the inputs, then keeps only level `level` of a mip chain. A prefiltered chain's
-/// folder (m0, m1, ...) gives its `mN` folder.
-pub fn load_level(
-    inputs: &[PathBuf],
-    from: Option<Kind>,
-    read: &io::ReadOptions,
-    level: usize,
-) -> Result<Loaded> {
-    if let [dir] = inputs {
-        let sub = crate::chain::level_dir(dir, level);
-        if crate::chain::is_chain_dir(dir) {
-            if !sub.is_dir() {
-                return Err(Error::file(
-                    dir,
-                    format!("no level {level}: no m{level} folder"),
-                ));
-            }
-            return load(&[sub], from, read);
-        }
-    }
-    let mut loaded = load(inputs, from, read)?;
-    loaded.keep_level(level)?;
-    Ok(loaded)
 }
 
 /// Finds px/nx/... or posx/negx/... files (any supported extension) in a folder.

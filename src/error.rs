@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 #[non_exhaustive]
 pub enum Error {
     /// The operating system refused a read or a write.
-    #[error("{}: {}", path.display(), crate::io::io_msg(source))]
+    #[error("{}: {}", path.display(), io_msg(source))]
     Io {
         /// The file read or written.
         path: PathBuf,
@@ -120,6 +120,15 @@ fn escaped(msg: String) -> String {
     match escape_text(&msg) {
         std::borrow::Cow::Borrowed(_) => msg,
         std::borrow::Cow::Owned(s) => s,
+    }
+}
+
+/// An I/O error as a short phrase ("No such file or directory").
+pub fn io_msg(e: &std::io::Error) -> String {
+    let s = e.to_string();
+    match s.find(" (os error") {
+        Some(i) => s[..i].to_string(),
+        None => s,
     }
 }
 

@@ -41,5 +41,6 @@ pub mod preview;
 pub mod resample;
 mod simd;
 pub mod synthetic;
+pub mod tonemap;
 
 pub use error::{Error, LimitKind, Result};

@@ -10,7 +10,7 @@ use crate::error::{param, Error, Result};
 use crate::image::Image;
 use crate::io::{self, FileFormat, WriteOptions};
 use crate::layout::Kind;
-use crate::preview::tonemap::Tonemap;
+use crate::tonemap::Tonemap;
 use std::path::{Path, PathBuf};
 
 /// An output: where, in which layout and format, with which options.
@@ -107,7 +107,7 @@ impl Target {
         };
         if let (Some((exposure, curve)), true) = (self.tone, self.is_8bit()) {
             for img in images {
-                crate::preview::tonemap::apply(img, curve, exposure);
+                crate::tonemap::apply(img, curve, exposure);
             }
         }
         // Box mips are means of level 0: they fit where it fits.

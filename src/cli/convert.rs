@@ -115,11 +115,11 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
             limits.max_dimension
         )));
     }
-    let plan = convert::plan_level(&a.inputs, a.input.from, &read, a.level)?;
+    let plan = cubeforge::chain::plan_level(&a.inputs, a.input.from, &read, a.level)?;
     if let Some(size) = a.size.or(plan.face_size).filter(|&s| s > 0) {
         check_memory(&limits, to, size, plan.working_bytes())?;
     }
-    let loaded = convert::load_level(&a.inputs, a.input.from, &read, a.level)?;
+    let loaded = cubeforge::chain::load_level(&a.inputs, a.input.from, &read, a.level)?;
     stages.done("decode");
     if loaded.meta.replaced_values > 0 {
         warn(format!(

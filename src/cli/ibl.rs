@@ -62,7 +62,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let read = a.input.read_options();
     // The whole plan against the budget before any file is decoded: the input, the
     // specular chain (and the sheen chain), the diffuse map.
-    let plan = convert::plan_input(&a.inputs, a.input.from, &read)?;
+    let plan = cubeforge::chain::plan(&a.inputs, a.input.from, &read)?;
     let defaults = ibl::engines::defaults(a.target);
     let size = a.size.map_or(defaults.specular_size as u64, u64::from);
     let diffuse = a

@@ -85,7 +85,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     let read = a.input.read_options();
     // The whole plan against the budget before any file is decoded: the input, the base
     // faces it is resampled to (256 at most), the map (faces, encoding, a sampler copy).
-    let plan = convert::plan_input(&a.inputs, a.input.from, &read)?;
+    let plan = cubeforge::chain::plan(&a.inputs, a.input.from, &read)?;
     let base = plan.face_size.unwrap_or(256).min(256) as u64;
     let face = |n: u64| 6 * 16 * n * n;
     a.input.limits().check_memory(

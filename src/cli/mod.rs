@@ -14,7 +14,7 @@ mod prefilter;
 mod preview;
 
 use clap::{Parser, Subcommand};
-use cubeforge::preview::tonemap::Tonemap;
+use cubeforge::tonemap::Tonemap;
 pub use out::{container_output, deliver, guard_standard_streams, output_name, write_files};
 use out::{write_stdout, DATA_ON_STDOUT};
 use std::time::Instant;

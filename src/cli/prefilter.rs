@@ -104,7 +104,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
         return Err(Error::usage(format!("--size {size}: use 1 to 16384")));
     }
     // The whole plan against the budget before any file is decoded.
-    let plan = convert::plan_input(&a.inputs, a.input.from, &read)?;
+    let plan = cubeforge::chain::plan(&a.inputs, a.input.from, &read)?;
     if let Some(size) = a.size.or(plan.face_size) {
         check_memory(&a.input.limits(), size, plan.working_bytes())?;
     }

@@ -8,10 +8,10 @@ use cubeforge::io::{self, FileFormat, Limits, ReadOptions, WriteOptions};
 use cubeforge::layout::Kind;
 use cubeforge::preview::material::{self, Material, Model};
 use cubeforge::preview::pbr::{self, PbrSetup};
-use cubeforge::preview::tonemap::{self, Tonemap};
 use cubeforge::preview::{
     self, grid, Background, Control, LoadedEnv, Options, Parallax, ParallaxMode, Shading, Surface,
 };
+use cubeforge::tonemap::{self, Tonemap};
 use cubeforge::{Error, Result};
 use glam::{Vec3, Vec4};
 use std::path::{Path, PathBuf};
@@ -298,8 +298,9 @@ fn check(a: &Args, output: &Path) -> Result<Plan> {
         as_stored: false,
     };
     let mut input = match &a.env {
-        Some(env) => cubeforge::convert::plan_input(std::slice::from_ref(env), a.from, &read)?
-            .working_bytes(),
+        Some(env) => {
+            cubeforge::chain::plan(std::slice::from_ref(env), a.from, &read)?.working_bytes()
+        }
         None => 0,
     };
     // The textures on the sphere, kept while it renders: the decal, the control map, the

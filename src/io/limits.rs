@@ -1,5 +1,6 @@
 //! Size and memory limits, checked from a file's header before any pixel memory is spent.
 
+use crate::alloc::human_bytes;
 use crate::error::{Error, LimitKind, Result};
 use std::cell::Cell;
 use std::path::Path;
@@ -107,15 +108,6 @@ pub(crate) fn default_memory_budget() -> u64 {
         most = most.min(max);
     }
     most / 2
-}
-
-/// Bytes as people read them (3.2 GiB, 512 MiB).
-pub(crate) fn human_bytes(b: u64) -> String {
-    if b >= 1 << 30 {
-        format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
-    } else {
-        format!("{:.0} MiB", (b as f64 / (1u64 << 20) as f64).ceil())
-    }
 }
 
 impl Default for Limits {

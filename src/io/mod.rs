@@ -22,6 +22,7 @@ use crate::error::{Error, Result};
 use crate::image::{ColorSpace, Image};
 use std::path::Path;
 
+pub(crate) use crate::alloc::human_bytes;
 pub use atomic::{
     check_folder, remove_temporaries, stage, stage_with, write_all_atomic, write_all_atomic_with,
     Staged,
@@ -30,7 +31,6 @@ pub use gpu::{finite, unorm8, GpuFormat, HALF_MAX};
 pub use input::claim;
 use input::read_with;
 pub(crate) use input::{read_file, regular_file};
-pub(crate) use limits::human_bytes;
 pub use limits::{Claim, Limits};
 
 /// File formats, told apart by their content (TGA, which has no signature, by its name).
@@ -498,14 +498,8 @@ pub fn unknown_ext(path: &Path) -> Error {
     )
 }
 
-/// An I/O error as a short phrase ("No such file or directory").
-pub fn io_msg(e: &std::io::Error) -> String {
-    let s = e.to_string();
-    match s.find(" (os error") {
-        Some(i) => s[..i].to_string(),
-        None => s,
-    }
-}
+/// An I/O error as a short phrase (kept here for callers of `io::io_msg`).
+pub use crate::error::io_msg;
 
 #[cfg(test)]
 mod tests {

@@ -22,6 +22,7 @@ mod gpu_formats;
 mod hostile_exr;
 mod ibl;
 mod info;
+mod layers;
 mod lut;
 mod man_pages;
 mod octahedral;
