@@ -364,7 +364,7 @@ fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Lo
     let files = vec![path.to_path_buf()];
     let hdr = meta.hdr;
     let (source, kind) = match decoded {
-        Decoded::Cube(cube) => (Source::Cube(cube), Kind::container(meta.file_format)),
+        Decoded::Cube(cube) => (Source::Cube(cube), meta.file_format.container_kind()),
         Decoded::Image(img) => {
             let (w, h) = (img.width, img.height);
             let kind = match from {

@@ -252,7 +252,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
     let file = path.display().to_string();
     Ok(match decoded {
         Decoded::Cube(cube) => {
-            let kind = Kind::container(meta.file_format);
+            let kind = meta.file_format.container_kind();
             if let Some(k) = from.filter(|&k| k != kind) {
                 return Err(Error::file(
                     path,

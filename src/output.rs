@@ -170,7 +170,7 @@ impl Target {
 pub(crate) fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
     let by_name = FileFormat::from_extension(output);
     match (to, by_name) {
-        (Some(k), Some(f)) if k.is_container() && f.is_container() && Kind::container(f) == k => {
+        (Some(k), Some(f)) if k.is_container() && f.is_container() && f.container_kind() == k => {
             Ok(k)
         }
         (Some(k), _) if k.is_container() => Err(Error::file(
@@ -197,7 +197,7 @@ pub(crate) fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
                 f.name(),
                 k.name(),
                 param("to"),
-                Kind::container(f).name()
+                f.container_kind().name()
             ),
         )),
         (Some(k), Some(_)) => Ok(k),
@@ -208,7 +208,7 @@ pub(crate) fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
                 k.name()
             ),
         )),
-        (None, Some(f)) if f.is_container() => Ok(Kind::container(f)),
+        (None, Some(f)) if f.is_container() => Ok(f.container_kind()),
         (None, Some(_)) => Ok(Kind::Hcross),
         (None, None) if output.extension().is_some() && !output.is_dir() => {
             Err(io::unknown_ext(output))

@@ -156,6 +156,18 @@ impl FileFormat {
         )
     }
 
+    /// The container layout of a container file format (KTX2 for any other): the layout
+    /// knows no file formats, the formats know their layouts.
+    pub fn container_kind(self) -> crate::layout::Kind {
+        use crate::layout::Kind;
+        match self {
+            FileFormat::Dds => Kind::Dds,
+            FileFormat::Ktx1 => Kind::Ktx,
+            FileFormat::Env => Kind::Env,
+            _ => Kind::Ktx2,
+        }
+    }
+
     /// The `--to` name of a container format ("ktx2", "dds", "ktx", "env").
     pub(crate) fn container_kind_name(self) -> &'static str {
         match self {

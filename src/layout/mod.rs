@@ -71,17 +71,6 @@ impl Kind {
         matches!(self, Kind::Ktx2 | Kind::Dds | Kind::Ktx | Kind::Env)
     }
 
-    /// The container layout of a container file format (KTX2 for any other).
-    pub fn container(format: crate::io::FileFormat) -> Kind {
-        use crate::io::FileFormat;
-        match format {
-            FileFormat::Dds => Kind::Dds,
-            FileFormat::Ktx1 => Kind::Ktx,
-            FileFormat::Env => Kind::Env,
-            _ => Kind::Ktx2,
-        }
-    }
-
     /// Crosses and strips: faces placed in cells.
     pub fn is_cells(self) -> bool {
         cross::cells(self).is_some()
