@@ -92,6 +92,9 @@ struct ParseContext {
     base: PathBuf,
     limits: Limits,
     cache: HashMap<PathBuf, (Arc<Image>, bool)>,
+    /// Bytes the images read so far keep: each next one is checked against the budget
+    /// with them, before it is decoded.
+    held: u64,
 }
 
 thread_local! {
@@ -107,6 +110,7 @@ impl ContextGuard {
             base: base.to_path_buf(),
             limits: *limits,
             cache: HashMap::new(),
+            held: 0,
         };
         ContextGuard(CONTEXT.with(|c| c.replace(Some(ctx))))
     }
@@ -129,6 +133,7 @@ fn load_image(name: &str) -> std::result::Result<ImageFile, String> {
             base: PathBuf::from("."),
             limits: Limits::default(),
             cache: HashMap::new(),
+            held: 0,
         });
         let path = if ctx.base == Path::new(".") {
             PathBuf::from(name)
@@ -156,6 +161,17 @@ fn load_image(name: &str) -> std::result::Result<ImageFile, String> {
             linear: true,
             as_stored: false,
         };
+        // The recipe's images together within the budget, each checked before its decode.
+        let claim = io::claim(&path, &read).map_err(|e| e.to_string())?;
+        if let Some(c) = claim {
+            ctx.limits
+                .check_memory(
+                    format_args!("{} with the recipe's other images", path.display()),
+                    ctx.held.saturating_add(c.decode_bytes),
+                )
+                .map_err(|e| e.to_string())?;
+            ctx.held = ctx.held.saturating_add(c.held_bytes);
+        }
         let (decoded, meta) = io::read(&path, &read).map_err(|e| e.to_string())?;
         let image = match decoded {
             Decoded::Image(img) => Arc::new(img),

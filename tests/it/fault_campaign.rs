@@ -472,3 +472,38 @@ fn preview_textures_are_inside_the_budget() {
     }
     assert!(out.exists());
 }
+
+/// Item 2: a control-map recipe's images count together, each checked before it is decoded:
+/// two 2048 px masks fit 150M one at a time, not together.
+#[test]
+fn a_recipes_images_count_together() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["a.png", "b.png"] {
+        let img = Image::from_fn(2048, 2048, |_, _| Vec4::new(0.5, 0.4, 0.3, 1.0));
+        crate::common::write_image(&dir.path().join(name), &img);
+    }
+    let recipe = dir.path().join("r.toml");
+    let run_recipe = |text: &str| {
+        std::fs::write(&recipe, text).unwrap();
+        run([
+            "control".as_ref(),
+            recipe.as_os_str(),
+            "-o".as_ref(),
+            dir.path().join("c.png").as_os_str(),
+            "--size".as_ref(),
+            "16".as_ref(),
+            "--max-memory".as_ref(),
+            "150M".as_ref(),
+        ])
+    };
+    ok(&run_recipe(
+        "[reflectivity]\nimage = { path = \"a.png\", channel = \"r\" }\n",
+    ));
+    let both = run_recipe(
+        "[reflectivity]\nimage = { path = \"a.png\", channel = \"r\" }\n[transmittance]\nimage = { path = \"b.png\", channel = \"g\" }\n",
+    );
+    refused(
+        &both,
+        &["b.png", "recipe's other images", "over the budget"],
+    );
+}
