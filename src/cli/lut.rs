@@ -28,6 +28,10 @@ pub struct Args {
     /// Write 16-bit PNG instead of 8-bit.
     #[arg(long)]
     pub png16: bool,
+    /// Memory the table may plan to use, in bytes or with K, M, G (default: half the
+    /// machine's memory, or of a container's limit or ulimit -v).
+    #[arg(long, value_parser = super::bytes)]
+    pub max_memory: Option<u64>,
 }
 
 const LAYOUT_HELP: &str = "\
@@ -55,6 +59,9 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         return Err(Error::usage("--png16 applies to PNG output only"));
     }
     let size = a.size as usize;
+    // The table (RGBA f32), its encoding and a KTX2's mip chain, before any work.
+    super::limits(u64::MAX, a.max_memory)
+        .check_memory(format_args!("--size {size}"), (size as u64).pow(2) * 16 * 3)?;
     let opts = LutOptions {
         multiscatter: a.multiscatter,
         samples: a.samples,

@@ -507,3 +507,24 @@ fn a_recipes_images_count_together() {
         &["b.png", "recipe's other images", "over the budget"],
     );
 }
+
+/// Item 2: `lut --size` is inside a budget too (it had none).
+#[test]
+fn lut_size_is_inside_the_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("l.png");
+    let args = |size: &'static str| {
+        [
+            "lut".as_ref(),
+            "-o".as_ref(),
+            out.as_os_str(),
+            "--size".as_ref(),
+            size.as_ref(),
+            "--max-memory".as_ref(),
+            "100M".as_ref(),
+        ]
+    };
+    refused(&run(args("4096")), &["--size 4096", "--max-memory"]);
+    assert!(!out.exists());
+    ok(&run(args("32")));
+}
