@@ -146,6 +146,17 @@ pub fn load_level(
     read: &ReadOptions,
     level: usize,
 ) -> Result<convert::Loaded> {
+    plan_level(inputs, from, read, level)?;
+    load_level_planned(inputs, from, read, level)
+}
+
+/// [`load_level`] once the caller has planned it with [`plan_level`].
+pub fn load_level_planned(
+    inputs: &[PathBuf],
+    from: Option<crate::layout::Kind>,
+    read: &ReadOptions,
+    level: usize,
+) -> Result<convert::Loaded> {
     if let [dir] = inputs {
         let sub = level_dir(dir, level);
         if is_chain_dir(dir) {
@@ -155,10 +166,10 @@ pub fn load_level(
                     format!("no level {level}: no m{level} folder"),
                 ));
             }
-            return convert::load(&[sub], from, read);
+            return convert::load_planned(&[sub], from, read);
         }
     }
-    let mut loaded = convert::load(inputs, from, read)?;
+    let mut loaded = convert::load_planned(inputs, from, read)?;
     loaded.keep_level(level)?;
     Ok(loaded)
 }

@@ -79,6 +79,17 @@ impl Loaded {
         Ok(())
     }
 
+    /// The decoded input's bytes while a command works from it: [`InputPlan::working_bytes`]
+    /// for what was read (standard input's size is known only now).
+    pub fn working_bytes(&self) -> u64 {
+        let held: u64 = self
+            .images()
+            .iter()
+            .map(|i| i.pixels.len() as u64 * 16)
+            .sum();
+        held.saturating_add(held / 2)
+    }
+
     /// The face edge that keeps the input's resolution.
     pub fn face_size(&self) -> usize {
         match &self.source {
@@ -253,12 +264,9 @@ pub fn load(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Resul
     load_planned(inputs, from, opts)
 }
 
-/// [`load`] without the plan (the caller made it).
-pub(crate) fn load_planned(
-    inputs: &[PathBuf],
-    from: Option<Kind>,
-    opts: &ReadOptions,
-) -> Result<Loaded> {
+/// [`load`] once the caller has planned it ([`plan_input`], [`crate::chain::plan`]): the
+/// headers are not read and checked a second time.
+pub fn load_planned(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Result<Loaded> {
     match inputs {
         [] => Err(Error::usage("no input given")),
         [dir] if dir.is_dir() => load_faces(&find_faces(dir)?, opts),

@@ -130,16 +130,9 @@ fn stats_of<'a>(pixels: impl Iterator<Item = &'a Vec4>) -> Stats {
     };
     let mut sum = 0.0f64;
     let mut n = 0u64;
+    let mut bad = LevelBad::default();
     for p in pixels {
-        for c in p.to_array() {
-            if c.is_nan() {
-                s.nan += 1;
-            } else if c.is_infinite() {
-                s.inf += 1;
-            } else if c < 0.0 {
-                s.negative += 1;
-            }
-        }
+        bad.count(*p);
         let l = luminance(*p) as f64;
         if l.is_finite() {
             s.min_luminance = s.min_luminance.min(l);
@@ -148,6 +141,7 @@ fn stats_of<'a>(pixels: impl Iterator<Item = &'a Vec4>) -> Stats {
             n += 1;
         }
     }
+    (s.nan, s.inf, s.negative) = (bad.nan, bad.inf, bad.negative);
     if n == 0 {
         s.min_luminance = 0.0;
         s.max_luminance = 0.0;
@@ -157,18 +151,25 @@ fn stats_of<'a>(pixels: impl Iterator<Item = &'a Vec4>) -> Stats {
     s
 }
 
-/// Bad values of one face, counted as [`stats_of`] counts them.
-fn face_bad(img: &Image) -> LevelBad {
-    let mut b = LevelBad::default();
-    for c in img.pixels.iter().flat_map(|p| p.to_array()) {
-        if c.is_nan() {
-            b.nan += 1;
-        } else if c.is_infinite() {
-            b.inf += 1;
-        } else if c < 0.0 {
-            b.negative += 1;
+impl LevelBad {
+    /// Counts a texel's bad channel values (NaN, infinite, negative: one kind each).
+    fn count(&mut self, p: Vec4) {
+        for c in p.to_array() {
+            if c.is_nan() {
+                self.nan += 1;
+            } else if c.is_infinite() {
+                self.inf += 1;
+            } else if c < 0.0 {
+                self.negative += 1;
+            }
         }
     }
+}
+
+/// Bad values of one face.
+fn face_bad(img: &Image) -> LevelBad {
+    let mut b = LevelBad::default();
+    img.pixels.iter().for_each(|&p| b.count(p));
     b
 }
 

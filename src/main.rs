@@ -3,7 +3,7 @@
 mod cli;
 
 fn main() {
-    cli::guard_standard_streams();
+    cli::remember_closed_stdout();
     // Messages name parameters by their flags (--size), not the library's field names.
     cubeforge::error::name_parameters_as_flags();
     keep_freed_memory();

@@ -263,6 +263,13 @@ pub(crate) fn encode_faces(
         .collect()
 }
 
+/// Refuses, before the work, a folder output that holds an input or that cubeforge may not
+/// replace whole ([`io::check_folder`]; `writing`: the paths the command writes into it).
+pub fn check_folder_output(dir: &Path, inputs: &[PathBuf], writing: &[PathBuf]) -> Result<()> {
+    refuse_folder(dir, inputs)?;
+    io::check_folder(dir, writing)
+}
+
 /// Refuses a folder output (replaced whole) that holds an input.
 pub fn refuse_folder(dir: &Path, inputs: &[PathBuf]) -> Result<()> {
     let Ok(real) = std::fs::canonicalize(dir) else {

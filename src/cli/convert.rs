@@ -119,7 +119,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     if let Some(size) = a.size.or(plan.face_size).filter(|&s| s > 0) {
         check_memory(&limits, to, size, plan.working_bytes())?;
     }
-    let loaded = cubeforge::chain::load_level(&a.inputs, a.input.from, &read, a.level)?;
+    let loaded = cubeforge::chain::load_level_planned(&a.inputs, a.input.from, &read, a.level)?;
     stages.done("decode");
     if loaded.meta.replaced_values > 0 {
         warn(format!(
@@ -147,12 +147,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
         )));
     }
     // Again with what was decoded (standard input's size is known only now).
-    let input: u64 = loaded
-        .images()
-        .iter()
-        .map(|i| i.pixels.len() as u64 * 16)
-        .sum();
-    check_memory(&limits, to, size, input + input / 2)?;
+    check_memory(&limits, to, size, loaded.working_bytes())?;
     target.face_format = face_format.unwrap_or(if loaded.hdr {
         FileFormat::Exr
     } else {

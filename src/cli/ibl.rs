@@ -54,10 +54,9 @@ pub struct Args {
 pub fn run(a: Args, verbose: bool) -> Result<()> {
     let mut stages = Stages::new(verbose);
     if a.output == std::path::Path::new("-") {
-        return Err(cubeforge::Error::usage(format!(
-            "-o - (standard output) takes one file, and {} writes several (a specular chain, a diffuse map, tables): name a folder",
-            "ibl"
-        )));
+        return Err(cubeforge::Error::usage(
+            "-o - (standard output) takes one file, and ibl writes several (a specular chain, a diffuse map, tables): name a folder",
+        ));
     }
     let read = a.input.read_options();
     // The whole plan against the budget before any file is decoded: the input, the
@@ -78,7 +77,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             .saturating_add(3 * face(diffuse))
             .saturating_add(plan.working_bytes()),
     )?;
-    let loaded = convert::load(&a.inputs, a.input.from, &read)?;
+    let loaded = convert::load_planned(&a.inputs, a.input.from, &read)?;
     stages.done("decode");
     let opts = IblOptions {
         name: Some(a.name.clone()),

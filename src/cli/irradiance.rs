@@ -59,8 +59,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     let mut target = Target::new(&a.output, a.to, true)?;
     if target.kind == Kind::Faces {
         // Replaced whole: refuse a folder that is not cubeforge's before the work.
-        output::refuse_folder(&a.output, &a.inputs)?;
-        cubeforge::io::check_folder(&a.output, a.sh.as_slice())?;
+        output::check_folder_output(&a.output, &a.inputs, a.sh.as_slice())?;
     }
     if !to_stdout {
         target.face_format = output::face_format(&a.format)?;
@@ -92,7 +91,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
         format_args!("--size {}", a.size),
         (2 * face(base) + 3 * face(a.size as u64)).saturating_add(plan.working_bytes()),
     )?;
-    let loaded = convert::load(&a.inputs, a.input.from, &read)?;
+    let loaded = convert::load_planned(&a.inputs, a.input.from, &read)?;
     stages.done("decode");
     // 256 faces hold everything the integral and the SH can see.
     let base_size = loaded.face_size().min(256);

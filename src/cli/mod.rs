@@ -15,7 +15,7 @@ mod preview;
 
 use clap::{Parser, Subcommand};
 use cubeforge::tonemap::Tonemap;
-pub use out::{container_output, deliver, guard_standard_streams, output_name, write_files};
+pub use out::{container_output, deliver, output_name, remember_closed_stdout, write_files};
 use out::{write_stdout, DATA_ON_STDOUT};
 use std::time::Instant;
 

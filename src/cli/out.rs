@@ -32,7 +32,7 @@ pub fn write_files(files: &[(std::path::PathBuf, Vec<u8>)]) -> cubeforge::Result
 }
 
 /// [`write_files`], where each of `folders` (six faces, a chain) replaces its folder whole.
-pub fn write_output(
+fn write_output(
     files: &[(std::path::PathBuf, Vec<u8>)],
     folders: &[std::path::PathBuf],
 ) -> cubeforge::Result<()> {
@@ -108,7 +108,7 @@ static STDOUT_CLOSED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicB
 /// start-up puts /dev/null on a closed standard stream (opened for reading and writing), so
 /// writes to it succeed and go nowhere: `cubeforge convert ... -o - >&-` would exit 0 having
 /// written nothing. A shell's `> /dev/null` opens it for writing only, so the two differ.
-pub fn guard_standard_streams() {
+pub fn remember_closed_stdout() {
     #[cfg(unix)]
     // SAFETY: fcntl and fstat only read the descriptor's flags and status into `st`, and
     // stat reads a NUL-terminated path.

@@ -96,8 +96,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     }
     if container.is_none() {
         // A folder output is replaced whole: refuse one that is not cubeforge's before the work.
-        output::refuse_folder(&a.output, &a.inputs)?;
-        io::check_folder(&a.output, &[])?;
+        output::check_folder_output(&a.output, &a.inputs, &[])?;
     }
     let read = a.input.read_options();
     if let Some(size) = a.size.filter(|&n| n == 0 || n > 16384) {
@@ -108,7 +107,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
     if let Some(size) = a.size.or(plan.face_size) {
         check_memory(&a.input.limits(), size, plan.working_bytes())?;
     }
-    let loaded = convert::load(&a.inputs, a.input.from, &read)?;
+    let loaded = convert::load_planned(&a.inputs, a.input.from, &read)?;
     stages.done("decode");
     if loaded.meta.replaced_values > 0 {
         super::warn(format!(
@@ -126,12 +125,7 @@ pub fn run(mut a: Args, verbose: bool) -> Result<()> {
             "--min-size {min} is larger than level 0, whose faces are {size} px"
         )));
     }
-    let input: u64 = loaded
-        .images()
-        .iter()
-        .map(|i| i.pixels.len() as u64 * 16)
-        .sum();
-    check_memory(&a.input.limits(), size, input + input / 2)?;
+    check_memory(&a.input.limits(), size, loaded.working_bytes())?;
     let base = convert::to_cube(&loaded, size, &Resampler::default());
     stages.done("resample");
 

@@ -57,11 +57,12 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
     std::fs::read(path).map_err(fail)
 }
 
-/// Fails unless `path` names a regular file (links followed), without opening it.
-pub(crate) fn regular_file(path: &Path) -> Result<()> {
+/// Fails unless `path` names a regular file (links followed), without opening it; its
+/// metadata when it does.
+pub(crate) fn regular_file(path: &Path) -> Result<std::fs::Metadata> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if meta.is_file() {
-        Ok(())
+        Ok(meta)
     } else if meta.is_dir() {
         Err(Error::file(path, "is a folder, not a file"))
     } else {
@@ -118,10 +119,7 @@ pub fn claim(path: &Path, opts: &ReadOptions) -> Result<Option<Claim>> {
     if path == Path::new("-") {
         return Ok(None);
     }
-    regular_file(path)?;
-    let len = std::fs::metadata(path)
-        .map_err(|e| Error::io(path, e))?
-        .len();
+    let len = regular_file(path)?.len();
     // Every header cubeforge reads fits in its first MiB; one that does not (a JPEG's size
     // after large metadata) is read whole.
     const HEAD: u64 = 1 << 20;

@@ -208,13 +208,7 @@ pub fn real_files(sub: &str, ext: &str) -> Vec<PathBuf> {
         println!("skipped: {} not found", dir.display());
         return Vec::new();
     };
-    let mut files: Vec<PathBuf> = entries
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|e| e == ext))
-        .collect();
-    files.sort();
-    files
+    with_extension(entries, ext)
 }
 
 /// Files of extension `ext` in the folder `HOSTILE_EXTRA` names, if any: other programs'
@@ -223,8 +217,12 @@ pub fn extra_files(ext: &str) -> Vec<PathBuf> {
     let Some(dir) = std::env::var_os("HOSTILE_EXTRA") else {
         return Vec::new();
     };
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
+    with_extension(std::fs::read_dir(dir).unwrap(), ext)
+}
+
+/// A folder's files of extension `ext`, sorted.
+fn with_extension(entries: std::fs::ReadDir, ext: &str) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = entries
         .flatten()
         .map(|e| e.path())
         .filter(|p| p.extension().is_some_and(|e| e == ext))

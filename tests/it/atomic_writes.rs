@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 const SKY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.png");
 
 /// Every entry under `dir`, relative, sorted.
-fn tree(dir: &Path) -> Vec<String> {
+pub(crate) fn tree(dir: &Path) -> Vec<String> {
     fn walk(d: &Path, root: &Path, out: &mut Vec<String>) {
         let Ok(rd) = std::fs::read_dir(d) else { return };
         for e in rd.flatten() {

@@ -4,6 +4,7 @@
 //! silently. Its findings about outputs (folders, `-o -`, signals, long names) are in
 //! `fault_outputs.rs`.
 
+pub(crate) use crate::atomic_writes::tree;
 use crate::common::{run, stderr};
 use cubeforge::image::Image;
 use glam::Vec4;
@@ -12,24 +13,6 @@ use std::process::Command;
 
 pub(crate) const SKY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.png");
 pub(crate) const BIN: &str = env!("CARGO_BIN_EXE_cubeforge");
-
-/// Every entry under `dir`, relative, sorted.
-pub(crate) fn tree(dir: &Path) -> Vec<String> {
-    fn walk(d: &Path, root: &Path, out: &mut Vec<String>) {
-        let Ok(rd) = std::fs::read_dir(d) else { return };
-        for e in rd.flatten() {
-            let p = e.path();
-            out.push(p.strip_prefix(root).unwrap().display().to_string());
-            if p.is_dir() && !p.is_symlink() {
-                walk(&p, root, out);
-            }
-        }
-    }
-    let mut out = Vec::new();
-    walk(dir, dir, &mut out);
-    out.sort();
-    out
-}
 
 /// A run that must fail with exactly one line that says `what` (and no internal error).
 pub(crate) fn refused(out: &std::process::Output, what: &[&str]) -> String {
