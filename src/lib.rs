@@ -34,6 +34,7 @@ pub mod ibl;
 pub mod image;
 pub mod info;
 pub mod io;
+pub mod jobs;
 pub mod layout;
 pub mod lut;
 pub mod output;
@@ -44,3 +45,5 @@ pub mod synthetic;
 pub mod tonemap;
 
 pub use error::{Error, LimitKind, Result};
+pub use jobs::{ConvertJob, Job, Progress, Quality, Report, Warning};
+pub use output::Destination;

@@ -3,7 +3,6 @@
 mod cli;
 
 fn main() {
-    cli::remember_closed_stdout();
     // Messages name parameters by their flags (--size), not the library's field names.
     cubeforge::error::name_parameters_as_flags();
     keep_freed_memory();

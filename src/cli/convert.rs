@@ -1,13 +1,11 @@
 //! `cubeforge convert`: any layout to any other.
 
-use super::{warn, Stages};
-use cubeforge::convert;
-use cubeforge::cube::{CubeMap, Interp};
-use cubeforge::io::{self, FileFormat, GpuFormat, WriteOptions};
+use cubeforge::cube::Interp;
+use cubeforge::io::{FileFormat, GpuFormat};
 use cubeforge::layout::Kind;
-use cubeforge::output::{self, Target};
+use cubeforge::output;
 use cubeforge::resample::{Orientation, Resampler};
-use cubeforge::{Error, Result};
+use cubeforge::{ConvertJob, Destination, Job, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -71,132 +69,39 @@ pub struct Args {
     pub input: super::InputArgs,
 }
 
-pub fn run(mut a: Args, verbose: bool) -> Result<()> {
-    let mut stages = Stages::new(verbose);
-    let (output, to_stdout) = super::output_name(&a.output, a.format.as_deref())?;
-    a.output = output;
-    let limits = a.input.limits();
-    let read = a.input.read_options();
-    // The output's layout and type, and the options it ignores, before the decode.
-    let mut target = Target::new(&a.output, a.to, false)?;
-    let to = target.kind;
-    let container = to.is_container();
-    if !container {
-        if a.levels.is_some() {
-            warn("--levels applies to KTX2 and DDS outputs: ignored");
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let output = super::destination(&a.output, a.format.as_deref(), |_| true)?;
+    let face_format = match (&output, &a.format) {
+        (Destination::Path(_), Some(f)) => {
+            Some(FileFormat::from_ext_str(f).ok_or_else(|| output::face_format(f).unwrap_err())?)
         }
-        if a.gpu_format.is_some() {
-            warn("--gpu-format applies to KTX2 and DDS outputs: ignored");
-        }
-        if a.zstd.is_some() {
-            warn("--zstd applies to KTX2 outputs: ignored");
-        }
-    } else if to == Kind::Dds && a.zstd.is_some() {
-        return Err(io::zstd_needs_ktx2(&a.output));
-    }
-    if a.levels == Some(0) {
-        return Err(Error::usage("--levels 0: a map has at least 1 level"));
-    }
-    if to == Kind::Faces && a.to.is_none() && a.output.extension().is_none() && !a.output.exists() {
-        warn(format!(
-            "{}: no file extension, so six faces go into this new folder (--to faces)",
-            a.output.display()
-        ));
-    }
-    let face_format = match (to, &a.format) {
-        (Kind::Faces, Some(f)) => Some(output::face_format(f)?),
         _ => None,
     };
-    // The whole plan against the budget before any file is decoded: the input as the
-    // headers describe it, the output at the size it will have.
-    if let Some(n) = a.size.filter(|&n| n > limits.max_dimension as usize) {
-        return Err(Error::usage(format!(
-            "--size {n}: over the size limit of {} px per side",
-            limits.max_dimension
-        )));
-    }
-    let plan = cubeforge::chain::plan_level(&a.inputs, a.input.from, &read, a.level)?;
-    if let Some(size) = a.size.or(plan.face_size).filter(|&s| s > 0) {
-        check_memory(&limits, to, size, plan.working_bytes())?;
-    }
-    let loaded = cubeforge::chain::load_level_planned(&a.inputs, a.input.from, &read, a.level)?;
-    stages.done("decode");
-    if loaded.meta.replaced_values > 0 {
-        warn(format!(
-            "{}: replaced {} NaN, infinite or negative values by 0 (and values above 1e28 by 1e28)",
-            loaded.files[0].display(),
-            loaded.meta.replaced_values
-        ));
-    }
-    let size = a.size.unwrap_or_else(|| loaded.face_size());
-    if size == 0 {
-        return Err(Error::usage("--size must be at least 1"));
-    }
-    if let (Some(n), true) = (a.levels, container) {
-        let most = CubeMap::full_chain_len(size);
-        if n > most {
-            return Err(Error::usage(format!(
-                "--levels {n}: a cube map of {size} px has 1 to {most} levels"
-            )));
-        }
-    }
-    let (w, h) = to.image_size(size);
-    if w as u64 * h as u64 > limits.max_pixels || w.max(h) > limits.max_dimension as usize {
-        return Err(Error::usage(format!(
-            "--size {size} makes a {w}x{h} output, over the size limit (--max-pixels)"
-        )));
-    }
-    // Again with what was decoded (standard input's size is known only now).
-    check_memory(&limits, to, size, loaded.working_bytes())?;
-    target.face_format = face_format.unwrap_or(if loaded.hdr {
-        FileFormat::Exr
-    } else {
-        FileFormat::Png
-    });
-    target.write = WriteOptions {
-        linear: a.input.linear,
-        png16: a.png16,
-        gpu_format: a.gpu_format.unwrap_or_default(),
-        zstd: a.zstd.filter(|_| container),
-    };
-    target.levels = a.levels;
-    target.tone = a.tone.for_target(&target);
-
-    let resampler = Resampler {
-        interp: a.interp,
-        antialias: !a.no_antialias,
-        orientation: Orientation {
-            yaw: a.yaw,
-            pitch: a.pitch,
-            roll: a.roll,
-            mirror: a.mirror,
+    let job = ConvertJob {
+        from: a.input.from,
+        to: a.to,
+        size: a.size,
+        face_format,
+        resampler: Resampler {
+            interp: a.interp,
+            antialias: !a.no_antialias,
+            orientation: Orientation {
+                yaw: a.yaw,
+                pitch: a.pitch,
+                roll: a.roll,
+                mirror: a.mirror,
+            },
         },
+        png16: a.png16,
+        gpu_format: a.gpu_format,
+        zstd: a.zstd,
+        levels: a.levels,
+        level: a.level,
+        tone: (a.tone.exposure, a.tone.tonemap),
+        read: a.input.read_options(),
+        ..ConvertJob::new(a.inputs, output)
     };
-    let out = convert::convert(&loaded, to, size, &resampler);
-    stages.done("resample");
-    let encoded = target.encode(out, &loaded.files)?;
-    if let Some(w) = &encoded.clamped {
-        warn(w);
-    }
-    stages.done("encode");
-    stages.quality(target.write.gpu_format, encoded.psnr);
-    super::deliver(&encoded.files, &encoded.folders, to_stdout)?;
-    stages.done("write");
-    stages.total();
-    Ok(())
-}
-
-/// The plan's memory: the output (RGBA f32, twice over for mips and encoding) beside the
-/// input's texels and pyramid (`input` bytes).
-fn check_memory(limits: &io::Limits, to: Kind, size: usize, input: u64) -> Result<()> {
-    let (w, h) = to.image_size(size);
-    let texels = if to.projection().is_some() || to.is_cells() {
-        (w as u64).saturating_mul(h as u64)
-    } else {
-        (size as u64).saturating_mul(size as u64).saturating_mul(6)
-    };
-    limits.check_memory(
-        format_args!("--size {size} ({w}x{h} output)"),
-        texels.saturating_mul(32).saturating_add(input),
-    )
+    let observer = super::Observer::new(verbose);
+    let report = job.run(&observer)?;
+    observer.report(&report)
 }

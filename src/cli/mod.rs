@@ -9,13 +9,15 @@ mod info;
 mod irradiance;
 mod lut;
 mod man;
+mod observer;
 mod out;
 mod prefilter;
 mod preview;
 
 use clap::{Parser, Subcommand};
 use cubeforge::tonemap::Tonemap;
-pub use out::{container_output, deliver, output_name, remember_closed_stdout, write_files};
+pub use observer::Observer;
+pub use out::{container_output, deliver, destination, output_name, write_files};
 use out::{write_stdout, DATA_ON_STDOUT};
 use std::time::Instant;
 

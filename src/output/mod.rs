@@ -13,6 +13,9 @@ use crate::layout::Kind;
 use crate::tonemap::Tonemap;
 use std::path::{Path, PathBuf};
 
+mod deliver;
+pub use deliver::{deliver, is_closed_pipe, stdout_open, write_stdout, Destination, Files};
+
 /// An output: where, in which layout and format, with which options.
 #[derive(Clone, Debug)]
 pub struct Target {
@@ -48,6 +51,14 @@ impl Encoded {
     /// ([`io::atomic`]).
     pub fn write(&self) -> Result<()> {
         io::write_all_atomic_with(&self.files, &self.folders)
+    }
+
+    /// The files to hand to [`deliver`].
+    pub fn into_files(self) -> Files {
+        Files {
+            files: self.files,
+            folders: self.folders,
+        }
     }
 }
 
@@ -301,4 +312,27 @@ pub fn refuse_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The exposure and tone curve `target` gets: the curve for 8-bit outputs. For others, None,
+/// and a warning when they were asked for (float outputs keep linear radiance).
+pub fn tone_for(
+    target: &Target,
+    exposure: f32,
+    tonemap: Tonemap,
+) -> (Option<(f32, Tonemap)>, Option<String>) {
+    let given = exposure != 0.0 || tonemap != Tonemap::None;
+    let eight_bit = target.is_8bit();
+    let warning = (given && !eight_bit).then(|| tone_ignored(&target.path));
+    ((given && eight_bit).then_some((exposure, tonemap)), warning)
+}
+
+/// The warning for exposure and tone options given for an output that keeps linear radiance.
+pub fn tone_ignored(output: &Path) -> String {
+    format!(
+        "{}: {} and {} apply to 8-bit outputs; this one keeps linear radiance",
+        output.display(),
+        param("exposure"),
+        param("tonemap")
+    )
 }

@@ -1,0 +1,119 @@
+//! Commands as library jobs. Each job is plain data (the options a front end gathered, with
+//! no flag in sight), checked by [`Job::validate`] before any file is read, planned by
+//! [`Job::memory_estimate`] from the inputs' headers, and run by [`Job::run`], which checks
+//! the plan against the limits, does the work, writes through [`crate::output::deliver`] and
+//! returns a [`Report`]. The command line, a batch manifest, the viewer and the tests build
+//! the same jobs.
+
+use crate::io::GpuFormat;
+use crate::Result;
+use std::path::PathBuf;
+
+mod convert;
+
+pub use convert::ConvertJob;
+
+/// What a long call tells its caller while it works. Every method has a default that does
+/// nothing, so `&()` is a silent observer.
+pub trait Progress: Sync {
+    /// A stage ended (decode, resample, filter, encode, write), for timings.
+    fn stage(&self, _name: &str) {}
+    /// Work of `total` units starts, named `label` (a progress bar's length and prefix).
+    fn start(&self, _total: u64, _label: &str) {}
+    /// `units` more of the work started last are done.
+    fn advance(&self, _units: u64) {}
+    /// The work started last is over.
+    fn finish(&self) {}
+    /// A warning, as soon as it is known (it is in the report too).
+    fn warning(&self, _w: &Warning) {}
+}
+
+impl Progress for () {}
+
+/// Something the user should know that did not stop the work: an option that does not apply,
+/// values clamped or replaced, a result that differs from what was asked.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Warning(pub String);
+
+impl std::fmt::Display for Warning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+/// A lossy container format's quality: level 0 read back against the map before encoding.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quality {
+    /// The texel format.
+    pub format: GpuFormat,
+    /// Peak signal-to-noise ratio in dB (peak 1; float formats compare v/(1+v)).
+    pub psnr_db: f64,
+}
+
+/// What a job did.
+#[derive(Clone, Debug, Default)]
+pub struct Report {
+    /// The files written (`-.EXT` for standard output), in order.
+    pub written: Vec<PathBuf>,
+    /// The warnings, in the order they were given to [`Progress::warning`].
+    pub warnings: Vec<Warning>,
+    /// Lines that describe the result (a chain's levels, a table's size), for a front end
+    /// to print.
+    pub summary: Vec<String>,
+    /// A lossy container format's quality, when one was written.
+    pub quality: Option<Quality>,
+}
+
+/// One command's work.
+pub trait Job {
+    /// Checks the options and the output's name, before any file is read. Returns the
+    /// warnings about options that do not apply.
+    fn validate(&self) -> Result<Vec<Warning>>;
+    /// The bytes the job plans to hold at its peak, from the inputs' headers (the inputs are
+    /// not decoded). [`Job::run`] refuses a plan over the limits.
+    fn memory_estimate(&self) -> Result<u64>;
+    /// Does the work and writes the result.
+    fn run(&self, progress: &dyn Progress) -> Result<Report>;
+}
+
+/// Collects warnings for the report and tells them to the observer at once.
+pub(crate) struct Warnings<'a> {
+    progress: &'a dyn Progress,
+    list: Vec<Warning>,
+}
+
+impl<'a> Warnings<'a> {
+    pub(crate) fn new(progress: &'a dyn Progress) -> Self {
+        Warnings {
+            progress,
+            list: Vec::new(),
+        }
+    }
+
+    pub(crate) fn push(&mut self, text: impl std::fmt::Display) {
+        let w = Warning(text.to_string());
+        self.progress.warning(&w);
+        self.list.push(w);
+    }
+
+    pub(crate) fn extend(&mut self, ws: Vec<Warning>) {
+        for w in ws {
+            self.progress.warning(&w);
+            self.list.push(w);
+        }
+    }
+
+    pub(crate) fn into_vec(self) -> Vec<Warning> {
+        self.list
+    }
+}
+
+/// The warning for decoded values that were not radiance.
+pub(crate) fn replaced_values(file: &std::path::Path, n: u64) -> Option<String> {
+    (n > 0).then(|| {
+        format!(
+            "{}: replaced {n} NaN, infinite or negative values by 0 (and values above 1e28 by 1e28)",
+            file.display()
+        )
+    })
+}

@@ -1,0 +1,184 @@
+//! The one write path: every command's files (faces, crosses, containers, chains, engine
+//! deliveries, control maps, tables, previews) land here. The inputs are refused once, the
+//! files are staged and committed all or none ([`crate::io::atomic`]), and standard output
+//! is a destination of its own, never a file name made up by a front end.
+
+use crate::error::{param, Error, Result};
+use crate::io::{self, FileFormat};
+use std::path::{Path, PathBuf};
+
+/// Where a command's result goes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Destination {
+    /// A file, or a folder for outputs of several files (faces, a chain).
+    Path(PathBuf),
+    /// Standard output, as one file of this type (a pipe or a redirection, never a terminal).
+    Stdout(FileFormat),
+}
+
+impl Destination {
+    /// `-` with `format` means standard output: the format must be one of those `allowed`
+    /// (the refusal lists them). Any other path is itself. Standard output that is closed
+    /// is refused here, before the work.
+    pub fn parse(
+        output: &Path,
+        format: Option<&str>,
+        allowed: impl Fn(FileFormat) -> bool,
+    ) -> Result<Destination> {
+        if output != Path::new("-") {
+            return Ok(Destination::Path(output.to_path_buf()));
+        }
+        match format.and_then(FileFormat::from_ext_str) {
+            Some(f) if allowed(f) => {
+                stdout_open()?;
+                Ok(Destination::Stdout(f))
+            }
+            _ => {
+                let list: Vec<&str> = FileFormat::ALL
+                    .iter()
+                    .filter(|&&f| allowed(f))
+                    .map(|f| f.extension())
+                    .collect();
+                let says = if FileFormat::ALL.iter().all(|&f| allowed(f)) {
+                    "needs"
+                } else {
+                    "takes one file, a container: add"
+                };
+                Err(Error::usage(format!(
+                    "-o - (standard output) {says} {} {}",
+                    param("format"),
+                    list.join(", ")
+                )))
+            }
+        }
+    }
+
+    /// The name encoders see: the path, or `-.EXT` for standard output (the extension picks
+    /// the encoder).
+    pub fn name(&self) -> PathBuf {
+        match self {
+            Destination::Path(p) => p.clone(),
+            Destination::Stdout(f) => PathBuf::from(format!("-.{}", f.extension())),
+        }
+    }
+
+    /// Whether the result goes to standard output.
+    pub fn is_stdout(&self) -> bool {
+        matches!(self, Destination::Stdout(_))
+    }
+}
+
+/// What a command writes: files in order, and the folders among their parents that are
+/// outputs in their own right (six faces, a chain), replaced whole.
+#[derive(Clone, Debug, Default)]
+pub struct Files {
+    /// Each file's final path and its bytes.
+    pub files: Vec<(PathBuf, Vec<u8>)>,
+    /// Folder outputs, replaced whole.
+    pub folders: Vec<PathBuf>,
+}
+
+impl Files {
+    /// Files with no folder output.
+    pub fn new(files: Vec<(PathBuf, Vec<u8>)>) -> Files {
+        Files {
+            files,
+            folders: Vec::new(),
+        }
+    }
+
+    /// The paths written, in order.
+    pub fn paths(&self) -> Vec<PathBuf> {
+        self.files.iter().map(|(p, _)| p.clone()).collect()
+    }
+}
+
+/// Writes `out` to `dest`: refuses to overwrite any of `inputs` (and folder outputs that hold
+/// one), then stages and commits every file, all or none; or writes its one file to standard
+/// output. A reader that went away from standard output is an [`Error::Io`] of kind
+/// `BrokenPipe` on `-`, for the front end to end quietly.
+pub fn deliver(out: &Files, dest: &Destination, inputs: &[PathBuf]) -> Result<()> {
+    if let Destination::Stdout(_) = dest {
+        if out.files.len() != 1 {
+            return Err(Error::usage(format!(
+                "-o - (standard output) takes one file, and this output is {} files",
+                out.files.len()
+            )));
+        }
+        use std::io::IsTerminal;
+        if std::io::stdout().is_terminal() {
+            return Err(Error::usage(
+                "-o -: standard output is a terminal; redirect it to a file or a pipe",
+            ));
+        }
+        return write_stdout(&out.files[0].1);
+    }
+    for dir in &out.folders {
+        super::refuse_folder(dir, inputs)?;
+    }
+    super::refuse_inputs(&out.paths(), inputs)?;
+    let staged = io::stage_with(&out.files, &out.folders)?;
+    // Tests stop here to signal a command that has written its temporaries.
+    if let Some(ms) = std::env::var("CUBEFORGE_TEST_PAUSE_BEFORE_COMMIT_MS")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
+    }
+    staged.commit()
+}
+
+/// Writes `bytes` to standard output and flushes. Refuses a closed standard output.
+pub fn write_stdout(bytes: &[u8]) -> Result<()> {
+    use std::io::Write;
+    // `cubeforge convert ... -o - >&-` must not exit 0 having written nothing.
+    stdout_open()?;
+    let mut out = std::io::stdout().lock();
+    out.write_all(bytes)
+        .and_then(|()| out.flush())
+        .map_err(|e| match e.kind() {
+            std::io::ErrorKind::BrokenPipe => Error::io("-", e),
+            _ => Error::usage(format!(
+                "cannot write to standard output: {}",
+                io::io_msg(&e)
+            )),
+        })
+}
+
+/// Whether `e` is standard output's reader having gone away (`| head`): not a failure.
+pub fn is_closed_pipe(e: &Error) -> bool {
+    matches!(e, Error::Io { path, source } if path == Path::new("-")
+        && source.kind() == std::io::ErrorKind::BrokenPipe)
+}
+
+/// Refuses a closed standard output.
+pub fn stdout_open() -> Result<()> {
+    if stdout_closed() {
+        return Err(Error::usage(
+            "cannot write to standard output: it is closed",
+        ));
+    }
+    Ok(())
+}
+
+/// Whether the process started with standard output closed (`>&-`). Rust's start-up puts
+/// /dev/null on a closed standard stream, opened for reading and writing, so writes to it
+/// succeed and go nowhere; a shell's `> /dev/null` opens it for writing only, so the two
+/// differ.
+fn stdout_closed() -> bool {
+    #[cfg(unix)]
+    // SAFETY: fcntl and fstat only read the descriptor's flags and status into `st`, and
+    // stat reads a NUL-terminated path.
+    unsafe {
+        let mut st: libc::stat = std::mem::zeroed();
+        let mut null: libc::stat = std::mem::zeroed();
+        let flags = libc::fcntl(1, libc::F_GETFL);
+        flags != -1
+            && flags & libc::O_ACCMODE == libc::O_RDWR
+            && libc::fstat(1, &mut st) == 0
+            && libc::stat(c"/dev/null".as_ptr(), &mut null) == 0
+            && (st.st_dev, st.st_ino) == (null.st_dev, null.st_ino)
+    }
+    #[cfg(not(unix))]
+    false
+}

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Digests of a few dozen commands' outputs, to show a restructuring changed no byte:
+#   tests/tools/digests.sh OLD_BINARY > before.txt; tests/tools/digests.sh target/release/cubeforge > after.txt
+#   diff before.txt after.txt
+# Run from the repository root. Each line: sha256, then the output's path under the work folder.
+set -uo pipefail
+bin=$(realpath "$1")
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+o=$work
+run() { "$bin" --quiet "$@" >"$o/stdout.$n" 2>"$o/stderr.$n" || echo "exit $? : $*" >>"$o/failures"; n=$((n + 1)); }
+n=0
+s=fixtures/sky.exr
+run convert $s -o $o/faces --to faces --size 32
+run convert fixtures/sky.png -o $o/faces_png --to faces --size 32 --format png
+run convert $s -o $o/hcross.exr --size 32
+run convert $s -o $o/vcross.png --to vcross --size 32 --tonemap aces --exposure -1
+run convert $s -o $o/hstrip.tga --to hstrip --size 16
+run convert $s -o $o/equirect.hdr --to equirect --size 32 --yaw 30 --pitch 10
+run convert $s -o $o/sphere.exr --to sphere --size 32
+run convert $s -o $o/angular.exr --to angular --size 32 --interp bicubic
+run convert $s -o $o/octa.exr --to octahedral --size 32 --mirror
+run convert $o/sphere.exr --from sphere -o $o/from_sphere.exr --to equirect --size 16
+run convert $o/octa.exr --from octahedral -o $o/from_octa.exr --to hcross --size 16
+run convert $s -o $o/sky.ktx2 --size 32
+run convert $s -o $o/sky_bc6h.ktx2 --size 32 --gpu-format bc6h --zstd
+run convert $s -o $o/sky.dds --size 32 --gpu-format rgba8-srgb --levels 2
+run convert $s -o $o/sky_bc7.dds --size 32 --gpu-format bc7-srgb
+run convert $s -o $o/sky.ktx --size 32
+run convert $s -o $o/sky.env --size 32
+run convert $o/sky.ktx2 -o $o/back.png --to equirect
+run convert $s -o $o/png16.png --size 16 --png16 --linear
+run convert $s -o - --format ktx2 --size 16
+run prefilter $s -o $o/ggx.ktx2 --filter ggx --size 32 --samples 8
+run prefilter $s -o $o/gauss.dds --filter gaussian --size 32
+run prefilter $s -o $o/chain --filter cosine --lighting phongbrdf --size 32
+run prefilter $s -o $o/box.ktx2 --filter box --levels 4 --size 32
+run prefilter $s -o $o/charlie.ktx2 --filter charlie --size 32 --min-size 8 --samples 4
+run prefilter $s -o - --format ktx --filter ggx --size 16 --samples 4
+run irradiance $s -o $o/irr --size 8 --sh $o/sh.json
+run irradiance $s -o $o/irr.ktx2 --size 8
+run irradiance $s -o $o/irr_png --format png --size 8 --tonemap reinhard
+run ibl $s -o $o/ibl_bevy --target bevy --size 32 --samples 4
+run ibl $s -o $o/ibl_gltf --target gltf --size 32 --samples 4 --sheen
+run ibl $s -o $o/ibl_filament --target filament --size 32 --samples 4
+run ibl $s -o $o/ibl_babylon --target babylon --size 32 --samples 4
+run ibl $s -o $o/ibl_generic --target generic --size 32 --samples 4 --name sky
+run lut -o $o/dfg.png --size 32
+run lut -o $o/dfg_ms.exr --multiscatter --size 32
+run lut -o $o/charlie.png --charlie --png16 --size 32
+run lut -o $o/dfg.ktx2 --size 16
+run control fixtures/control/chrome_and_paint.toml -o $o/chrome.png --size 64x32
+run control fixtures/control/frosted_glass.toml -o $o/frosted.ktx2 --size 32x32
+run control fixtures/control/wet_ground.json -o $o/wet.exr --size 64x32
+run preview $s -o $o/chrome_prev.png --size 48
+run preview $s -o $o/glass_prev.png --size 48 --material glass
+run preview $o/ggx.ktx2 -o $o/pbr_prev.exr --size 48 --material pbr
+run preview $s -o - --format png --size 32 --material crystal
+cd "$o"
+find . -type f ! -name 'stderr.*' ! -name failures -print0 | sort -z | xargs -0 sha256sum
+[ -f failures ] && sed 's|'"$o"'|$o|g' failures
+exit 0
