@@ -1,11 +1,10 @@
 //! `cubeforge control`: bake a control map (reflectivity, transmittance, blur, Fresnel mask)
 //! from a recipe.
 
-use super::{warn, Stages};
-use cubeforge::control::{self, Baked, Size};
-use cubeforge::io::{self, ktx2, FileFormat, GpuFormat, Limits, WriteOptions};
-use cubeforge::{Error, Result};
-use std::path::{Path, PathBuf};
+use cubeforge::control::Size;
+use cubeforge::io::{GpuFormat, Limits};
+use cubeforge::{ControlJob, Job, Result};
+use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 #[command(after_long_help = RECIPE_HELP)]
@@ -91,150 +90,16 @@ impl KtxFormat {
 }
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
-    let mut stages = Stages::new(verbose);
-    let limits = super::limits(a.max_pixels, a.max_memory);
-    // Check the options before reading anything.
-    let format = match FileFormat::from_extension(&a.output) {
-        Some(f @ (FileFormat::Png | FileFormat::Exr | FileFormat::Ktx2)) => f,
-        _ => {
-            return Err(Error::file(
-                &a.output,
-                "a control map is written as .png, .exr or .ktx2",
-            ))
-        }
+    let job = ControlJob {
+        size: a.size,
+        png16: a.png16,
+        gpu_format: a.gpu_format.gpu(),
+        zstd: a.zstd,
+        levels: a.levels,
+        limits: super::limits(a.max_pixels, a.max_memory),
+        ..ControlJob::new(a.recipe, a.output)
     };
-    if a.png16 && format != FileFormat::Png {
-        return Err(Error::usage("--png16 applies to PNG output only"));
-    }
-    if a.levels.is_some() && format != FileFormat::Ktx2 {
-        return Err(Error::usage("--levels applies to KTX2 output only"));
-    }
-    if a.zstd.is_some() && format != FileFormat::Ktx2 {
-        return Err(io::zstd_needs_ktx2(&a.output));
-    }
-    let sidecar_path = sidecar_path(&a.output);
-
-    let recipe = control::load(&a.recipe, &limits)?;
-    stages.done("read");
-    let mut inputs = vec![a.recipe.clone()];
-    inputs.extend(recipe.images().iter().map(|f| f.path.clone()));
-    // Never over the recipe or an image it reads.
-    cubeforge::output::refuse_inputs(&[a.output.clone(), sidecar_path.clone()], &inputs)?;
-
-    let size = recipe
-        .output_size(a.size)
-        .map_err(|e| Error::file(&a.recipe, e.to_string()))?;
-    let full_chain = cubeforge::cube::CubeMap::full_chain_len(size.width.max(size.height));
-    if let Some(n) = a.levels {
-        if n == 0 || n > full_chain {
-            return Err(Error::usage(format!(
-                "--levels {n}: a {size} map has 1 to {full_chain} levels"
-            )));
-        }
-    }
-    // Say where an oversized size came from: the option, the recipe's line, or its image.
-    let (w, h) = (size.width as u64, size.height as u64);
-    if w.max(h) > limits.max_dimension as u64 || w * h > limits.max_pixels {
-        let from = match (a.size, recipe.size_line) {
-            (Some(_), _) => "--size".to_string(),
-            (None, Some(l)) => format!("{}: line {l}", a.recipe.display()),
-            (None, None) => format!("{}: its first image", a.recipe.display()),
-        };
-        return Err(Error::usage(format!(
-            "{from}: a {size} map is over the limit of {} pixels, {} per side (--max-pixels)",
-            limits.max_pixels, limits.max_dimension
-        )));
-    }
-    // The baked map, its sources at output size and the mip chain, RGBA f32.
-    limits.check_memory(
-        format_args!("{}: a {size} map", a.recipe.display()),
-        size.width as u64 * size.height as u64 * 16 * 4,
-    )?;
-    let baked = recipe.bake(Some(size), &limits)?;
-    stages.done("bake");
-
-    let (bytes, what) = match format {
-        FileFormat::Ktx2 => {
-            let levels = baked.image.mip_chain(a.levels.unwrap_or(full_chain));
-            let gpu = a.gpu_format.gpu();
-            let mut what = format!("KTX2 {} with {} mip levels", gpu.name(), levels.len());
-            if let Some(z) = a.zstd {
-                what.push_str(&format!(", Zstandard level {z}"));
-            }
-            let bytes = ktx2::encode_2d_with(&levels, gpu, a.zstd)
-                .map_err(|e| Error::file(&a.output, e))?;
-            if gpu.is_lossy() {
-                stages.quality(gpu, io::container_psnr(&bytes, gpu, &[&levels[0]]));
-            }
-            (bytes, what)
-        }
-        FileFormat::Exr => (
-            io::encode_image(&a.output, &baked.image, &WriteOptions::default())?,
-            "half-float EXR".to_string(),
-        ),
-        _ => {
-            let write = WriteOptions {
-                linear: true,
-                png16: a.png16,
-                ..WriteOptions::default()
-            };
-            let bits = if a.png16 { 16 } else { 8 };
-            (
-                io::encode_image(&a.output, &baked.image, &write)?,
-                format!("{bits}-bit PNG"),
-            )
-        }
-    };
-    let name = a
-        .output
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let mut sidecar = serde_json::to_vec_pretty(&baked.sidecar(&name))
-        .map_err(|e| Error::file(&sidecar_path, e.to_string()))?;
-    sidecar.push(b'\n');
-    stages.done("encode");
-    super::write_files(&[(a.output.clone(), bytes), (sidecar_path.clone(), sidecar)])?;
-    stages.done("write");
-
-    report(&a.output, &sidecar_path, &baked, &what)?;
-    stages.total();
-    Ok(())
-}
-
-/// `mask.png` -> `mask.png.json`.
-fn sidecar_path(output: &Path) -> PathBuf {
-    let mut s = output.as_os_str().to_owned();
-    s.push(".json");
-    PathBuf::from(s)
-}
-
-/// Level 0 and each half-size level after it, `count` in all.
-fn report(output: &Path, sidecar: &Path, baked: &Baked, what: &str) -> Result<()> {
-    for w in &baked.warnings {
-        warn(w);
-    }
-    super::report(format_args!(
-        "{}: {}x{} control map, {what}, linear data",
-        output.display(),
-        baked.image.width,
-        baked.image.height
-    ))?;
-    for (c, ch) in ["R", "G", "B", "A"].iter().zip(&baked.channels) {
-        let note = if ch.holds == control::Slot::Blur && baked.max_lod_bias > 0.0 {
-            format!(" (lod bias = blur x {})", baked.max_lod_bias)
-        } else {
-            String::new()
-        };
-        super::report(format_args!(
-            "  {c} = {:<13} {}{note}",
-            ch.holds.name(),
-            ch.source
-        ))?;
-    }
-    super::report(format_args!(
-        "{}: max_lod_bias {} and the packing",
-        sidecar.display(),
-        baked.max_lod_bias
-    ))
+    let observer = super::Observer::new(verbose);
+    let report = job.run(&observer)?;
+    observer.report(&report)
 }

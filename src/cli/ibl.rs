@@ -1,10 +1,8 @@
 //! `cubeforge ibl`: the files an engine loads for image-based lighting, in one command.
 
-use super::Stages;
-use cubeforge::convert;
-use cubeforge::ibl::{self, Engine, IblOptions};
+use cubeforge::ibl::{Engine, IblOptions};
 use cubeforge::io::GpuFormat;
-use cubeforge::Result;
+use cubeforge::{IblJob, Job, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -52,62 +50,23 @@ pub struct Args {
 }
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
-    let mut stages = Stages::new(verbose);
-    if a.output == std::path::Path::new("-") {
-        return Err(cubeforge::Error::usage(
-            "-o - (standard output) takes one file, and ibl writes several (a specular chain, a diffuse map, tables): name a folder",
-        ));
-    }
-    let read = a.input.read_options();
-    // The whole plan against the budget before any file is decoded: the input, the
-    // specular chain (and the sheen chain), the diffuse map.
-    let plan = cubeforge::chain::plan(&a.inputs, a.input.from, &read)?;
-    let defaults = ibl::engines::defaults(a.target);
-    let size = a.size.map_or(defaults.specular_size as u64, u64::from);
-    let diffuse = a
-        .diffuse_size
-        .map_or(defaults.diffuse_size as u64, u64::from);
-    let face = |n: u64| 6 * 16 * n * n;
-    // Each chain: the base faces, the chain (4/3 of them), a bordered sampler copy and the
-    // encoding; the diffuse map: its faces, the encoding and a sampler copy.
-    let chains = if a.sheen { 2 } else { 1 };
-    a.input.limits().check_memory(
-        format_args!("--size {size} and --diffuse-size {diffuse}"),
-        (chains * 4 * face(size))
-            .saturating_add(3 * face(diffuse))
-            .saturating_add(plan.working_bytes()),
-    )?;
-    let loaded = convert::load_planned(&a.inputs, a.input.from, &read)?;
-    stages.done("decode");
-    let opts = IblOptions {
-        name: Some(a.name.clone()),
-        specular_size: a.size.map(|v| v as usize),
-        min_size: a.min_size.map(|v| v as usize),
-        diffuse_size: a.diffuse_size.map(|v| v as usize),
-        samples: a.samples,
-        gpu_format: a.gpu_format,
-        zstd: a.zstd,
-        sheen: a.sheen,
-        yaw: a.yaw,
+    let job = IblJob {
+        from: a.input.from,
+        options: IblOptions {
+            name: Some(a.name),
+            specular_size: a.size.map(|v| v as usize),
+            min_size: a.min_size.map(|v| v as usize),
+            diffuse_size: a.diffuse_size.map(|v| v as usize),
+            samples: a.samples,
+            gpu_format: a.gpu_format,
+            zstd: a.zstd,
+            sheen: a.sheen,
+            yaw: a.yaw,
+        },
+        read: a.input.read_options(),
+        ..IblJob::new(a.inputs, a.output, a.target)
     };
-    let stages_cell = std::sync::Mutex::new(&mut stages);
-    let delivery = ibl::deliver(&loaded, a.target, &a.output, &opts, &|s| {
-        if let Ok(mut st) = stages_cell.lock() {
-            st.done(s);
-        }
-    })?;
-    if let Some(w) = &delivery.clamped {
-        super::warn(w);
-    }
-    if let Some(f) = a.gpu_format {
-        stages.quality(f, delivery.psnr);
-    }
-    super::write_files(&delivery.files)?;
-    stages.done("write");
-    for (p, bytes) in &delivery.files {
-        super::report(format_args!("{} ({} bytes)", p.display(), bytes.len()))?;
-    }
-    super::report(&delivery.snippet)?;
-    stages.total();
-    Ok(())
+    let observer = super::Observer::new(verbose);
+    let report = job.run(&observer)?;
+    observer.report(&report)
 }

@@ -1,10 +1,9 @@
 //! `cubeforge lut`: the BRDF lookup tables a split-sum shader samples beside the prefiltered
 //! chain.
 
-use super::Stages;
-use cubeforge::io::{self, ktx2, FileFormat, GpuFormat, WriteOptions};
-use cubeforge::lut::{self, LutOptions};
-use cubeforge::{Error, Result};
+use cubeforge::jobs::LutKind;
+use cubeforge::lut;
+use cubeforge::{Job, LutJob, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -45,84 +44,21 @@ albedo E in R, G and B (the Sample Viewer reads B); above 1 at grazing n.v and l
 which PNG clamps (use .exr or .ktx2 to keep it).";
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
-    let mut stages = Stages::new(verbose);
-    let format = match FileFormat::from_extension(&a.output) {
-        Some(f @ (FileFormat::Png | FileFormat::Exr | FileFormat::Ktx2)) => f,
-        _ => {
-            return Err(Error::file(
-                &a.output,
-                "a lookup table is written as .png, .exr or .ktx2",
-            ))
-        }
-    };
-    if a.png16 && format != FileFormat::Png {
-        return Err(Error::usage("--png16 applies to PNG output only"));
-    }
-    let size = a.size as usize;
-    // The table (RGBA f32), its encoding and a KTX2's mip chain, before any work.
-    super::limits(u64::MAX, a.max_memory)
-        .check_memory(format_args!("--size {size}"), (size as u64).pow(2) * 16 * 3)?;
-    let opts = LutOptions {
-        multiscatter: a.multiscatter,
+    let job = LutJob {
+        kind: if a.charlie {
+            LutKind::Charlie
+        } else if a.multiscatter {
+            LutKind::Multiscatter
+        } else {
+            LutKind::Dfg
+        },
+        size: a.size as usize,
         samples: a.samples,
+        png16: a.png16,
+        limits: super::limits(u64::MAX, a.max_memory),
+        ..LutJob::new(a.output)
     };
-    let (table, what) = if a.charlie {
-        (
-            lut::charlie(size, &opts),
-            "Charlie sheen table (E in R, G, B)",
-        )
-    } else if a.multiscatter {
-        (
-            lut::dfg(size, &opts),
-            "multiscatter DFG table (R = DFG1, G = DFG2)",
-        )
-    } else {
-        (lut::dfg(size, &opts), "DFG table (R = scale, G = bias)")
-    };
-    stages.done("integrate");
-
-    let (bytes, encoding) = match format {
-        FileFormat::Ktx2 => (
-            ktx2::encode_2d(std::slice::from_ref(&table), GpuFormat::Rgba16f),
-            "KTX2 RGBA16F".to_string(),
-        ),
-        FileFormat::Exr => (
-            io::encode_image(&a.output, &table, &WriteOptions::default())?,
-            "half-float EXR".to_string(),
-        ),
-        _ => {
-            let above = io::count_out_of_range([&table], 1.0);
-            if above > 0 {
-                super::warn(format_args!(
-                    "{}: {above} values above 1 written as 1 (PNG holds 0 to 1); .exr or .ktx2 keep them",
-                    a.output.display()
-                ));
-            }
-            let write = WriteOptions {
-                linear: true,
-                png16: a.png16,
-                ..WriteOptions::default()
-            };
-            let bits = if a.png16 { 16 } else { 8 };
-            (
-                io::encode_image(&a.output, &table, &write)?,
-                format!("{bits}-bit PNG, linear"),
-            )
-        }
-    };
-    if format != FileFormat::Png {
-        if let Some(w) = io::clamp_warning(&a.output, format, GpuFormat::Rgba16f, [&table]) {
-            super::warn(w);
-        }
-    }
-    stages.done("encode");
-    super::write_files(&[(a.output.clone(), bytes)])?;
-    stages.done("write");
-    super::report(format_args!(
-        "{}: {size}x{size} {what}, {} samples a texel, {encoding}; x = n.v, y = roughness, roughness 0 in the top row",
-        a.output.display(),
-        a.samples
-    ))?;
-    stages.total();
-    Ok(())
+    let observer = super::Observer::new(verbose);
+    let report = job.run(&observer)?;
+    observer.report(&report)
 }

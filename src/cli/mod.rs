@@ -17,7 +17,7 @@ mod preview;
 use clap::{Parser, Subcommand};
 use cubeforge::tonemap::Tonemap;
 pub use observer::Observer;
-pub use out::{container_output, deliver, destination, output_name, write_files};
+pub use out::{destination, write_files};
 use out::{write_stdout, DATA_ON_STDOUT};
 use std::time::Instant;
 
@@ -112,33 +112,6 @@ pub struct ToneArgs {
     /// float containers stay linear.
     #[arg(long, value_enum, default_value_t = Tonemap::None)]
     pub tonemap: Tonemap,
-}
-
-impl ToneArgs {
-    /// What the target gets: the curve for 8-bit outputs; for others, None and a warning
-    /// when the options were given.
-    pub fn for_target(&self, target: &cubeforge::output::Target) -> Option<(f32, Tonemap)> {
-        let applies = tone_applies(&target.path, target.is_8bit(), self.exposure, self.tonemap);
-        let given = self.exposure != 0.0 || self.tonemap != Tonemap::None;
-        (given && applies).then_some((self.exposure, self.tonemap))
-    }
-}
-
-/// Whether an output is tone-mapped (it is stored in 8 bits); says so when the options were
-/// given for one that is not.
-pub fn tone_applies(
-    output: &std::path::Path,
-    eight_bit: bool,
-    exposure: f32,
-    tonemap: Tonemap,
-) -> bool {
-    if !eight_bit && (exposure != 0.0 || tonemap != Tonemap::None) {
-        warn(format_args!(
-            "{}: --exposure and --tonemap apply to 8-bit outputs; this one keeps linear radiance",
-            output.display()
-        ));
-    }
-    eight_bit
 }
 
 /// Times stages and prints them with -v.

@@ -57,4 +57,10 @@ impl Progress for Observer {
     fn warning(&self, w: &Warning) {
         super::warn(w);
     }
+    fn note(&self, text: &str) {
+        self.stages
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .note(text);
+    }
 }

@@ -1,20 +1,16 @@
 //! `cubeforge preview`: a material on a sphere lit by an environment map, shaded by the
 //! programs of The Cg Tutorial, chapter 7.
 
-use super::{warn, Stages};
-use cubeforge::ibl::{self, Engine};
-use cubeforge::image::{srgb_to_linear, Image};
-use cubeforge::io::{self, FileFormat, Limits, ReadOptions, WriteOptions};
+use cubeforge::ibl::Engine;
+use cubeforge::image::srgb_to_linear;
+use cubeforge::io::Limits;
 use cubeforge::layout::Kind;
-use cubeforge::preview::material::{self, Material, Model};
-use cubeforge::preview::pbr::{self, PbrSetup};
-use cubeforge::preview::{
-    self, grid, Background, Control, LoadedEnv, Options, Parallax, ParallaxMode, Shading, Surface,
-};
-use cubeforge::tonemap::{self, Tonemap};
-use cubeforge::{Error, Result};
+use cubeforge::preview::material;
+use cubeforge::preview::{Background, Options, Parallax, ParallaxMode, Shading};
+use cubeforge::tonemap::Tonemap;
+use cubeforge::{Error, Job, PreviewJob, Result};
 use glam::{Vec3, Vec4};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 #[command(
@@ -179,82 +175,18 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     if a.material == "list" {
         return super::say(material::list().trim_end());
     }
-    let mut stages = Stages::new(verbose);
-    let (Some(env_path), Some(output)) = (&a.env, &a.output) else {
+    let (Some(env), Some(output)) = (a.env, a.output) else {
         return Err(Error::usage(
             "preview needs an environment and an output: cubeforge preview ENV -o OUTPUT",
         ));
     };
-    let plan = check(&a, output)?;
-    let env = load_env(env_path, a.from, plan.limits)?;
-    let mut inputs: Vec<PathBuf> = env.files.clone();
-    let textures = load_textures(&a, &plan.materials, verbose, &mut inputs, &plan.limits)?;
-    stages.done("decode");
-    let split_sum = if plan.materials.iter().any(|m| m.model == Model::Pbr) {
-        let setup = pbr::prepare(&env, env_path, a.target)?;
-        if let Some(w) = &setup.warning {
-            warn(w);
-        }
-        stages.done("split-sum");
-        stages.note(&setup.note);
-        Some(setup)
-    } else {
-        None
-    };
-    warn_without_chain(&a, env_path, &env, &plan.materials, &textures);
-    let img = render_cells(&a, &plan, &env, split_sum.as_ref(), &textures)?;
-    stages.done("render");
-    write(&plan, &inputs, &img, &mut stages)?;
-    stages.total();
-    Ok(())
-}
-
-/// What the options ask for, all checked before the (possibly slow) decode.
-struct Plan {
-    output: PathBuf,
-    to_stdout: bool,
-    tone_mapped: bool,
-    /// The material, or each of a --grid.
-    materials: Vec<Material>,
-    opts: Options,
-    limits: Limits,
-}
-
-/// Checks everything that can be checked before anything is read, in the order the errors
-/// are reported.
-fn check(a: &Args, output: &Path) -> Result<Plan> {
-    let (output, to_stdout) = super::output_name(output, a.format.as_deref())?;
-    let tone_mapped = match FileFormat::from_extension(&output) {
-        Some(f) if f.is_container() => {
-            return Err(Error::file(
-                &output,
-                "the preview is an image: name it .png .jpg .tga .exr or .hdr",
-            ))
-        }
-        Some(f) => super::tone_applies(
-            &output,
-            io::largest_value(f, Default::default()).is_none(),
-            a.exposure,
-            a.tonemap,
-        ),
-        None => return Err(io::unknown_ext(&output)),
-    };
-    let specs: Vec<String> = if a.grid.is_empty() {
-        vec![a.material.clone()]
-    } else {
-        a.grid.clone()
-    };
-    let materials: Vec<Material> = specs
-        .iter()
-        .map(|s| material::resolve(s.trim()))
-        .collect::<Result<_>>()?;
-    check_pbr(a, &materials)?;
+    let output = super::destination(&output, a.format.as_deref(), |_| true)?;
     if a.env_radius.is_none() && (a.env_center.is_some() || a.parallax.is_some()) {
         return Err(Error::usage(
             "--env-center and --parallax need --env-radius (the environment's distance)",
         ));
     }
-    let opts = Options {
+    let view = Options {
         size: a.size,
         fov: a.fov,
         distance: a.distance,
@@ -268,338 +200,28 @@ fn check(a: &Args, output: &Path) -> Result<Plan> {
             center: a.env_center.unwrap_or(Vec3::ZERO),
             mode: a.parallax.unwrap_or_default(),
         }),
-        samples: a.samples.unwrap_or(if tone_mapped { 4 } else { 1 }),
+        samples: a
+            .samples
+            .unwrap_or_else(|| PreviewJob::default_samples(&output)),
         background: parse_background(&a.background)?,
     };
-    opts.validate()?;
-    // Finite already (its parser); it must also not be negative.
-    if a.max_lod_bias < 0.0 {
-        return Err(Error::usage("--max-lod-bias must be a number >= 0"));
-    }
-    let cells = a
-        .grid
-        .len()
-        .max(a.grid_bias.len())
-        .max(a.grid_roughness.len().max(1) * a.grid_metallic.len().max(1));
-    let limits = super::limits(a.max_pixels, a.max_memory);
-    // The picture (every cell of a grid) against the pixel limit, before anything is read.
-    let pixels = (a.size as u64).saturating_mul(a.size as u64) * cells as u64;
-    if pixels > limits.max_pixels {
-        return Err(Error::usage(format!(
-            "--size {} makes {pixels} pixels, over the limit of {} (--max-pixels)",
-            a.size, limits.max_pixels
-        )));
-    }
-    // Each cell's picture and its samples' buffers, RGBA f32, beside the environment as its
-    // headers describe it (its decode's peak checked too): all before any file is decoded.
-    let read = ReadOptions {
-        limits,
-        linear: false,
-        as_stored: false,
+    let job = PreviewJob {
+        from: a.from,
+        material: a.material,
+        grid: a.grid,
+        grid_bias: a.grid_bias,
+        grid_roughness: a.grid_roughness,
+        grid_metallic: a.grid_metallic,
+        view,
+        decal: a.decal,
+        control: a.control,
+        max_lod_bias: a.max_lod_bias,
+        tone: (a.exposure, a.tonemap),
+        target: a.target,
+        limits: super::limits(a.max_pixels, a.max_memory),
+        ..PreviewJob::new(env, output)
     };
-    let mut input = match &a.env {
-        Some(env) => {
-            cubeforge::chain::plan(std::slice::from_ref(env), a.from, &read)?.working_bytes()
-        }
-        None => 0,
-    };
-    // The textures on the sphere, kept while it renders: the decal, the control map, the
-    // materials' own decals (the largest one's decode on top).
-    let mut textures: Vec<&PathBuf> = a.decal.iter().chain(&a.control).collect();
-    if a.decal.is_none() {
-        textures.extend(materials.iter().filter_map(|m| m.decal.as_ref()));
-    }
-    textures.sort();
-    textures.dedup();
-    let mut peak = 0u64;
-    for t in textures {
-        if let Some(c) = io::claim(t, &read)? {
-            input = input.saturating_add(c.held_bytes);
-            peak = peak.max(c.decode_bytes - c.held_bytes.min(c.decode_bytes));
-        }
-    }
-    input = input.saturating_add(peak);
-    limits.check_memory(
-        format_args!("--size {}", a.size),
-        pixels.saturating_mul(16 * 3).saturating_add(input),
-    )?;
-    Ok(Plan {
-        output,
-        to_stdout,
-        tone_mapped,
-        materials,
-        opts,
-        limits,
-    })
-}
-
-/// The pbr options: sweeps of a pbr material with values in [0, 1], a --target that applies.
-fn check_pbr(a: &Args, materials: &[Material]) -> Result<()> {
-    let sweeps = [
-        ("--grid-roughness", &a.grid_roughness),
-        ("--grid-metallic", &a.grid_metallic),
-    ];
-    for (name, values) in sweeps {
-        if values.is_empty() {
-            continue;
-        }
-        if materials[0].model != Model::Pbr {
-            return Err(Error::usage(format!(
-                "{name} needs a pbr material (pbr, gold, copper, plastic-glossy, plastic-rough or a file with model = \"pbr\"); \"{}\" has model \"{}\"",
-                materials[0].name,
-                materials[0].model.name()
-            )));
-        }
-        if let Some(v) = values.iter().find(|v| !(0.0..=1.0).contains(*v)) {
-            return Err(Error::usage(format!(
-                "{name} values must be between 0 and 1 (got {v})"
-            )));
-        }
-    }
-    if let Some(e) = a.target {
-        if !materials.iter().any(|m| m.model == Model::Pbr) {
-            return Err(Error::usage(
-                "--target picks the roughness mapping a pbr material reads the chain with; the material is not pbr",
-            ));
-        }
-        if ibl::engines::filters_itself(e) {
-            return Err(Error::usage(format!(
-                "--target {}: that engine prefilters the panorama itself, with a mapping of its own; use bevy, gltf, babylon, filament or generic",
-                e.name()
-            )));
-        }
-    }
-    Ok(())
-}
-
-/// Reads the environment, warning about values replaced on read.
-fn load_env(env_path: &Path, from: Option<Kind>, limits: Limits) -> Result<LoadedEnv> {
-    let read = ReadOptions {
-        limits,
-        linear: false,
-        as_stored: false,
-    };
-    let env = preview::load_environment(env_path, from, &read)?;
-    if env.replaced_values > 0 {
-        warn(format!(
-            "{}: replaced {} NaN, infinite or negative values by 0 (and values above 1e28 by 1e28)",
-            env_path.display(),
-            env.replaced_values
-        ));
-    }
-    Ok(env)
-}
-
-/// The textures on the sphere, each read once.
-struct Textures {
-    /// --decal, which overrides the materials' own.
-    decal: Option<Image>,
-    /// --control and the LOD bias its blur of 1 means.
-    control: Option<(Image, f32)>,
-    /// Decals named by material files.
-    file_decals: Vec<(PathBuf, Image)>,
-}
-
-/// Reads the decal, the control map (and its sidecar) and the materials' decals, adding each
-/// file to `inputs` (which the output must not overwrite).
-fn load_textures(
-    a: &Args,
-    materials: &[Material],
-    verbose: bool,
-    inputs: &mut Vec<PathBuf>,
-    limits: &Limits,
-) -> Result<Textures> {
-    let decal_img = a
-        .decal
-        .as_ref()
-        .map(|p| preview::read_texture(p, false, limits))
-        .transpose()?;
-    inputs.extend(a.decal.iter().cloned());
-    let control = match &a.control {
-        Some(p) => {
-            let (img, max, side) = preview::read_control(p, a.max_lod_bias, limits)?;
-            inputs.push(p.clone());
-            if verbose {
-                match &side {
-                    Some(s) => super::tell(format_args!(
-                        "cubeforge: control map blur 1 = LOD bias {max} (from {})",
-                        s.display()
-                    )),
-                    None => super::tell(format_args!(
-                        "cubeforge: control map blur 1 = LOD bias {max} (--max-lod-bias)"
-                    )),
-                }
-            }
-            Some((img, max))
-        }
-        None => None,
-    };
-    // Decals named by material files, read once each.
-    let mut file_decals: Vec<(PathBuf, Image)> = Vec::new();
-    if decal_img.is_none() {
-        for m in materials {
-            if let Some(p) = &m.decal {
-                if !file_decals.iter().any(|(q, _)| q == p) {
-                    file_decals.push((p.clone(), preview::read_texture(p, false, limits)?));
-                    inputs.push(p.clone());
-                }
-            }
-        }
-    }
-    Ok(Textures {
-        decal: decal_img,
-        control,
-        file_decals,
-    })
-}
-
-/// Blur (a LOD bias, or a control map's) asked of an environment without a chain does nothing:
-/// say so rather than render a sharp picture silently.
-/// (pbr materials always sample a chain, made in memory when ENV has none.)
-fn warn_without_chain(
-    a: &Args,
-    env_path: &Path,
-    env: &LoadedEnv,
-    materials: &[Material],
-    textures: &Textures,
-) {
-    if materials.iter().all(|m| m.model == Model::Pbr) {
-        return;
-    }
-    let wants_blur = a.lod_bias != 0.0
-        || a.grid_bias.iter().any(|b| *b != 0.0)
-        || textures
-            .control
-            .as_ref()
-            .is_some_and(|(img, max)| *max > 0.0 && img.pixels.iter().any(|p| p.z > 0.0));
-    if env.levels() == 1 && wants_blur {
-        warn(format!(
-            "{} has one level: LOD bias and blur need a prefiltered mip chain (make one with `cubeforge prefilter`); rendering without blur",
-            env_path.display()
-        ));
-    }
-}
-
-/// The cells of a roughness / metallic sweep of `m`, row by row (one row per metallic value),
-/// and the row's length.
-fn sweep(a: &Args, m: &Material) -> (Vec<(Material, f32, String)>, usize) {
-    let opt = |v: &[f32]| -> Vec<Option<f32>> {
-        if v.is_empty() {
-            vec![None]
-        } else {
-            v.iter().copied().map(Some).collect()
-        }
-    };
-    let (metals, roughs) = (opt(&a.grid_metallic), opt(&a.grid_roughness));
-    let mut jobs = Vec::new();
-    for metal in &metals {
-        for rough in &roughs {
-            let mut cell = m.clone();
-            let mut label = Vec::new();
-            if let Some(v) = metal {
-                cell.metallic = *v;
-                label.push(format!("m {v}"));
-            }
-            if let Some(v) = rough {
-                cell.roughness = *v;
-                label.push(format!("r {v}"));
-            }
-            jobs.push((cell, a.lod_bias, label.join("  ")));
-        }
-    }
-    (jobs, roughs.len())
-}
-
-/// One render per cell (materials, biases of the one material, or its roughness and metallic
-/// values), tone-mapped when the output is; a grid becomes a contact sheet.
-fn render_cells(
-    a: &Args,
-    plan: &Plan,
-    env: &LoadedEnv,
-    pbr_setup: Option<&PbrSetup>,
-    textures: &Textures,
-) -> Result<Image> {
-    let materials = &plan.materials;
-    let swept = !a.grid_roughness.is_empty() || !a.grid_metallic.is_empty();
-    let mut columns = None;
-    let jobs: Vec<(Material, f32, String)> = if swept {
-        let (jobs, cols) = sweep(a, &materials[0]);
-        columns = Some(cols);
-        jobs
-    } else if !a.grid_bias.is_empty() {
-        a.grid_bias
-            .iter()
-            .map(|b| (materials[0].clone(), *b, format!("bias {b}")))
-            .collect()
-    } else {
-        materials
-            .iter()
-            .map(|m| (m.clone(), a.lod_bias, m.name.clone()))
-            .collect()
-    };
-    let mut rendered: Vec<(Image, String)> = Vec::with_capacity(jobs.len());
-    for (m, bias, label) in jobs {
-        let decal = textures.decal.as_ref().or_else(|| {
-            m.decal.as_ref().and_then(|p| {
-                textures
-                    .file_decals
-                    .iter()
-                    .find(|(q, _)| q == p)
-                    .map(|(_, i)| i)
-            })
-        });
-        let surface = Surface {
-            decal,
-            control: textures.control.as_ref().map(|(img, max)| Control {
-                map: img,
-                max_lod_bias: *max,
-            }),
-        };
-        let o = Options {
-            lod_bias: bias,
-            ..plan.opts
-        };
-        let bar = super::progress(o.size as u64, format!("preview {label}"));
-        // pbr materials sample the GGX chain (perhaps made in memory), the others the map.
-        let (sampler, split_sum) = match pbr_setup {
-            Some(p) if m.model == Model::Pbr => (p.sampler(env), Some(&p.split_sum)),
-            _ => (&env.sampler, None),
-        };
-        let mut img = preview::render_lit(sampler, split_sum, &m, &surface, &o, &|n| {
-            if let Some(b) = &bar {
-                b.inc(n);
-            }
-        })?;
-        if let Some(b) = bar {
-            b.finish_and_clear();
-        }
-        if plan.tone_mapped {
-            tonemap::apply(&mut img, a.tonemap, a.exposure);
-        }
-        rendered.push((img, label));
-    }
-    Ok(if let Some(cols) = columns {
-        grid::contact_sheet_columns(&rendered, cols)
-    } else if a.grid.is_empty() && a.grid_bias.is_empty() {
-        rendered.swap_remove(0).0
-    } else {
-        grid::contact_sheet(&rendered)
-    })
-}
-
-/// Encodes the picture and writes it (or sends it to standard output), refusing to overwrite
-/// an input and warning about clamped values.
-fn write(plan: &Plan, inputs: &[PathBuf], img: &Image, stages: &mut Stages) -> Result<()> {
-    let output = &plan.output;
-    cubeforge::output::refuse_inputs(std::slice::from_ref(output), inputs)?;
-    if let Some(f) = io::FileFormat::from_extension(output) {
-        if let Some(w) = io::clamp_warning(output, f, Default::default(), [img]) {
-            super::warn(w);
-        }
-    }
-    let bytes = io::encode_image(output, img, &WriteOptions::default())?;
-    stages.done("encode");
-    super::deliver(&[(output.clone(), bytes)], &[], plan.to_stdout)?;
-    stages.done("write");
-    Ok(())
+    let observer = super::Observer::new(verbose);
+    let report = job.run(&observer)?;
+    observer.report(&report)
 }

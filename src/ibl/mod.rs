@@ -262,14 +262,7 @@ pub fn deliver(
         delivery.levels = lighting.levels;
         delivery
     };
-    crate::output::refuse_inputs(
-        &delivery
-            .files
-            .iter()
-            .map(|f| f.0.clone())
-            .collect::<Vec<_>>(),
-        &loaded.files,
-    )?;
+    // output::deliver refuses to write over an input.
     Ok(delivery)
 }
 

@@ -9,9 +9,21 @@ use crate::io::GpuFormat;
 use crate::Result;
 use std::path::PathBuf;
 
+mod control;
 mod convert;
+mod ibl;
+mod irradiance;
+mod lut;
+mod prefilter;
+mod preview;
 
+pub use control::ControlJob;
 pub use convert::ConvertJob;
+pub use ibl::IblJob;
+pub use irradiance::IrradianceJob;
+pub use lut::{LutJob, LutKind};
+pub use prefilter::PrefilterJob;
+pub use preview::PreviewJob;
 
 /// What a long call tells its caller while it works. Every method has a default that does
 /// nothing, so `&()` is a silent observer.
@@ -26,6 +38,9 @@ pub trait Progress: Sync {
     fn finish(&self) {}
     /// A warning, as soon as it is known (it is in the report too).
     fn warning(&self, _w: &Warning) {}
+    /// A detail of how the work is done (a chain's mapping, where a setting came from), for
+    /// a verbose front end.
+    fn note(&self, _text: &str) {}
 }
 
 impl Progress for () {}

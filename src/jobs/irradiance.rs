@@ -1,0 +1,202 @@
+//! `irradiance` as a job: the diffuse side, an irradiance map and 9 SH coefficients.
+
+use super::{Job, Progress, Quality, Report, Warning, Warnings};
+use crate::chain;
+use crate::convert::{self, Loaded, Output};
+use crate::error::{param, Error, Result};
+use crate::filter::{self, sh, IrradianceMethod};
+use crate::io::{self, FileFormat, GpuFormat, ReadOptions, WriteOptions};
+use crate::layout::Kind;
+use crate::output::{self, Destination, Target};
+use crate::resample::Resampler;
+use crate::tonemap::Tonemap;
+use std::path::PathBuf;
+
+/// The largest face edge of an irradiance map (it holds no detail).
+const MOST: usize = 4096;
+
+/// The base faces the integral reads: 256 hold everything the integral and the SH can see.
+const BASE: usize = 256;
+
+/// A Lambertian irradiance map (any layout or container) and, optionally, its 9 SH
+/// coefficients as JSON.
+#[derive(Clone, Debug)]
+pub struct IrradianceJob {
+    /// Anything [`crate::ConvertJob`] reads.
+    pub inputs: Vec<PathBuf>,
+    /// Where the map goes.
+    pub output: Destination,
+    /// The input's layout (None: from the aspect ratio).
+    pub from: Option<Kind>,
+    /// The map's layout (None: from the output's name).
+    pub to: Option<Kind>,
+    /// Face edge of the map.
+    pub size: usize,
+    /// Where the SH coefficients go (None: not written).
+    pub sh: Option<PathBuf>,
+    /// Exact integral or the 9 coefficients.
+    pub method: IrradianceMethod,
+    /// File type of face images.
+    pub face_format: FileFormat,
+    /// Texel format of KTX2 and DDS output.
+    pub gpu_format: GpuFormat,
+    /// Zstandard level of KTX2 supercompression.
+    pub zstd: Option<i32>,
+    /// Exposure (stops) and tone curve for 8-bit outputs.
+    pub tone: (f32, Tonemap),
+    /// Limits and colour handling of the inputs.
+    pub read: ReadOptions,
+}
+
+impl IrradianceJob {
+    /// An irradiance map of `inputs` at `output`, 32 px, exact.
+    pub fn new(inputs: Vec<PathBuf>, output: Destination) -> IrradianceJob {
+        IrradianceJob {
+            inputs,
+            output,
+            from: None,
+            to: None,
+            size: 32,
+            sh: None,
+            method: IrradianceMethod::Brute,
+            face_format: FileFormat::Exr,
+            gpu_format: GpuFormat::Rgba16f,
+            zstd: None,
+            tone: (0.0, Tonemap::None),
+            read: ReadOptions::default(),
+        }
+    }
+
+    /// The output before the input is known, with its options and a tone warning.
+    fn target(&self) -> Result<(Target, Option<String>)> {
+        let mut target = Target::new(&self.output.name(), self.to, true)?;
+        if !self.output.is_stdout() {
+            target.face_format = self.face_format;
+        }
+        target.write = WriteOptions {
+            linear: self.read.linear,
+            gpu_format: self.gpu_format,
+            zstd: self.zstd,
+            ..WriteOptions::default()
+        };
+        target.levels = Some(1);
+        let (tone, warning) = output::tone_for(&target, self.tone.0, self.tone.1);
+        target.tone = tone;
+        Ok((target, warning))
+    }
+
+    /// The input, the base faces it is resampled to, the map (faces, encoding, a sampler
+    /// copy).
+    fn plan_bytes(&self, input_face: Option<usize>, input: u64) -> u64 {
+        let base = input_face.unwrap_or(BASE).min(BASE) as u64;
+        let face = |n: u64| 6 * 16 * n * n;
+        (2 * face(base) + 3 * face(self.size as u64)).saturating_add(input)
+    }
+}
+
+impl Job for IrradianceJob {
+    fn validate(&self) -> Result<Vec<Warning>> {
+        let name = self.output.name();
+        if self.output.is_stdout() && self.sh.is_some() {
+            return Err(Error::usage(format!(
+                "-o - (standard output) takes one file: write the {} coefficients with -o FILE",
+                param("sh")
+            )));
+        }
+        let (target, tone_warning) = self.target()?;
+        if target.kind == Kind::Faces {
+            // Replaced whole: refuse a folder that is not cubeforge's before the work.
+            output::check_folder_output(&name, &self.inputs, self.sh.as_slice())?;
+            if self.face_format.is_container() {
+                return Err(Error::usage(format!(
+                    "{} {}: face images are png, jpg, tga, hdr or exr",
+                    param("format"),
+                    self.face_format.extension()
+                )));
+            }
+        }
+        let mut warnings = Vec::new();
+        match target.kind {
+            Kind::Ktx2 => {}
+            Kind::Dds if self.zstd.is_some() => return Err(io::zstd_needs_ktx2(&name)),
+            _ if self.zstd.is_some() => warnings.push(Warning(format!(
+                "{} applies to KTX2 outputs: ignored",
+                param("zstd")
+            ))),
+            _ => {}
+        }
+        warnings.extend(tone_warning.map(Warning));
+        if self.size == 0 || self.size > MOST {
+            return Err(Error::usage(format!(
+                "{} {}: use 1 to {MOST}",
+                param("size"),
+                self.size
+            )));
+        }
+        Ok(warnings)
+    }
+
+    fn memory_estimate(&self) -> Result<u64> {
+        let plan = chain::plan(&self.inputs, self.from, &self.read)?;
+        Ok(self.plan_bytes(plan.face_size, plan.working_bytes()))
+    }
+
+    fn run(&self, progress: &dyn Progress) -> Result<Report> {
+        let mut warnings = Warnings::new(progress);
+        warnings.extend(self.validate()?);
+        let (target, _) = self.target()?;
+        // The whole plan against the budget before any file is decoded.
+        self.read.limits.check_memory(
+            format_args!("{} {}", param("size"), self.size),
+            self.memory_estimate()?,
+        )?;
+        let loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
+        progress.stage("decode");
+        let base_size = loaded.face_size().min(BASE);
+        let base = convert::to_cube(&loaded, base_size, &Resampler::default());
+        progress.stage("resample");
+        progress.start(6 * self.size as u64, &format!("irradiance {}", self.size));
+        let (irr, coeffs) = filter::irradiance_with_progress(&base, self.size, self.method, &|n| {
+            progress.advance(n)
+        });
+        progress.finish();
+        progress.stage("filter");
+
+        let out = match target.kind {
+            k if k == Kind::Faces || k.is_container() => Output::Cube(irr),
+            to => Output::Image(convert::to_image(
+                &Loaded::from_cube(irr),
+                to,
+                self.size,
+                &Resampler::default(),
+            )),
+        };
+        let encoded = target.encode(out, &loaded.files)?;
+        if let Some(w) = &encoded.clamped {
+            warnings.push(w);
+        }
+        let quality = encoded.psnr.map(|psnr_db| Quality {
+            format: self.gpu_format,
+            psnr_db,
+        });
+        let mut files = encoded.into_files();
+        if let Some(p) = &self.sh {
+            let json = serde_json::to_vec_pretty(&sh::ShFile::new(&coeffs))
+                .map_err(|e| Error::usage(e.to_string()))?;
+            files.files.push((p.clone(), json));
+        }
+        progress.stage("encode");
+        output::deliver(&files, &self.output, &loaded.files)?;
+        progress.stage("write");
+        let dc = coeffs[0].map(|v| v * sh::BASIS[0].3);
+        Ok(Report {
+            written: files.paths(),
+            warnings: warnings.into_vec(),
+            summary: vec![format!(
+                "irradiance {} px ({:?}); mean radiance {:.4} {:.4} {:.4}",
+                self.size, self.method, dc[0], dc[1], dc[2]
+            )],
+            quality,
+        })
+    }
+}

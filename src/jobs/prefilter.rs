@@ -1,0 +1,269 @@
+//! `prefilter` as a job: a mip chain for blurred or glossy reflections.
+
+use super::{replaced_values, Job, Progress, Quality, Report, Warning, Warnings};
+use crate::chain::{self, LevelsFile};
+use crate::convert;
+use crate::cube::CubeMap;
+use crate::error::{param, Error, Result};
+use crate::filter::{self, ChainOptions, LevelInfo};
+use crate::io::{self, FileFormat, GpuFormat, ReadOptions, WriteOptions};
+use crate::output::{self, Destination, Files};
+use crate::resample::Resampler;
+use std::path::PathBuf;
+
+/// The largest face edge of a chain's first level.
+const MOST: usize = 16384;
+
+/// Prefilters a map into a mip chain: a KTX2, DDS, KTX1 or .env container with every level,
+/// or a folder of `m{level}/` faces with `levels.json`.
+///
+/// ```
+/// use cubeforge::filter::{ChainOptions, FilterKind};
+/// use cubeforge::{Destination, Job, PrefilterJob};
+///
+/// # fn main() -> cubeforge::Result<()> {
+/// let out = std::env::temp_dir().join("cubeforge-doc-ggx.ktx2");
+/// let job = PrefilterJob {
+///     size: Some(16),
+///     chain: ChainOptions { filter: FilterKind::Ggx, samples: 8, ..ChainOptions::default() },
+///     ..PrefilterJob::new(vec!["fixtures/sky.exr".into()], Destination::Path(out.clone()))
+/// };
+/// let report = job.run(&())?;
+/// assert_eq!(report.summary.len(), 5); // 16, 8, 4, 2 and 1 px levels
+/// # std::fs::remove_file(&out).ok();
+/// # Ok(())
+/// # }
+/// ```
+#[derive(Clone, Debug)]
+pub struct PrefilterJob {
+    /// Anything [`crate::ConvertJob`] reads.
+    pub inputs: Vec<PathBuf>,
+    /// A container, a folder, or standard output (a container).
+    pub output: Destination,
+    /// The input's layout (None: from the aspect ratio).
+    pub from: Option<crate::layout::Kind>,
+    /// Face edge of level 0 (None: the input's).
+    pub size: Option<usize>,
+    /// The filter and the levels.
+    pub chain: ChainOptions,
+    /// File type of a folder's level images.
+    pub face_format: FileFormat,
+    /// Texel format of container output.
+    pub gpu_format: GpuFormat,
+    /// Zstandard level of KTX2 supercompression.
+    pub zstd: Option<i32>,
+    /// Limits and colour handling of the inputs.
+    pub read: ReadOptions,
+}
+
+impl PrefilterJob {
+    /// A chain of `inputs` at `output` with every option at its default (GGX).
+    pub fn new(inputs: Vec<PathBuf>, output: Destination) -> PrefilterJob {
+        PrefilterJob {
+            inputs,
+            output,
+            from: None,
+            size: None,
+            chain: ChainOptions::default(),
+            face_format: FileFormat::Exr,
+            gpu_format: GpuFormat::Rgba16f,
+            zstd: None,
+            read: ReadOptions::default(),
+        }
+    }
+
+    fn container(&self) -> Option<FileFormat> {
+        FileFormat::from_extension(&self.output.name()).filter(|f| f.is_container())
+    }
+
+    /// The base faces, the chain (4/3 of them), a bordered sampler copy and the encoding,
+    /// beside the input's texels and pyramid (`input` bytes).
+    fn plan_bytes(size: usize, input: u64) -> u64 {
+        (6 * 16 * 4 * (size as u64).pow(2)).saturating_add(input)
+    }
+
+    fn check_memory(&self, size: usize, input: u64) -> Result<()> {
+        self.read.limits.check_memory(
+            format_args!("{} {size}", param("size")),
+            Self::plan_bytes(size, input),
+        )
+    }
+
+    fn check_size(size: usize) -> Result<()> {
+        if size == 0 || size > MOST {
+            return Err(Error::usage(format!(
+                "{} {size}: use 1 to {MOST}",
+                param("size")
+            )));
+        }
+        Ok(())
+    }
+}
+
+impl Job for PrefilterJob {
+    fn validate(&self) -> Result<Vec<Warning>> {
+        let name = self.output.name();
+        let container = self.container();
+        if container.is_none() && name.extension().is_some() && !name.is_dir() {
+            return Err(Error::file(
+                &name,
+                "prefilter writes a .ktx2 or .dds cube map, or a folder (no extension)",
+            ));
+        }
+        if self.face_format.is_container() {
+            return Err(Error::usage(format!(
+                "{} {}: use exr, hdr, png, tga or jpg",
+                param("format"),
+                self.face_format.extension()
+            )));
+        }
+        let mut warnings = Vec::new();
+        match container {
+            Some(FileFormat::Ktx2) => {}
+            Some(_) if self.zstd.is_some() => return Err(io::zstd_needs_ktx2(&name)),
+            _ if self.zstd.is_some() => warnings.push(Warning(format!(
+                "{} applies to KTX2 outputs: ignored",
+                param("zstd")
+            ))),
+            _ => {}
+        }
+        if self.chain.samples == 0 {
+            return Err(Error::usage(format!(
+                "{} must be at least 1",
+                param("samples")
+            )));
+        }
+        if container.is_none() {
+            // A folder output is replaced whole: refuse one that is not cubeforge's before
+            // the work.
+            output::check_folder_output(&name, &self.inputs, &[])?;
+        }
+        if let Some(size) = self.size {
+            Self::check_size(size)?;
+        }
+        Ok(warnings)
+    }
+
+    fn memory_estimate(&self) -> Result<u64> {
+        let plan = chain::plan(&self.inputs, self.from, &self.read)?;
+        Ok(match self.size.or(plan.face_size) {
+            Some(size) => Self::plan_bytes(size, plan.working_bytes()),
+            None => plan.working_bytes(),
+        })
+    }
+
+    fn run(&self, progress: &dyn Progress) -> Result<Report> {
+        let mut warnings = Warnings::new(progress);
+        warnings.extend(self.validate()?);
+        let container = self.container();
+        // The whole plan against the budget before any file is decoded.
+        let plan = chain::plan(&self.inputs, self.from, &self.read)?;
+        if let Some(size) = self.size.or(plan.face_size) {
+            self.check_memory(size, plan.working_bytes())?;
+        }
+        let loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
+        progress.stage("decode");
+        if let Some(w) = replaced_values(&loaded.files[0], loaded.meta.replaced_values as u64) {
+            warnings.push(w);
+        }
+        let size = self.size.unwrap_or_else(|| loaded.face_size());
+        Self::check_size(size)?;
+        if let Some(min) = self.chain.min_size.filter(|&m| m > size) {
+            return Err(Error::usage(format!(
+                "{} {min} is larger than level 0, whose faces are {size} px",
+                param("min_size")
+            )));
+        }
+        self.check_memory(size, loaded.working_bytes())?;
+        let base = convert::to_cube(&loaded, size, &Resampler::default());
+        progress.stage("resample");
+
+        let levels = filter::plan(&self.chain, size);
+        let costs: Vec<u64> = levels.iter().map(|(i, _)| cost(i)).collect();
+        progress.start(
+            costs.iter().sum(),
+            &format!("{} {size}", self.chain.filter.name()),
+        );
+        let (chain, infos) =
+            filter::prefilter(&base, &self.chain, &|level| progress.advance(costs[level]));
+        progress.finish();
+        progress.stage("filter");
+
+        let description = LevelsFile::new(&self.chain, size, infos);
+        let write = WriteOptions {
+            linear: self.read.linear,
+            zstd: self.zstd.filter(|_| container == Some(FileFormat::Ktx2)),
+            ..WriteOptions::default()
+        };
+        let encoded = chain::encode(
+            &self.output.name(),
+            &chain,
+            &description,
+            self.face_format,
+            &write,
+            self.gpu_format,
+            &loaded.files,
+        )?;
+        if let Some(w) = &encoded.clamped {
+            warnings.push(w);
+        }
+        let quality = encoded.psnr.map(|psnr_db| Quality {
+            format: self.gpu_format,
+            psnr_db,
+        });
+        progress.stage("encode");
+        let mut files: Files = encoded.into_files();
+        if self.output.is_stdout() && files.files.len() > 1 {
+            // A DDS chain's description goes beside it: there is no beside on standard output.
+            warnings.push(
+                "-o -: the DDS chain's levels description (NAME.dds.levels.json) is not written",
+            );
+            files.files.truncate(1);
+        }
+        output::deliver(&files, &self.output, &loaded.files)?;
+        progress.stage("write");
+        let mut summary: Vec<String> = description.levels.iter().map(level_line).collect();
+        if let (Some(min), Some(last)) = (self.chain.min_size, description.levels.last()) {
+            summary.push(format!(
+                "stopped at {} px ({} {min}): {} levels instead of {}",
+                last.size,
+                param("min_size"),
+                description.levels.len(),
+                CubeMap::full_chain_len(size)
+            ));
+        }
+        Ok(Report {
+            written: files.paths(),
+            warnings: warnings.into_vec(),
+            summary,
+            quality,
+        })
+    }
+}
+
+/// A level's work for the progress bar: an exact sum costs about what 64 samples do.
+fn cost(i: &LevelInfo) -> u64 {
+    let per_texel = match (i.samples, i.power.or(i.sigma)) {
+        (Some(s), _) => s as u64,
+        (None, Some(_)) => 64,
+        _ => 1,
+    };
+    (6 * i.size * i.size) as u64 * per_texel
+}
+
+/// One level as the report lists it: its size, its lobe and how it was summed.
+fn level_line(i: &LevelInfo) -> String {
+    let what = match (i.roughness, i.power, i.sigma) {
+        (Some(r), _, _) => format!("roughness {r:.3} (alpha {:.4})", r * r),
+        (_, Some(p), _) => format!("power {p:.1}"),
+        (_, _, Some(s)) => format!("sigma {:.5} rad ({:.3} deg)", s, s.to_degrees()),
+        _ => "2x2 box mean".to_string(),
+    };
+    let samples = match (i.samples, i.power.or(i.sigma)) {
+        (Some(s), _) => format!(", {s} samples"),
+        // A narrow cosine or Gaussian lobe: summed over the texels it covers.
+        (None, Some(_)) => ", exact sum".to_string(),
+        _ => String::new(),
+    };
+    format!("level {:2}  {:5} px  {what}{samples}", i.level, i.size)
+}

@@ -1,0 +1,313 @@
+//! `preview` as a job: a material (or a contact sheet of several) on a sphere lit by an
+//! environment map, with the programs of The Cg Tutorial, chapter 7, and split-sum PBR.
+
+use super::{Job, Progress, Report, Warning, Warnings};
+use crate::chain;
+use crate::error::{param, Error, Result};
+use crate::ibl::{self, Engine};
+use crate::image::Image;
+use crate::io::{self, FileFormat, Limits, ReadOptions, WriteOptions};
+use crate::layout::Kind;
+use crate::output::{self, Destination, Files};
+use crate::preview::material::{self, Material, Model};
+use crate::preview::{self, pbr, Options};
+use crate::tonemap::Tonemap;
+use std::path::PathBuf;
+
+mod cells;
+
+/// A preview picture: `material` (or each of `grid`) on the unit sphere, lit by `env`.
+///
+/// ```
+/// use cubeforge::{Destination, Job, PreviewJob};
+///
+/// # fn main() -> cubeforge::Result<()> {
+/// let out = std::env::temp_dir().join("cubeforge-doc-glass.png");
+/// let mut job = PreviewJob::new("fixtures/sky.exr".into(), Destination::Path(out.clone()));
+/// job.material = "glass".into();
+/// job.view.size = 32;
+/// job.run(&())?;
+/// # std::fs::remove_file(&out).ok();
+/// # Ok(())
+/// # }
+/// ```
+#[derive(Clone, Debug)]
+pub struct PreviewJob {
+    /// The environment: anything [`crate::ConvertJob`] reads, or a prefiltered chain.
+    pub env: PathBuf,
+    /// The picture (.png .jpg .tga tone-mapped, .exr .hdr linear), or standard output.
+    pub output: Destination,
+    /// The environment's layout (None: from the aspect ratio).
+    pub from: Option<Kind>,
+    /// A preset or a .toml material file (the one swept by the roughness, metallic and bias
+    /// grids).
+    pub material: String,
+    /// A contact sheet of several materials (presets or files).
+    pub grid: Vec<String>,
+    /// A contact sheet of `material` at several LOD biases.
+    pub grid_bias: Vec<f32>,
+    /// A contact sheet of a pbr `material` at several roughness values (one row).
+    pub grid_roughness: Vec<f32>,
+    /// ... and several metallic values (one row each).
+    pub grid_metallic: Vec<f32>,
+    /// Camera, shading, parallax, samples and background ([`PreviewJob::default_samples`]).
+    pub view: Options,
+    /// Decal texture on the sphere's (u, v), over the materials' own decal colours.
+    pub decal: Option<PathBuf>,
+    /// A control map from [`crate::ControlJob`].
+    pub control: Option<PathBuf>,
+    /// The LOD bias a control map's blur of 1 means when its sidecar does not say.
+    pub max_lod_bias: f32,
+    /// Exposure (stops) and tone curve for tone-mapped outputs.
+    pub tone: (f32, Tonemap),
+    /// pbr materials: read the chain with this engine's roughness mapping.
+    pub target: Option<Engine>,
+    /// Limits on the inputs and the memory budget.
+    pub limits: Limits,
+}
+
+impl PreviewJob {
+    /// Chrome at 512 px, 4 samples a pixel for tone-mapped outputs, 1 for linear ones.
+    pub fn new(env: PathBuf, output: Destination) -> PreviewJob {
+        let samples = Self::default_samples(&output);
+        PreviewJob {
+            env,
+            output,
+            from: None,
+            material: "chrome".into(),
+            grid: Vec::new(),
+            grid_bias: Vec::new(),
+            grid_roughness: Vec::new(),
+            grid_metallic: Vec::new(),
+            view: Options {
+                samples,
+                ..Options::default()
+            },
+            decal: None,
+            control: None,
+            max_lod_bias: 4.0,
+            tone: (0.0, Tonemap::None),
+            target: None,
+            limits: Limits::default(),
+        }
+    }
+
+    /// Samples per pixel by default: 4 for tone-mapped outputs (edges smoothed), 1 for
+    /// linear ones (each pixel the radiance through its centre).
+    pub fn default_samples(output: &Destination) -> usize {
+        if tone_mapped(output) {
+            4
+        } else {
+            1
+        }
+    }
+
+    /// The materials (one, or a grid's), resolved.
+    fn materials(&self) -> Result<Vec<Material>> {
+        let specs: Vec<&String> = if self.grid.is_empty() {
+            vec![&self.material]
+        } else {
+            self.grid.iter().collect()
+        };
+        specs.iter().map(|s| material::resolve(s.trim())).collect()
+    }
+
+    /// Pictures in the sheet.
+    fn cells(&self) -> u64 {
+        self.grid
+            .len()
+            .max(self.grid_bias.len())
+            .max(self.grid_roughness.len().max(1) * self.grid_metallic.len().max(1)) as u64
+    }
+
+    fn read(&self) -> ReadOptions {
+        ReadOptions {
+            limits: self.limits,
+            linear: false,
+            as_stored: false,
+        }
+    }
+
+    /// The pbr options: sweeps of a pbr material with values in [0, 1], a target that applies.
+    fn check_pbr(&self, materials: &[Material]) -> Result<()> {
+        let sweeps = [
+            ("grid_roughness", &self.grid_roughness),
+            ("grid_metallic", &self.grid_metallic),
+        ];
+        for (name, values) in sweeps {
+            if values.is_empty() {
+                continue;
+            }
+            if materials[0].model != Model::Pbr {
+                return Err(Error::usage(format!(
+                    "{} needs a pbr material (pbr, gold, copper, plastic-glossy, plastic-rough or a file with model = \"pbr\"); \"{}\" has model \"{}\"",
+                    param(name),
+                    materials[0].name,
+                    materials[0].model.name()
+                )));
+            }
+            if let Some(v) = values.iter().find(|v| !(0.0..=1.0).contains(*v)) {
+                return Err(Error::usage(format!(
+                    "{} values must be between 0 and 1 (got {v})",
+                    param(name)
+                )));
+            }
+        }
+        if let Some(e) = self.target {
+            if !materials.iter().any(|m| m.model == Model::Pbr) {
+                return Err(Error::usage(format!(
+                    "{} picks the roughness mapping a pbr material reads the chain with; the material is not pbr",
+                    param("target")
+                )));
+            }
+            if ibl::engines::filters_itself(e) {
+                return Err(Error::usage(format!(
+                    "{} {}: that engine prefilters the panorama itself, with a mapping of its own; use bevy, gltf, babylon, filament or generic",
+                    param("target"),
+                    e.name()
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Whether the picture is stored in 8 bits (tone-mapped) rather than linear.
+fn tone_mapped(output: &Destination) -> bool {
+    FileFormat::from_extension(&output.name())
+        .is_some_and(|f| io::largest_value(f, Default::default()).is_none())
+}
+
+impl Job for PreviewJob {
+    /// Everything that can be checked before anything is read, in the order the errors are
+    /// reported.
+    fn validate(&self) -> Result<Vec<Warning>> {
+        let name = self.output.name();
+        let mut warnings = Vec::new();
+        match FileFormat::from_extension(&name) {
+            Some(f) if f.is_container() => {
+                return Err(Error::file(
+                    &name,
+                    "the preview is an image: name it .png .jpg .tga .exr or .hdr",
+                ))
+            }
+            Some(_) => {
+                let (exposure, curve) = self.tone;
+                if !tone_mapped(&self.output) && (exposure != 0.0 || curve != Tonemap::None) {
+                    warnings.push(Warning(output::tone_ignored(&name)));
+                }
+            }
+            None => return Err(io::unknown_ext(&name)),
+        }
+        let materials = self.materials()?;
+        self.check_pbr(&materials)?;
+        self.view.validate()?;
+        if !(self.max_lod_bias >= 0.0 && self.max_lod_bias.is_finite()) {
+            return Err(Error::usage(format!(
+                "{} must be a number >= 0",
+                param("max_lod_bias")
+            )));
+        }
+        // The picture (every cell of a grid) against the pixel limit, before anything is read.
+        let size = self.view.size as u64;
+        let pixels = size.saturating_mul(size) * self.cells();
+        if pixels > self.limits.max_pixels {
+            return Err(Error::usage(format!(
+                "{} {} makes {pixels} pixels, over the limit of {} ({})",
+                param("size"),
+                self.view.size,
+                self.limits.max_pixels,
+                param("max_pixels")
+            )));
+        }
+        Ok(warnings)
+    }
+
+    /// Each cell's picture and its samples' buffers, RGBA f32, beside the environment as its
+    /// headers describe it (its decode's peak too) and the textures on the sphere (the
+    /// largest one's decode on top).
+    fn memory_estimate(&self) -> Result<u64> {
+        let read = self.read();
+        let mut input =
+            chain::plan(std::slice::from_ref(&self.env), self.from, &read)?.working_bytes();
+        let materials = self.materials()?;
+        let mut textures: Vec<&PathBuf> = self.decal.iter().chain(&self.control).collect();
+        if self.decal.is_none() {
+            textures.extend(materials.iter().filter_map(|m| m.decal.as_ref()));
+        }
+        textures.sort();
+        textures.dedup();
+        let mut peak = 0u64;
+        for t in textures {
+            if let Some(c) = io::claim(t, &read)? {
+                input = input.saturating_add(c.held_bytes);
+                peak = peak.max(c.decode_bytes - c.held_bytes.min(c.decode_bytes));
+            }
+        }
+        let size = self.view.size as u64;
+        let pixels = size.saturating_mul(size) * self.cells();
+        Ok(pixels
+            .saturating_mul(16 * 3)
+            .saturating_add(input.saturating_add(peak)))
+    }
+
+    fn run(&self, progress: &dyn Progress) -> Result<Report> {
+        let mut warnings = Warnings::new(progress);
+        warnings.extend(self.validate()?);
+        let materials = self.materials()?;
+        self.limits.check_memory(
+            format_args!("{} {}", param("size"), self.view.size),
+            self.memory_estimate()?,
+        )?;
+        let env = preview::load_environment(&self.env, self.from, &self.read())?;
+        if let Some(w) = super::replaced_values(&self.env, env.replaced_values as u64) {
+            warnings.push(w);
+        }
+        let mut inputs: Vec<PathBuf> = env.files.clone();
+        let textures = cells::load_textures(self, &materials, progress, &mut inputs)?;
+        progress.stage("decode");
+        let split_sum = if materials.iter().any(|m| m.model == Model::Pbr) {
+            let setup = pbr::prepare(&env, &self.env, self.target)?;
+            if let Some(w) = &setup.warning {
+                warnings.push(w);
+            }
+            progress.stage("split-sum");
+            progress.note(&setup.note);
+            Some(setup)
+        } else {
+            None
+        };
+        if let Some(w) = cells::without_chain(self, &env, &materials, &textures) {
+            warnings.push(w);
+        }
+        let img = cells::render(
+            self,
+            &materials,
+            &env,
+            split_sum.as_ref(),
+            &textures,
+            progress,
+        )?;
+        progress.stage("render");
+        let name = self.output.name();
+        if let Some(f) = FileFormat::from_extension(&name) {
+            if let Some(w) = io::clamp_warning(&name, f, Default::default(), [&img]) {
+                warnings.push(w);
+            }
+        }
+        let files = Files::new(vec![(name.clone(), encode(&name, &img)?)]);
+        progress.stage("encode");
+        output::deliver(&files, &self.output, &inputs)?;
+        progress.stage("write");
+        Ok(Report {
+            written: files.paths(),
+            warnings: warnings.into_vec(),
+            summary: Vec::new(),
+            quality: None,
+        })
+    }
+}
+
+fn encode(name: &std::path::Path, img: &Image) -> Result<Vec<u8>> {
+    io::encode_image(name, img, &WriteOptions::default())
+}
