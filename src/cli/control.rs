@@ -2,7 +2,7 @@
 //! from a recipe.
 
 use cubeforge::control::Size;
-use cubeforge::io::{GpuFormat, Limits};
+use cubeforge::io::GpuFormat;
 use cubeforge::{ControlJob, Job, Result};
 use std::path::PathBuf;
 
@@ -23,20 +23,13 @@ pub struct Args {
     /// Texel format of KTX2 output (never sRGB: control maps hold data; all four channels).
     #[arg(long, value_enum, default_value_t = KtxFormat::Rgba8)]
     pub gpu_format: KtxFormat,
-    /// Supercompress KTX2 output with Zstandard at LEVEL (1 to 22; 19 when no level is given,
-    /// as in --zstd=19).
-    #[arg(long, value_name = "LEVEL", num_args = 0..=1, require_equals = true, default_missing_value = "19", value_parser = clap::value_parser!(i32).range(1..=22))]
-    pub zstd: Option<i32>,
+    #[command(flatten)]
+    pub zstd: super::ZstdArg,
     /// Mip levels in KTX2 output (default: the full chain down to 1x1).
     #[arg(long)]
     pub levels: Option<usize>,
-    /// Refuse images with more pixels than this (checked before decoding).
-    #[arg(long, default_value_t = Limits::default().max_pixels)]
-    pub max_pixels: u64,
-    /// Memory a command may plan to use, in bytes or with K, M, G (default: half the
-    /// machine's memory, or of a container's limit or ulimit -v).
-    #[arg(long, value_parser = super::bytes)]
-    pub max_memory: Option<u64>,
+    #[command(flatten)]
+    pub limits: super::LimitArgs,
 }
 
 const RECIPE_HELP: &str = "\
@@ -94,9 +87,9 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         size: a.size,
         png16: a.png16,
         gpu_format: a.gpu_format.gpu(),
-        zstd: a.zstd,
+        zstd: a.zstd.zstd,
         levels: a.levels,
-        limits: super::limits(a.max_pixels, a.max_memory),
+        limits: a.limits.limits(),
         ..ControlJob::new(a.recipe, a.output)
     };
     let observer = super::Observer::new(verbose);

@@ -52,10 +52,8 @@ pub struct Args {
     /// compressed, rgb9e5 and rg11b10 packed HDR in 4 bytes).
     #[arg(long, value_enum)]
     pub gpu_format: Option<GpuFormat>,
-    /// Supercompress KTX2 output with Zstandard at LEVEL (1 to 22; 19 when no level is given,
-    /// as in --zstd=19). Readers inflate it on load (three.js, Bevy, KTX-Software); DDS has none.
-    #[arg(long, value_name = "LEVEL", num_args = 0..=1, require_equals = true, default_missing_value = "19", value_parser = clap::value_parser!(i32).range(1..=22))]
-    pub zstd: Option<i32>,
+    #[command(flatten)]
+    pub zstd: super::ZstdArg,
     /// Mip levels in KTX2 and DDS output (default: the full chain down to 1x1).
     #[arg(long)]
     pub levels: Option<usize>,
@@ -94,7 +92,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         },
         png16: a.png16,
         gpu_format: a.gpu_format,
-        zstd: a.zstd,
+        zstd: a.zstd.zstd,
         levels: a.levels,
         level: a.level,
         tone: (a.tone.exposure, a.tone.tonemap),

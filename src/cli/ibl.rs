@@ -34,11 +34,8 @@ pub struct Args {
     /// Texel format of the KTX2 files (default: the target's).
     #[arg(long, value_enum)]
     pub gpu_format: Option<GpuFormat>,
-    /// Supercompress the KTX2 files with Zstandard at LEVEL (1 to 22; 19 when no level is
-    /// given, as in --zstd=19): Bevy (its default `zstd` feature), three.js and KTX-Software
-    /// inflate it on load.
-    #[arg(long, value_name = "LEVEL", num_args = 0..=1, require_equals = true, default_missing_value = "19", value_parser = clap::value_parser!(i32).range(1..=22))]
-    pub zstd: Option<i32>,
+    #[command(flatten)]
+    pub zstd: super::ZstdArg,
     /// Turn the environment about +Y first, degrees (90 brings +Z to +X).
     #[arg(value_parser = super::angle, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub yaw: f32,
@@ -59,7 +56,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             diffuse_size: a.diffuse_size.map(|v| v as usize),
             samples: a.samples,
             gpu_format: a.gpu_format,
-            zstd: a.zstd,
+            zstd: a.zstd.zstd,
             sheen: a.sheen,
             yaw: a.yaw,
         },

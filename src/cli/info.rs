@@ -1,6 +1,6 @@
 //! `cubeforge info`: describe files and folders.
 
-use cubeforge::io::{Limits, ReadOptions};
+use cubeforge::io::ReadOptions;
 use cubeforge::{info, Error, Result};
 use std::path::PathBuf;
 
@@ -20,18 +20,13 @@ pub struct Args {
     /// Treat 8- and 16-bit values as data (no sRGB decode) for the statistics.
     #[arg(long)]
     pub linear: bool,
-    /// Refuse images with more pixels than this.
-    #[arg(long, default_value_t = Limits::default().max_pixels)]
-    pub max_pixels: u64,
-    /// Memory a command may plan to use, in bytes or with K, M, G (default: half the
-    /// machine's memory, or of a container's limit or ulimit -v).
-    #[arg(long, value_parser = super::bytes)]
-    pub max_memory: Option<u64>,
+    #[command(flatten)]
+    pub limits: super::LimitArgs,
 }
 
 pub fn run(args: Args) -> Result<()> {
     let opts = ReadOptions {
-        limits: super::limits(args.max_pixels, args.max_memory),
+        limits: args.limits.limits(),
         linear: args.linear,
         as_stored: true,
     };

@@ -27,10 +27,8 @@ pub struct Args {
     /// Write 16-bit PNG instead of 8-bit.
     #[arg(long)]
     pub png16: bool,
-    /// Memory the table may plan to use, in bytes or with K, M, G (default: half the
-    /// machine's memory, or of a container's limit or ulimit -v).
-    #[arg(long, value_parser = super::bytes)]
-    pub max_memory: Option<u64>,
+    #[command(flatten)]
+    pub memory: super::MemoryArg,
 }
 
 const LAYOUT_HELP: &str = "\
@@ -55,7 +53,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         size: a.size as usize,
         samples: a.samples,
         png16: a.png16,
-        limits: super::limits(u64::MAX, a.max_memory),
+        limits: super::limits(u64::MAX, a.memory.max_memory),
         ..LutJob::new(a.output)
     };
     let observer = super::Observer::new(verbose);

@@ -79,18 +79,13 @@ pub struct InputArgs {
     /// 8- and 16-bit files hold data, not colour: no sRGB decode on read or encode on write.
     #[arg(long)]
     pub linear: bool,
-    /// Refuse images with more pixels than this (checked before decoding).
-    #[arg(long, default_value_t = cubeforge::io::Limits::default().max_pixels)]
-    pub max_pixels: u64,
-    /// Memory a command may plan to use, in bytes or with K, M, G (default: half the
-    /// machine's memory, or of a container's limit or ulimit -v); a bigger plan is refused before it starts.
-    #[arg(long, value_parser = bytes)]
-    pub max_memory: Option<u64>,
+    #[command(flatten)]
+    pub limits: LimitArgs,
 }
 
 impl InputArgs {
     pub fn limits(&self) -> cubeforge::io::Limits {
-        limits(self.max_pixels, self.max_memory)
+        self.limits.limits()
     }
 
     pub fn read_options(&self) -> cubeforge::io::ReadOptions {
@@ -100,6 +95,42 @@ impl InputArgs {
             as_stored: false,
         }
     }
+}
+
+/// The size limits: pixels of any image read, and the memory a command may plan.
+#[derive(clap::Args, Debug)]
+pub struct LimitArgs {
+    /// Refuse images with more pixels than this (checked before decoding).
+    #[arg(long, default_value_t = cubeforge::io::Limits::default().max_pixels)]
+    pub max_pixels: u64,
+    #[command(flatten)]
+    pub memory: MemoryArg,
+}
+
+impl LimitArgs {
+    pub fn limits(&self) -> cubeforge::io::Limits {
+        limits(self.max_pixels, self.memory.max_memory)
+    }
+}
+
+/// The memory budget alone (for commands that read no image).
+#[derive(clap::Args, Debug)]
+pub struct MemoryArg {
+    /// Memory a command may plan to use, in bytes or with K, M, G (default: half the
+    /// machine's memory, or of a container's limit or ulimit -v); a bigger plan is refused
+    /// before it starts.
+    #[arg(long, value_parser = bytes)]
+    pub max_memory: Option<u64>,
+}
+
+/// Zstandard supercompression of KTX2 outputs.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct ZstdArg {
+    /// Supercompress KTX2 output with Zstandard at LEVEL (1 to 22; 19 when no level is given,
+    /// as in --zstd=19). Readers inflate it on load (three.js, Bevy with its default `zstd`
+    /// feature, KTX-Software); DDS has none.
+    #[arg(long, value_name = "LEVEL", num_args = 0..=1, require_equals = true, default_missing_value = "19", value_parser = clap::value_parser!(i32).range(1..=22))]
+    pub zstd: Option<i32>,
 }
 
 /// Exposure and tone curve for outputs of 8 bits a channel: HDR input would clip at 1.

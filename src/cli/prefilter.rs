@@ -50,10 +50,8 @@ pub struct Args {
     /// Texel format of KTX2 and DDS output.
     #[arg(long, value_enum, default_value_t = GpuFormat::Rgba16f)]
     pub gpu_format: GpuFormat,
-    /// Supercompress KTX2 output with Zstandard at LEVEL (1 to 22; 19 when no level is given,
-    /// as in --zstd=19). Readers inflate it on load (three.js, Bevy, KTX-Software); DDS has none.
-    #[arg(long, value_name = "LEVEL", num_args = 0..=1, require_equals = true, default_missing_value = "19", value_parser = clap::value_parser!(i32).range(1..=22))]
-    pub zstd: Option<i32>,
+    #[command(flatten)]
+    pub zstd: super::ZstdArg,
     #[command(flatten)]
     pub input: super::InputArgs,
 }
@@ -83,7 +81,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         },
         face_format,
         gpu_format: a.gpu_format,
-        zstd: a.zstd,
+        zstd: a.zstd.zstd,
         read: a.input.read_options(),
         ..PrefilterJob::new(a.inputs, output)
     };

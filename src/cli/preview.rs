@@ -3,7 +3,6 @@
 
 use cubeforge::ibl::Engine;
 use cubeforge::image::srgb_to_linear;
-use cubeforge::io::Limits;
 use cubeforge::layout::Kind;
 use cubeforge::preview::material;
 use cubeforge::preview::{Background, Options, Parallax, ParallaxMode, Shading};
@@ -116,13 +115,8 @@ pub struct Args {
     /// octahedral).
     #[arg(long, value_enum)]
     pub from: Option<Kind>,
-    /// Refuse images with more pixels than this (checked before decoding).
-    #[arg(long, default_value_t = Limits::default().max_pixels)]
-    pub max_pixels: u64,
-    /// Memory a command may plan to use, in bytes or with K, M, G (default: half the
-    /// machine's memory, or of a container's limit or ulimit -v).
-    #[arg(long, value_parser = super::bytes)]
-    pub max_memory: Option<u64>,
+    #[command(flatten)]
+    pub limits: super::LimitArgs,
 }
 
 fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
@@ -218,7 +212,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         max_lod_bias: a.max_lod_bias,
         tone: (a.exposure, a.tonemap),
         target: a.target,
-        limits: super::limits(a.max_pixels, a.max_memory),
+        limits: a.limits.limits(),
         ..PreviewJob::new(env, output)
     };
     let observer = super::Observer::new(verbose);

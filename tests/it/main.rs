@@ -22,6 +22,7 @@ mod gpu_formats;
 mod hostile_exr;
 mod ibl;
 mod info;
+mod jobs;
 mod layers;
 mod lut;
 mod man_pages;

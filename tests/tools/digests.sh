@@ -3,7 +3,7 @@
 #   tests/tools/digests.sh OLD_BINARY > before.txt; tests/tools/digests.sh target/release/cubeforge > after.txt
 #   diff before.txt after.txt
 # Run from the repository root. Each line: sha256, then the output's path under the work folder.
-# QUIET= KEEP_STDERR=' ' compares the printed summaries and warnings too.
+# QUIET= KEEP_STDERR=1 compares the printed summaries and warnings too.
 set -uo pipefail
 bin=$(realpath "$1")
 work=$(mktemp -d)
@@ -60,6 +60,10 @@ run preview $s -o - --format png --size 32 --material crystal
 cd "$o"
 # Printed paths name the work folder, which differs between runs.
 sed -i "s|$o|OUT|g" stdout.* stderr.*
-find . -type f ! -name failures ${KEEP_STDERR:-! -name stderr.*} -print0 | sort -z | xargs -0 sha256sum
+if [ -n "${KEEP_STDERR:-}" ]; then
+    find . -type f ! -name failures -print0 | sort -z | xargs -0 sha256sum
+else
+    find . -type f ! -name failures ! -name 'stderr.*' -print0 | sort -z | xargs -0 sha256sum
+fi
 [ -f failures ] && sed 's|'"$o"'|$o|g' failures
 exit 0

@@ -1,0 +1,207 @@
+//! Commands as library jobs (issue 27): a job run from the library does what the command
+//! does, tells its stages and warnings to a `Progress`, refuses a plan over the memory budget
+//! before reading pixels, and writes only through `output::deliver`. Two guards keep the
+//! structure: the command line's `run` functions stay short (flags -> job -> report), and no
+//! module but `output` and `io::atomic` writes files.
+
+use cubeforge::{
+    ConvertJob, Destination, Error, GpuFormat, Job, LimitKind, LutJob, PrefilterJob, Progress,
+    Warning,
+};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Records what a job tells its observer.
+#[derive(Default)]
+struct Record {
+    stages: Mutex<Vec<String>>,
+    warnings: Mutex<Vec<String>>,
+    units: Mutex<(u64, u64)>,
+}
+
+impl Progress for Record {
+    fn stage(&self, name: &str) {
+        self.stages.lock().unwrap().push(name.to_owned());
+    }
+    fn start(&self, total: u64, _label: &str) {
+        self.units.lock().unwrap().0 += total;
+    }
+    fn advance(&self, units: u64) {
+        self.units.lock().unwrap().1 += units;
+    }
+    fn warning(&self, w: &Warning) {
+        self.warnings.lock().unwrap().push(w.to_string());
+    }
+}
+
+fn sky() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/sky.exr")
+}
+
+#[test]
+fn a_conversion_reports_its_stages_files_and_warnings() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cross.png");
+    let job = ConvertJob {
+        size: Some(16),
+        gpu_format: Some(GpuFormat::Bc7),
+        ..ConvertJob::new(vec![sky()], Destination::Path(out.clone()))
+    };
+    let record = Record::default();
+    let report = job.run(&record).unwrap();
+    assert_eq!(report.written, std::slice::from_ref(&out));
+    assert!(out.is_file());
+    assert_eq!(
+        *record.stages.lock().unwrap(),
+        ["decode", "resample", "encode", "write"]
+    );
+    // Warnings are data, named by the library's field names, and heard as they come.
+    assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+    assert!(report.warnings[0]
+        .0
+        .contains("`gpu_format` applies to KTX2 and DDS"));
+    assert_eq!(record.warnings.lock().unwrap().len(), 1);
+}
+
+#[test]
+fn a_chain_counts_its_progress_and_lists_its_levels() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ggx.ktx2");
+    let mut job = PrefilterJob::new(vec![sky()], Destination::Path(out.clone()));
+    job.size = Some(16);
+    job.chain.samples = 4;
+    let record = Record::default();
+    let report = job.run(&record).unwrap();
+    let (total, done) = *record.units.lock().unwrap();
+    assert!(total > 0 && total == done, "{total} units, {done} done");
+    assert_eq!(report.summary.len(), 5, "{:?}", report.summary);
+    assert!(report.summary[0].starts_with("level  0"));
+}
+
+#[test]
+fn validate_refuses_before_any_file_is_read() {
+    // The input does not exist: validate never looks at it.
+    let job = ConvertJob {
+        zstd: Some(3),
+        ..ConvertJob::new(
+            vec!["no/such/input.exr".into()],
+            Destination::Path("out.dds".into()),
+        )
+    };
+    let e = job.validate().unwrap_err();
+    assert!(e.to_string().contains("`zstd`"), "{e}");
+    let lut = LutJob {
+        png16: true,
+        ..LutJob::new("table.exr".into())
+    };
+    assert!(lut.validate().unwrap_err().to_string().contains("`png16`"));
+}
+
+#[test]
+fn a_plan_over_the_budget_is_refused_with_nothing_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("big.ktx2");
+    let mut job = ConvertJob::new(vec![sky()], Destination::Path(out.clone()));
+    job.size = Some(2048);
+    job.read.limits.max_memory = 64 << 20;
+    let estimate = job.memory_estimate().unwrap();
+    assert!(estimate > 64 << 20, "{estimate}");
+    match job.run(&()) {
+        Err(Error::Limit {
+            kind: LimitKind::Memory,
+            ..
+        }) => {}
+        other => panic!("expected a memory limit, got {other:?}"),
+    }
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_job_never_writes_over_its_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("sky.exr");
+    std::fs::copy(sky(), &input).unwrap();
+    let before = std::fs::read(&input).unwrap();
+    let job = ConvertJob {
+        size: Some(8),
+        to: Some(cubeforge::Layout::Equirect),
+        ..ConvertJob::new(vec![input.clone()], Destination::Path(input.clone()))
+    };
+    let e = job.run(&()).unwrap_err();
+    assert!(
+        e.to_string().contains("refusing to overwrite an input"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(&input).unwrap(), before);
+}
+
+/// Every `pub fn run` of the command line: flags -> job -> report, nothing else.
+#[test]
+fn command_line_runs_are_short() {
+    let cli = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/cli");
+    for e in std::fs::read_dir(&cli).unwrap().flatten() {
+        let text = std::fs::read_to_string(e.path()).unwrap();
+        let Some(start) = text.find("\npub fn run(") else {
+            continue;
+        };
+        let body = &text[start + 1..];
+        let end = body.find("\n}\n").unwrap_or(body.len());
+        let lines = body[..end].lines().count();
+        assert!(
+            lines <= 60,
+            "{}: run is {lines} lines; move the work into its job",
+            e.path().display()
+        );
+    }
+}
+
+/// Files are written in one place: `output` (the write path) over `io::atomic` (staging).
+#[test]
+fn only_the_output_module_writes_files() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    walk(&src, &mut files);
+    let writes = [
+        "fs::write(",
+        "File::create(",
+        "OpenOptions::new(",
+        "stage_with(",
+        "write_all_atomic(",
+        "write_all_atomic_with(",
+    ];
+    for f in files {
+        let rel = f
+            .strip_prefix(&src)
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        if rel.starts_with("io/atomic/") || rel.starts_with("output/") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&f).unwrap();
+        let text = match text.find("#[cfg(test)]") {
+            Some(i) => &text[..i],
+            None => &text[..],
+        };
+        for w in writes {
+            let used = text
+                .lines()
+                .filter(|l| {
+                    !l.trim_start().starts_with("//") && !l.trim_start().starts_with("pub use")
+                })
+                .any(|l| l.contains(w));
+            assert!(!used, "src/{rel} calls {w}: write through output::deliver");
+        }
+    }
+}
+
+fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            walk(&p, out);
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+}
