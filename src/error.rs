@@ -7,20 +7,20 @@
 use std::path::{Path, PathBuf};
 
 /// Everything that can go wrong; the message names the file and says what to change.
-#[derive(Debug, thiserror::Error)]
+///
+/// A message names the caller's parameters by their field names (`` `size` ``) when shown
+/// with `Display`; [`Error::with_flags`] names them as command-line flags (`--size`).
+#[derive(Debug)]
 #[non_exhaustive]
 pub enum Error {
     /// The operating system refused a read or a write.
-    #[error("{}: {}", path.display(), io_msg(source))]
     Io {
         /// The file read or written.
         path: PathBuf,
         /// What the operating system said.
-        #[source]
         source: std::io::Error,
     },
     /// A file whose content is malformed, truncated, or not what its name says.
-    #[error("{}: {msg}", path.display())]
     Decode {
         /// The file.
         path: PathBuf,
@@ -28,7 +28,6 @@ pub enum Error {
         msg: String,
     },
     /// Over a limit on pixels, dimensions or memory (raise it if the input is genuine).
-    #[error("{}{msg}", path.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default())]
     Limit {
         /// The file, when the limit is about one.
         path: Option<PathBuf>,
@@ -39,7 +38,6 @@ pub enum Error {
     },
     /// A well-formed file or request that cubeforge does not handle (a pixel format, a
     /// layout, a container of another kind).
-    #[error("{}: {msg}", path.display())]
     Unsupported {
         /// The file (or the output name).
         path: PathBuf,
@@ -47,7 +45,6 @@ pub enum Error {
         msg: String,
     },
     /// A recipe or material file that does not say something valid, at a line when known.
-    #[error("{}: {}{msg}", path.display(), line.map(|l| format!("line {l}: ")).unwrap_or_default())]
     Recipe {
         /// The recipe or material file.
         path: PathBuf,
@@ -57,8 +54,52 @@ pub enum Error {
         msg: String,
     },
     /// A parameter out of range, or parameters that do not fit together.
-    #[error("{0}")]
     InvalidOption(String),
+}
+
+impl Error {
+    /// The message with each parameter marked, before it is named one way or the other.
+    fn marked(&self) -> String {
+        match self {
+            Error::Io { path, source } => format!("{}: {}", path.display(), io_msg(source)),
+            Error::Decode { path, msg } | Error::Unsupported { path, msg } => {
+                format!("{}: {msg}", path.display())
+            }
+            Error::Limit { path, msg, .. } => format!(
+                "{}{msg}",
+                path.as_ref()
+                    .map(|p| format!("{}: ", p.display()))
+                    .unwrap_or_default()
+            ),
+            Error::Recipe { path, line, msg } => format!(
+                "{}: {}{msg}",
+                path.display(),
+                line.map(|l| format!("line {l}: ")).unwrap_or_default()
+            ),
+            Error::InvalidOption(msg) => msg.clone(),
+        }
+    }
+
+    /// The message with parameters named as command-line flags (`--lod-bias`), for a
+    /// command-line front end; `Display` names them as fields (`` `lod_bias` ``).
+    pub fn with_flags(&self) -> String {
+        name_params(&self.marked(), true)
+    }
+}
+
+impl std::fmt::Display for Error {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&name_params(&self.marked(), false))
+    }
+}
+
+impl std::error::Error for Error {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Error::Io { source, .. } => Some(source),
+            _ => None,
+        }
+    }
 }
 
 /// The field of [`crate::io::Limits`] an [`Error::Limit`] is about.
@@ -71,23 +112,68 @@ pub enum LimitKind {
     Memory,
 }
 
-/// Whether messages name parameters as command-line flags (`--from`) rather than as the
-/// library's field names (`` `from` ``): the CLI switches once at start-up, so one message
-/// text serves both.
-static FLAG_NAMES: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+/// Marks around a parameter's name in a message (private-use characters, which no
+/// terminal acts on and [`escape_text`] leaves alone), so one text serves the library, which
+/// names fields, and a command line, which names flags.
+const OPEN: char = '\u{e000}';
+const CLOSE: char = '\u{e001}';
 
-/// From now on, messages name parameters as command-line flags (`from` becomes `--from`,
-/// `lod_bias` becomes `--lod-bias`). For command-line front ends.
-pub fn name_parameters_as_flags() {
-    FLAG_NAMES.store(true, std::sync::atomic::Ordering::Relaxed);
+/// A parameter in a message: `` `from` `` where the library shows it, `--from` where a
+/// command line does ([`Error::with_flags`], [`name_params`]).
+pub(crate) fn param(name: &str) -> String {
+    format!("{OPEN}{name}{CLOSE}")
 }
 
-/// A parameter as messages name it: `` `from` `` in the library, `--from` in the CLI.
-pub(crate) fn param(name: &str) -> String {
-    if FLAG_NAMES.load(std::sync::atomic::Ordering::Relaxed) {
-        format!("--{}", name.replace('_', "-"))
-    } else {
-        format!("`{name}`")
+/// `text` (a message, a warning, a summary line) with its parameters named as command-line
+/// flags (`flags`: `lod_bias` becomes `--lod-bias`) or as the library's fields
+/// (`` `lod_bias` ``).
+pub fn name_params(text: &str, flags: bool) -> String {
+    if !text.contains(OPEN) {
+        return text.to_owned();
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    let mut rest = text;
+    while let Some(i) = rest.find(OPEN) {
+        out.push_str(&rest[..i]);
+        let after = &rest[i + OPEN.len_utf8()..];
+        let Some(j) = after.find(CLOSE) else {
+            out.push_str(after);
+            return out;
+        };
+        let name = &after[..j];
+        if flags {
+            out.push_str("--");
+            out.push_str(&name.replace('_', "-"));
+        } else {
+            out.push('`');
+            out.push_str(name);
+            out.push('`');
+        }
+        rest = &after[j + CLOSE.len_utf8()..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// A message for people (a warning, a summary line) whose parameters a front end names its
+/// own way: `Display` names fields (`` `size` ``), [`Text::with_flags`] flags (`--size`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Text(String);
+
+impl Text {
+    /// The text as written, parameters marked by [`param`].
+    pub fn new(text: impl Into<String>) -> Text {
+        Text(text.into())
+    }
+    /// The text with parameters named as command-line flags.
+    pub fn with_flags(&self) -> String {
+        name_params(&self.0, true)
+    }
+}
+
+impl std::fmt::Display for Text {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&name_params(&self.0, false))
     }
 }
 
@@ -197,9 +283,11 @@ mod tests {
 
     #[test]
     fn the_library_names_parameters_by_their_fields() {
-        // The CLI's flag wording (--lod-bias) is tested through the binary.
-        assert_eq!(param("lod_bias"), "`lod_bias`");
+        let e = Error::usage(format!("{} must be >= 0", param("lod_bias")));
+        assert_eq!(e.to_string(), "`lod_bias` must be >= 0");
+        assert_eq!(e.with_flags(), "--lod-bias must be >= 0");
         let e = crate::layout::detect(64, 64).unwrap_err();
+        let e = name_params(&e, false);
         assert!(e.contains("`from` sphere") && !e.contains("--"), "{e}");
     }
 }

@@ -397,6 +397,8 @@ fn holds_a_face(dir: &Path) -> bool {
     })
 }
 
+/// The report as text. Parameters in it (a square image's note names `from`) are marked for
+/// a front end to name its own way ([`crate::error::name_params`]).
 impl std::fmt::Display for Report {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         // The name on one line, whatever it holds.

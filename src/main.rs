@@ -3,8 +3,6 @@
 mod cli;
 
 fn main() {
-    // Messages name parameters by their flags (--size), not the library's field names.
-    cubeforge::error::name_parameters_as_flags();
     keep_freed_memory();
     // A bug or an exhausted machine still ends with one line, not a backtrace.
     std::panic::set_hook(Box::new(|info| {

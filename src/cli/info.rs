@@ -39,7 +39,7 @@ pub fn run(args: Args) -> Result<()> {
             Err(e) if args.files.len() == 1 => return Err(e),
             Err(e) => {
                 // One line, even for a name that holds a line break.
-                let text = e.to_string();
+                let text = e.with_flags();
                 let e = cubeforge::error::escape_text(&text);
                 super::tell(format_args!("cubeforge: error: {e}"));
                 failed += 1;

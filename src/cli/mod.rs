@@ -212,7 +212,7 @@ pub fn quiet() -> bool {
 
 pub fn warn(msg: impl std::fmt::Display) {
     if !quiet() {
-        let text = msg.to_string();
+        let text = cubeforge::error::name_params(&msg.to_string(), true);
         tell(format_args!(
             "cubeforge: warning: {}",
             cubeforge::error::escape_text(&text)
@@ -257,6 +257,8 @@ pub fn progress(total: u64, prefix: String) -> Option<indicatif::ProgressBar> {
 /// quietly; any other failure (`> /dev/full`) is an error, never a panic.
 pub fn say(text: impl std::fmt::Display) -> cubeforge::Result<()> {
     use std::io::Write;
+    // Parameters named by the library are flags here (`--from`).
+    let text = cubeforge::error::name_params(&text.to_string(), true);
     write_stdout(|out| writeln!(out, "{text}"))
 }
 
@@ -433,7 +435,7 @@ pub fn run() -> i32 {
         Err(e) => {
             // One line, whatever the message holds (a file's text, a JSON error, a name with
             // a line break or an escape sequence), every control character written out.
-            let text = e.to_string();
+            let text = e.with_flags();
             let line = cubeforge::error::escape_text(&text);
             tell(format_args!("cubeforge: error: {line}{}", how_to_raise(&e)));
             1

@@ -26,7 +26,7 @@ impl Observer {
             stages.quality(q.format, Some(q.psnr_db));
         }
         for line in &report.summary {
-            super::report(line)?;
+            super::report(line.with_flags())?;
         }
         stages.total();
         Ok(())
@@ -55,12 +55,12 @@ impl Progress for Observer {
         }
     }
     fn warning(&self, w: &Warning) {
-        super::warn(w);
+        super::warn(w.with_flags());
     }
     fn note(&self, text: &str) {
         self.stages
             .lock()
             .unwrap_or_else(|e| e.into_inner())
-            .note(text);
+            .note(cubeforge::error::name_params(text, true));
     }
 }

@@ -62,8 +62,9 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         Destination::Stdout(_) => FileFormat::Exr,
         Destination::Path(_) => FileFormat::from_ext_str(&a.format).ok_or_else(|| {
             Error::usage(format!(
-                "--format {}: use exr, hdr, png, tga or jpg",
-                a.format
+                "--format {}: use {}",
+                a.format,
+                FileFormat::list(FileFormat::is_image, false)
             ))
         })?,
     };

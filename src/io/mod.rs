@@ -71,6 +71,35 @@ impl FileFormat {
         FileFormat::Env,
     ];
 
+    /// The image formats (one picture a file, not a cube-map container).
+    pub fn is_image(self) -> bool {
+        !self.is_container()
+    }
+
+    /// The extensions of the formats `keep` selects, for messages: `dot` puts a dot before
+    /// each (".png .jpg or .exr"), else they are comma-separated ("png, jpg or exr").
+    pub fn list(keep: impl Fn(FileFormat) -> bool, dot: bool) -> String {
+        let names: Vec<String> = Self::ALL
+            .iter()
+            .filter(|&&f| keep(f))
+            .map(|f| {
+                if dot {
+                    format!(".{}", f.extension())
+                } else {
+                    f.extension().to_owned()
+                }
+            })
+            .collect();
+        match names.split_last() {
+            Some((last, [])) => last.clone(),
+            Some((last, rest)) => {
+                let sep = if dot { " " } else { ", " };
+                format!("{} or {last}", rest.join(sep))
+            }
+            None => String::new(),
+        }
+    }
+
     /// The extension cubeforge writes for the format (without the dot).
     pub fn extension(self) -> &'static str {
         match self {
@@ -506,7 +535,10 @@ pub fn container_psnr(bytes: &[u8], format: GpuFormat, original: &[&Image]) -> O
 pub fn unknown_ext(path: &Path) -> Error {
     Error::unsupported(
         path,
-        "unknown output extension: use .png .jpg .tga .hdr .exr .ktx2 .dds .ktx or .env",
+        format!(
+            "unknown output extension: use {}",
+            FileFormat::list(|_| true, true)
+        ),
     )
 }
 

@@ -51,7 +51,7 @@ impl ControlJob {
             Some(f @ (FileFormat::Png | FileFormat::Exr | FileFormat::Ktx2)) => Ok(f),
             _ => Err(Error::file(
                 &self.output,
-                "a control map is written as .png, .exr or .ktx2",
+                format!("a control map is written as {}", super::lut::TABLE_FORMATS),
             )),
         }
     }
@@ -231,7 +231,7 @@ impl Job for ControlJob {
         Ok(Report {
             written: files.paths(),
             warnings: warnings.into_vec(),
-            summary,
+            summary: super::texts(summary),
             quality,
         })
     }

@@ -118,7 +118,7 @@ impl Job for ConvertJob {
         let to = target.kind;
         let name = self.output.name();
         let mut warnings = Vec::new();
-        let mut warn = |s: String| warnings.push(Warning(s));
+        let mut warn = |s: String| warnings.push(Warning::new(s));
         if !to.is_container() {
             if self.levels.is_some() {
                 warn(format!(
@@ -157,9 +157,10 @@ impl Job for ConvertJob {
         if let Some(f) = self.face_format.filter(|f| f.is_container()) {
             if to == Kind::Faces {
                 return Err(Error::usage(format!(
-                    "{} {}: face images are png, jpg, tga, hdr or exr",
+                    "{} {}: face images are {}",
                     param("format"),
-                    f.extension()
+                    f.extension(),
+                    FileFormat::list(FileFormat::is_image, false)
                 )));
             }
         }

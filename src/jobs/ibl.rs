@@ -133,7 +133,7 @@ impl Job for IblJob {
         Ok(Report {
             written: files.paths(),
             warnings: warnings.into_vec(),
-            summary,
+            summary: super::texts(summary),
             quality,
         })
     }

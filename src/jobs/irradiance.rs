@@ -1,6 +1,6 @@
 //! `irradiance` as a job: the diffuse side, an irradiance map and 9 SH coefficients.
 
-use super::{Job, Progress, Quality, Report, Warning, Warnings};
+use super::{Job, Progress, Quality, Report, Text, Warning, Warnings};
 use crate::chain;
 use crate::convert::{self, Loaded, Output};
 use crate::error::{param, Error, Result};
@@ -109,9 +109,10 @@ impl Job for IrradianceJob {
             output::check_folder_output(&name, &self.inputs, self.sh.as_slice())?;
             if self.face_format.is_container() {
                 return Err(Error::usage(format!(
-                    "{} {}: face images are png, jpg, tga, hdr or exr",
+                    "{} {}: face images are {}",
                     param("format"),
-                    self.face_format.extension()
+                    self.face_format.extension(),
+                    FileFormat::list(FileFormat::is_image, false)
                 )));
             }
         }
@@ -119,13 +120,13 @@ impl Job for IrradianceJob {
         match target.kind {
             Kind::Ktx2 => {}
             Kind::Dds if self.zstd.is_some() => return Err(io::zstd_needs_ktx2(&name)),
-            _ if self.zstd.is_some() => warnings.push(Warning(format!(
+            _ if self.zstd.is_some() => warnings.push(Warning::new(format!(
                 "{} applies to KTX2 outputs: ignored",
                 param("zstd")
             ))),
             _ => {}
         }
-        warnings.extend(tone_warning.map(Warning));
+        warnings.extend(tone_warning.map(Warning::new));
         if self.size == 0 || self.size > MOST {
             return Err(Error::usage(format!(
                 "{} {}: use 1 to {MOST}",
@@ -192,10 +193,10 @@ impl Job for IrradianceJob {
         Ok(Report {
             written: files.paths(),
             warnings: warnings.into_vec(),
-            summary: vec![format!(
+            summary: vec![Text::new(format!(
                 "irradiance {} px ({:?}); mean radiance {:.4} {:.4} {:.4}",
                 self.size, self.method, dc[0], dc[1], dc[2]
-            )],
+            ))],
             quality,
         })
     }

@@ -1,11 +1,15 @@
 //! `lut` as a job: the BRDF lookup tables a split-sum shader samples beside the chain.
 
-use super::{Job, Progress, Report, Warning, Warnings};
+use super::{Job, Progress, Report, Text, Warning, Warnings};
 use crate::error::{param, Error, Result};
 use crate::io::{self, ktx2, FileFormat, GpuFormat, Limits, WriteOptions};
 use crate::lut::{self, LutOptions};
 use crate::output::{self, Destination, Files};
 use std::path::PathBuf;
+
+/// The files a table (or a control map) is written as: 8- or 16-bit PNG, half-float EXR,
+/// or a one-level KTX2.
+pub(crate) const TABLE_FORMATS: &str = ".png, .exr or .ktx2";
 
 /// Which table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -54,7 +58,7 @@ impl LutJob {
             Some(f @ (FileFormat::Png | FileFormat::Exr | FileFormat::Ktx2)) => Ok(f),
             _ => Err(Error::file(
                 &self.output,
-                "a lookup table is written as .png, .exr or .ktx2",
+                format!("a lookup table is written as {}", TABLE_FORMATS),
             )),
         }
     }
@@ -153,11 +157,11 @@ impl Job for LutJob {
         Ok(Report {
             written: files.paths(),
             warnings: warnings.into_vec(),
-            summary: vec![format!(
+            summary: vec![Text::new(format!(
                 "{}: {size}x{size} {what}, {} samples a texel, {encoding}; x = n.v, y = roughness, roughness 0 in the top row",
                 self.output.display(),
                 self.samples
-            )],
+            ))],
             quality: None,
         })
     }

@@ -47,14 +47,7 @@ impl Progress for () {}
 
 /// Something the user should know that did not stop the work: an option that does not apply,
 /// values clamped or replaced, a result that differs from what was asked.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Warning(pub String);
-
-impl std::fmt::Display for Warning {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
+pub type Warning = crate::error::Text;
 
 /// A lossy container format's quality: level 0 read back against the map before encoding.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,7 +67,7 @@ pub struct Report {
     pub warnings: Vec<Warning>,
     /// Lines that describe the result (a chain's levels, a table's size), for a front end
     /// to print.
-    pub summary: Vec<String>,
+    pub summary: Vec<crate::error::Text>,
     /// A lossy container format's quality, when one was written.
     pub quality: Option<Quality>,
 }
@@ -106,7 +99,7 @@ impl<'a> Warnings<'a> {
     }
 
     pub(crate) fn push(&mut self, text: impl std::fmt::Display) {
-        let w = Warning(text.to_string());
+        let w = Warning::new(text.to_string());
         self.progress.warning(&w);
         self.list.push(w);
     }
@@ -121,6 +114,13 @@ impl<'a> Warnings<'a> {
     pub(crate) fn into_vec(self) -> Vec<Warning> {
         self.list
     }
+}
+
+pub(crate) use crate::error::Text;
+
+/// Summary lines as texts.
+pub(crate) fn texts(lines: Vec<String>) -> Vec<Text> {
+    lines.into_iter().map(Text::new).collect()
 }
 
 /// The warning for decoded values that were not radiance.

@@ -112,16 +112,17 @@ impl Job for PrefilterJob {
         }
         if self.face_format.is_container() {
             return Err(Error::usage(format!(
-                "{} {}: use exr, hdr, png, tga or jpg",
+                "{} {}: use {}",
                 param("format"),
-                self.face_format.extension()
+                self.face_format.extension(),
+                FileFormat::list(FileFormat::is_image, false)
             )));
         }
         let mut warnings = Vec::new();
         match container {
             Some(FileFormat::Ktx2) => {}
             Some(_) if self.zstd.is_some() => return Err(io::zstd_needs_ktx2(&name)),
-            _ if self.zstd.is_some() => warnings.push(Warning(format!(
+            _ if self.zstd.is_some() => warnings.push(Warning::new(format!(
                 "{} applies to KTX2 outputs: ignored",
                 param("zstd")
             ))),
@@ -235,7 +236,7 @@ impl Job for PrefilterJob {
         Ok(Report {
             written: files.paths(),
             warnings: warnings.into_vec(),
-            summary,
+            summary: super::texts(summary),
             quality,
         })
     }

@@ -215,8 +215,9 @@ pub(crate) fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
         (Some(k), None) => Err(Error::file(
             output,
             format!(
-                "a {} image needs a file name ending in .png .jpg .tga .hdr or .exr",
-                k.name()
+                "a {} image needs a file name ending in {}",
+                k.name(),
+                FileFormat::list(FileFormat::is_image, true)
             ),
         )),
         (None, Some(f)) if f.is_container() => Ok(f.container_kind()),
@@ -233,8 +234,9 @@ pub fn face_format(name: &str) -> Result<FileFormat> {
     match FileFormat::from_ext_str(name) {
         Some(f) if !f.is_container() => Ok(f),
         _ => Err(Error::usage(format!(
-            "{} {name}: face images are png, jpg, tga, hdr or exr",
-            param("format")
+            "{} {name}: face images are {}",
+            param("format"),
+            FileFormat::list(FileFormat::is_image, false)
         ))),
     }
 }

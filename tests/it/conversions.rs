@@ -546,7 +546,7 @@ fn detection_by_aspect_ratio() {
     assert_eq!(layout::detect(768, 128), Ok(Kind::Hstrip));
     assert_eq!(layout::detect(128, 768), Ok(Kind::Vstrip));
     // The library names the parameter; the CLI says --from (tests/it/cli_errors.rs).
-    let square = layout::detect(256, 256).unwrap_err();
+    let square = cubeforge::error::name_params(&layout::detect(256, 256).unwrap_err(), false);
     assert!(
         square.contains("`from` sphere") && square.contains("octahedral"),
         "{square}"

@@ -85,7 +85,8 @@ fn square_images_need_from_for_their_face_size() {
     // No --from: the layout and the face size are unknown (64 as one face, 32 as a ball).
     let r = describe(&p, None).unwrap();
     assert_eq!((r.kind, r.face_size), (None, None));
-    let note = r.kind_note.clone().unwrap();
+    // The library names the parameter by its field (the CLI by its flag).
+    let note = cubeforge::error::name_params(&r.kind_note.clone().unwrap(), false);
     assert!(
         note.contains("`from` sphere")
             && note.contains("`from` octahedral")

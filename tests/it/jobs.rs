@@ -58,7 +58,7 @@ fn a_conversion_reports_its_stages_files_and_warnings() {
     // Warnings are data, named by the library's field names, and heard as they come.
     assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
     assert!(report.warnings[0]
-        .0
+        .to_string()
         .contains("`gpu_format` applies to KTX2 and DDS"));
     assert_eq!(record.warnings.lock().unwrap().len(), 1);
 }
@@ -75,7 +75,7 @@ fn a_chain_counts_its_progress_and_lists_its_levels() {
     let (total, done) = *record.units.lock().unwrap();
     assert!(total > 0 && total == done, "{total} units, {done} done");
     assert_eq!(report.summary.len(), 5, "{:?}", report.summary);
-    assert!(report.summary[0].starts_with("level  0"));
+    assert!(report.summary[0].to_string().starts_with("level  0"));
 }
 
 #[test]

@@ -57,6 +57,22 @@ run preview $s -o $o/chrome_prev.png --size 48
 run preview $s -o $o/glass_prev.png --size 48 --material glass
 run preview $o/ggx.ktx2 -o $o/pbr_prev.exr --size 48 --material pbr
 run preview $s -o - --format png --size 32 --material crystal
+# Refusals: their messages (with KEEP_STDERR) and exit codes.
+run convert $s -o $o/bad.dds --zstd --size 8
+run convert $s -o $o/bad.png --size 0
+run convert $s -o $o/bad_faces --to faces --format ktx2 --size 8
+run convert $s -o $o/bad.exr --levels 0
+run prefilter $s -o $o/bad_chain --format ktx2 --size 8
+run prefilter $s -o $o/bad.ktx2 --size 8 --min-size 16
+run irradiance $s -o - --format exr --sh $o/bad.json
+run ibl $s -o - --target bevy
+run lut -o $o/bad.jpg
+run lut -o $o/bad.exr --png16
+run control fixtures/control/chrome_and_paint.toml -o $o/bad.exr --levels 2
+run preview $s -o $o/bad.ktx2
+run preview $s -o $o/bad.png --grid-roughness 0.5
+run preview $s -o $o/bad.png --size 64 --max-memory 1K
+run convert $s -o $o/bad.ktx2 --size 4096 --max-memory 10M
 cd "$o"
 # Printed paths name the work folder, which differs between runs.
 sed -i "s|$o|OUT|g" stdout.* stderr.*

@@ -188,13 +188,16 @@ impl Job for PreviewJob {
             Some(f) if f.is_container() => {
                 return Err(Error::file(
                     &name,
-                    "the preview is an image: name it .png .jpg .tga .exr or .hdr",
+                    format!(
+                        "the preview is an image: name it {}",
+                        FileFormat::list(FileFormat::is_image, true)
+                    ),
                 ))
             }
             Some(_) => {
                 let (exposure, curve) = self.tone;
                 if !tone_mapped(&self.output) && (exposure != 0.0 || curve != Tonemap::None) {
-                    warnings.push(Warning(output::tone_ignored(&name)));
+                    warnings.push(Warning::new(output::tone_ignored(&name)));
                 }
             }
             None => return Err(io::unknown_ext(&name)),
