@@ -8,10 +8,14 @@ pub mod brute;
 mod diffuse;
 mod hybrid;
 pub mod lobe;
+mod roughness;
 pub mod sh;
+pub mod sh_engines;
 mod window;
 
 pub use diffuse::{irradiance, irradiance_with_progress, IrradianceMethod};
+pub(crate) use roughness::plan_mapped;
+pub use roughness::{RoughnessMapping, BABYLON_LOD_GENERATION_SCALE};
 
 use crate::cube::{CubeMap, Faces};
 use bright::BrightSum;

@@ -27,7 +27,6 @@ use crate::image::{ColorSpace, Image};
 use ::image::{codecs::png, ColorType, ExtendedColorType, ImageDecoder, ImageEncoder};
 use glam::{Vec3, Vec4};
 use serde::{Deserialize, Serialize};
-use std::f64::consts::PI;
 use std::path::Path;
 
 /// The 8 bytes every `.env` file starts with.
@@ -35,112 +34,13 @@ pub const MAGIC: [u8; 8] = [0x86, 0x16, 0x87, 0x96, 0xF6, 0xD6, 0x96, 0x36];
 /// The largest value RGBD stores (D = 1/255).
 pub const RGBD_MAX: f32 = 255.0;
 /// Babylon's default `lodGenerationScale` (also what it assumes when a file has none).
-pub const DEFAULT_LOD_GENERATION_SCALE: f64 = 0.8;
+pub const DEFAULT_LOD_GENERATION_SCALE: f64 = crate::filter::BABYLON_LOD_GENERATION_SCALE;
 /// The manifest version written (Babylon reads 1 and 2).
 pub const VERSION: u32 = 2;
 /// Babylon's approximate sRGB curve (`toGammaSpace` without exact conversions).
 const GAMMA: f32 = 2.2;
 
-/// Babylon's irradiance polynomial: `E(n) / pi` as Babylon builds it from a cube map
-/// (`CubeMapToSphericalPolynomialTools`), per channel [r, g, b], evaluated by its shader as
-/// `x nx + y ny + z nz + xx nx^2 + yy ny^2 + zz nz^2 + yz ny nz + zx nz nx + xy nx ny` when it
-/// uses the polynomial, or turned back into harmonics (`SphericalHarmonics.FromPolynomial`,
-/// see [`SphericalPolynomial::irradiance_over_pi`]) when it uses those.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct SphericalPolynomial {
-    /// Coefficient of nx.
-    pub x: [f64; 3],
-    /// Coefficient of ny.
-    pub y: [f64; 3],
-    /// Coefficient of nz.
-    pub z: [f64; 3],
-    /// Coefficient of nx^2.
-    pub xx: [f64; 3],
-    /// Coefficient of ny^2.
-    pub yy: [f64; 3],
-    /// Coefficient of nz^2.
-    pub zz: [f64; 3],
-    /// Coefficient of ny nz.
-    pub yz: [f64; 3],
-    /// Coefficient of nz nx.
-    pub zx: [f64; 3],
-    /// Coefficient of nx ny.
-    pub xy: [f64; 3],
-}
-
-// Babylon's constants, as its source writes them (SphericalPolynomial.updateFromHarmonics and
-// SphericalHarmonics.FromPolynomial): Ramamoorthi and Hanrahan's c4, 2 c2, c5, 2 c5, c1, 2 c1,
-// and their inverses (0.886277 is Babylon's own rounding of c4 = 0.886227).
-const C4: f64 = 0.886277;
-const C2X2: f64 = 1.02333;
-const C5: f64 = 0.247708;
-const C5X2: f64 = 0.495417;
-const C1: f64 = 0.429043;
-const C1X2: f64 = 0.858086;
-
-impl SphericalPolynomial {
-    /// The polynomial Babylon stores for a cube map whose order-2 radiance coefficients (in
-    /// cubeforge's basis, [`crate::filter::sh::BASIS`], per channel) are `radiance`: the
-    /// harmonics of `E / pi` (radiance times pi, 2pi/3, pi/4 per band, over pi; Babylon's
-    /// basis differs from cubeforge's only by Condon-Shortley signs, which cancel here) put
-    /// through Babylon's `updateFromHarmonics`, constants and all. Non-finite values become 0.
-    pub fn from_radiance_sh(radiance: &[[f64; 3]; 9]) -> SphericalPolynomial {
-        let e = crate::filter::sh::irradiance(radiance);
-        let h = |i: usize| e[i].map(|v| if v.is_finite() { v / PI } else { 0.0 });
-        let lin = |i: usize, k: f64| h(i).map(|v| k * v / PI);
-        let comb = |a: f64, b: f64, c: f64| -> [f64; 3] {
-            std::array::from_fn(|ch| (a * h(0)[ch] + b * h(6)[ch] + c * h(8)[ch]) / PI)
-        };
-        SphericalPolynomial {
-            x: lin(3, C2X2),
-            y: lin(1, C2X2),
-            z: lin(2, C2X2),
-            xx: comb(C4, -C5, C1),
-            yy: comb(C4, -C5, -C1),
-            zz: comb(C4, C5X2, 0.0),
-            yz: lin(5, C1X2),
-            zx: lin(7, C1X2),
-            xy: lin(4, C1X2),
-        }
-    }
-
-    /// The polynomial at unit direction `n`, as Babylon's polynomial shader path evaluates it.
-    pub fn evaluate(&self, n: Vec3) -> [f64; 3] {
-        let (x, y, z) = (n.x as f64, n.y as f64, n.z as f64);
-        std::array::from_fn(|c| {
-            self.x[c] * x
-                + self.y[c] * y
-                + self.z[c] * z
-                + self.xx[c] * x * x
-                + self.yy[c] * y * y
-                + self.zz[c] * z * z
-                + self.yz[c] * y * z
-                + self.zx[c] * z * x
-                + self.xy[c] * x * y
-        })
-    }
-
-    /// `E(n) / pi` as Babylon's harmonics shader path computes it from this polynomial
-    /// (`SphericalHarmonics.FromPolynomial`, `preScaleForRendering`, then the basis at `n`):
-    /// the diffuse light a white Lambertian surface facing `n` reflects.
-    pub fn irradiance_over_pi(&self, n: Vec3) -> [f64; 3] {
-        use crate::filter::sh::basis;
-        let b = basis(n);
-        std::array::from_fn(|c| {
-            // Harmonics in cubeforge's (positive) basis: Babylon's signs cancel again.
-            let l00 = (0.376127 * self.xx[c] + 0.376127 * self.yy[c] + 0.376126 * self.zz[c]) * PI;
-            let l1 = 0.977204 * PI;
-            let l2 = 1.16538 * PI;
-            let l20 = (1.34567 * self.zz[c] - 0.672834 * self.xx[c] - 0.672834 * self.yy[c]) * PI;
-            let l22 = 1.16538 * (self.xx[c] - self.yy[c]) * PI;
-            l00 * b[0]
-                + l1 * (self.y[c] * b[1] + self.z[c] * b[2] + self.x[c] * b[3])
-                + l2 * (self.xy[c] * b[4] + self.yz[c] * b[5] + self.zx[c] * b[7])
-                + l20 * b[6]
-                + l22 * b[8]
-        })
-    }
-}
+pub use crate::filter::sh_engines::SphericalPolynomial;
 
 /// One image's place in the file: bytes from the end of the manifest.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]

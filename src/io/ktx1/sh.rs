@@ -2,17 +2,7 @@
 
 use super::{KeyValue, SH_KEY};
 
-/// Filament's `sh` coefficients from order-2 radiance coefficients in cubeforge's basis
-/// ([`crate::filter::sh::BASIS`], per channel): what `cmgen --sh-shader` (and `--deploy`)
-/// computes, the irradiance divided by pi with each basis constant folded in, so that
-/// `E(n) / pi = sh[0] + sh[1] y + sh[2] z + sh[3] x + sh[4] xy + sh[5] yz + sh[6] (3z^2 - 1) +
-/// sh[7] xz + sh[8] (x^2 - y^2)`, the polynomial Filament's shader evaluates. Filament's
-/// Condon-Shortley signs on the basis and on its constants cancel, so none appear here.
-pub fn filament_sh(radiance: &[[f64; 3]; 9]) -> [[f64; 3]; 9] {
-    use crate::filter::sh::{irradiance, BASIS};
-    let e = irradiance(radiance);
-    std::array::from_fn(|i| e[i].map(|v| v * BASIS[i].3 / std::f64::consts::PI))
-}
+pub use crate::filter::sh_engines::filament_sh;
 
 /// The `sh` key/value pair: nine lines of "r g b", as `cmgen` writes it (each value the
 /// shortest that reads back as the same f32, in exponent form when very small or large; NaN and
