@@ -7,7 +7,7 @@ use crate::cube::{
     faces_from_images, CubeMap, CubeSampler, Environment, FACE_LONG_NAMES, FACE_NAMES,
 };
 use crate::error::{Error, Result};
-use crate::flux::{Grid, Peaks, Split};
+use crate::flux::{Grid, Peaks};
 use crate::image::Image;
 use crate::io::{self, Decoded, FileFormat, Meta, ReadOptions};
 use crate::layout::{self, cross, ImageEnv, Kind};
@@ -99,8 +99,13 @@ impl Loaded {
     }
 
     /// Prepares the input for lookups by direction, with the pyramid levels an output whose
-    /// texels span at most `max_footprint` radians needs for antialiasing (None: all levels).
-    pub fn environment(&self, max_footprint: Option<f32>) -> Box<dyn Environment + '_> {
+    /// texels span at most `max_footprint` radians needs for antialiasing (None: all levels),
+    /// and finds its peaks: lookups see the input below their ceiling, and a resampler splats
+    /// the peaks on top of what it renders (`Resampler::to_cube_with_peaks`).
+    pub fn environment(
+        &self,
+        max_footprint: Option<f32>,
+    ) -> (Box<dyn Environment + '_>, Option<Peaks>) {
         let levels = |texel_angle: f32| {
             max_footprint.map(|f| {
                 // The deepest level the resampler picks for that footprint (it reads level 0
@@ -113,16 +118,6 @@ impl Loaded {
                 }
             })
         };
-        // Lookups see the input below its peaks' ceiling; the resampler splats the peaks.
-        fn split<'a, E: Environment + 'a>(
-            env: E,
-            peaks: Option<Peaks>,
-        ) -> Box<dyn Environment + 'a> {
-            match peaks {
-                Some(peaks) => Box::new(Split { env, peaks }),
-                None => Box::new(env),
-            }
-        }
         let ceiling =
             |peaks: &Option<Peaks>| peaks.as_ref().map_or(Vec4::INFINITY, Peaks::ceiling_vec);
         match &self.source {
@@ -130,13 +125,11 @@ impl Loaded {
                 let angle = ImageEnv::new(*p, img, Some(1)).texel_angle();
                 if *p == layout::Projection::Equirect {
                     let (env, peaks) = ImageEnv::split_panorama(img, levels(angle));
-                    return split(env, peaks);
+                    return (Box::new(env), peaks);
                 }
                 let peaks = self.peaks();
-                split(
-                    ImageEnv::below(*p, img, levels(angle), ceiling(&peaks)),
-                    peaks,
-                )
+                let env = ImageEnv::below(*p, img, levels(angle), ceiling(&peaks));
+                (Box::new(env), peaks)
             }
             Source::Cube(c) => {
                 let peaks = self.peaks();
@@ -144,7 +137,7 @@ impl Loaded {
                 // Box mips of level 0 (stored levels may be prefiltered, not plain mips).
                 let angle = crate::cube::texel_angle(c.size());
                 let env = CubeSampler::with_box_mips_below(&c.levels[0], levels(angle), ceiling);
-                split(env, peaks)
+                (Box::new(env), peaks)
             }
         }
     }
@@ -438,7 +431,10 @@ pub fn to_cube(loaded: &Loaded, size: usize, resampler: &Resampler) -> CubeMap {
         Source::Cube(c) if resampler.orientation.is_identity() && c.size() == size => CubeMap {
             levels: vec![c.levels[0].clone()],
         },
-        _ => resampler.to_cube(loaded.environment(Some(2.0 / size as f32)).as_ref(), size),
+        _ => {
+            let (env, peaks) = loaded.environment(Some(2.0 / size as f32));
+            resampler.to_cube_with_peaks(env.as_ref(), peaks.as_ref(), size)
+        }
     }
 }
 
@@ -454,7 +450,8 @@ pub fn to_image(loaded: &Loaded, to: Kind, size: usize, resampler: &Resampler) -
                 layout::Projection::Octahedral => Some(6.0 / w as f32),
                 _ => None,
             };
-            resampler.to_projection(loaded.environment(footprint).as_ref(), p, w, h)
+            let (env, peaks) = loaded.environment(footprint);
+            resampler.to_projection_with_peaks(env.as_ref(), peaks.as_ref(), p, w, h)
         }
         None => {
             let cells = if to.is_cells() { to } else { Kind::Hcross };

@@ -4,7 +4,7 @@
 #![warn(missing_docs)]
 
 use crate::cube::{face_dir, CubeMap, Dirs, Environment, Interp, BATCH};
-use crate::flux::Grid;
+use crate::flux::{Grid, Peaks};
 use crate::image::Image;
 use crate::layout::{equirect, octahedral, Projection};
 use glam::{Mat3, Vec3, Vec4};
@@ -108,6 +108,17 @@ pub(crate) fn deepest_level(ratio: f32) -> usize {
 impl Resampler {
     /// A cube map of face edge `size` from any environment.
     pub fn to_cube(&self, env: &dyn Environment, size: usize) -> CubeMap {
+        self.to_cube_with_peaks(env, None, size)
+    }
+
+    /// `to_cube`, then an input's peaks (see [`crate::flux`]) splatted on top: `env` looks
+    /// up the input below their ceiling.
+    pub fn to_cube_with_peaks(
+        &self,
+        env: &dyn Environment,
+        peaks: Option<&Peaks>,
+        size: usize,
+    ) -> CubeMap {
         let inv = 1.0 / size as f32;
         let grid = Grid::Cube(size);
         let mut faces = std::array::from_fn(|face| {
@@ -125,15 +136,15 @@ impl Resampler {
                 |x, y| grid.density(x, y),
             )
         });
-        self.splat(env, grid, &mut faces);
+        self.splat(peaks, grid, &mut faces);
         CubeMap {
             levels: vec![faces],
         }
     }
 
-    /// Adds the environment's peaks, if it has any, to an output rendered from it.
-    fn splat(&self, env: &dyn Environment, grid: Grid, images: &mut [Image]) {
-        if let Some(peaks) = env.peaks() {
+    /// Adds an input's peaks, if it has any, to an output rendered from the rest of it.
+    fn splat(&self, peaks: Option<&Peaks>, grid: Grid, images: &mut [Image]) {
+        if let Some(peaks) = peaks {
             let turn = (!self.orientation.is_identity()).then(|| self.orientation.lookup_matrix());
             peaks.splat(grid, turn, images);
         }
@@ -143,6 +154,18 @@ impl Resampler {
     pub fn to_projection(
         &self,
         env: &dyn Environment,
+        proj: Projection,
+        w: usize,
+        h: usize,
+    ) -> Image {
+        self.to_projection_with_peaks(env, None, proj, w, h)
+    }
+
+    /// `to_projection`, then an input's peaks splatted on top (see `to_cube_with_peaks`).
+    pub fn to_projection_with_peaks(
+        &self,
+        env: &dyn Environment,
+        peaks: Option<&Peaks>,
         proj: Projection,
         w: usize,
         h: usize,
@@ -188,7 +211,7 @@ impl Resampler {
                 self.render(env, dims(f32::INFINITY), at(proj), footprint, density)
             }
         };
-        self.splat(env, grid, std::slice::from_mut(&mut image));
+        self.splat(peaks, grid, std::slice::from_mut(&mut image));
         image
     }
 

@@ -46,11 +46,6 @@ pub trait Environment: Sync {
             *o = self.sample(dirs.get(i), level, interp);
         }
     }
-    /// The input's peaks above the ceiling its lookups are clamped to, which a resampler
-    /// splats on top of what it rendered (see [`crate::flux`]); None for a plain environment.
-    fn peaks(&self) -> Option<&crate::flux::Peaks> {
-        None
-    }
 }
 
 /// Directions per batch: enough to amortise a call, small enough to live on the stack.

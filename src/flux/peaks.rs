@@ -2,7 +2,6 @@
 //! output so their flux arrives whole.
 
 use super::{Grid, PEAK_RATIO};
-use crate::cube::{Dirs, Environment, Interp};
 use crate::image::Image;
 use crate::layout::Projection;
 use glam::{Mat3, Vec3, Vec4};
@@ -350,31 +349,6 @@ fn merge(sorted: impl Iterator<Item = (u64, [f64; 3])>) -> Vec<(u64, [f64; 3])> 
         }
     }
     out
-}
-
-/// An environment whose lookups see the bounded part of an input, with the peaks that go on
-/// top of whatever is rendered from it.
-pub(crate) struct Split<E: Environment> {
-    pub env: E,
-    pub peaks: Peaks,
-}
-
-impl<E: Environment> Environment for Split<E> {
-    fn sample(&self, d: Vec3, level: usize, interp: Interp) -> Vec4 {
-        self.env.sample(d, level, interp)
-    }
-    fn sample_many(&self, dirs: &Dirs, level: usize, interp: Interp, out: &mut [Vec4]) {
-        self.env.sample_many(dirs, level, interp, out)
-    }
-    fn texel_angle(&self) -> f32 {
-        self.env.texel_angle()
-    }
-    fn levels(&self) -> usize {
-        self.env.levels()
-    }
-    fn peaks(&self) -> Option<&Peaks> {
-        Some(&self.peaks)
-    }
 }
 
 #[cfg(test)]
