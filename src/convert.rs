@@ -118,13 +118,11 @@ impl Loaded {
                 }
             })
         };
-        let ceiling =
-            |peaks: &Option<Peaks>| peaks.as_ref().map_or(Vec4::INFINITY, Peaks::ceiling_vec);
         match &self.source {
             Source::Projection(p, img) => {
                 let angle = ImageEnv::new(*p, img, Some(1)).texel_angle();
                 if *p == layout::Projection::Equirect {
-                    let (env, peaks) = ImageEnv::split_panorama(img, levels(angle));
+                    let (env, peaks) = split_panorama(img, levels(angle));
                     return (Box::new(env), peaks);
                 }
                 let peaks = self.peaks();
@@ -133,10 +131,10 @@ impl Loaded {
             }
             Source::Cube(c) => {
                 let peaks = self.peaks();
-                let ceiling = ceiling(&peaks);
                 // Box mips of level 0 (stored levels may be prefiltered, not plain mips).
                 let angle = crate::cube::texel_angle(c.size());
-                let env = CubeSampler::with_box_mips_below(&c.levels[0], levels(angle), ceiling);
+                let env =
+                    CubeSampler::with_box_mips_below(&c.levels[0], levels(angle), ceiling(&peaks));
                 (Box::new(env), peaks)
             }
         }
@@ -167,6 +165,27 @@ impl Loaded {
     pub fn mean_radiance(&self) -> [f64; 3] {
         crate::flux::mean_radiance(self.grid(), &self.images())
     }
+}
+
+/// Each colour channel clamped to the peaks' ceiling (none without peaks): what lookups see.
+fn ceiling(peaks: &Option<Peaks>) -> Vec4 {
+    peaks.as_ref().map_or(Vec4::INFINITY, Peaks::ceiling_vec)
+}
+
+/// `ImageEnv::below` for a panorama whose peaks are not known yet: finds them in the same pass
+/// that makes level 1 (when `levels` asks for it), and returns them with the environment.
+fn split_panorama(base: &Image, levels: Option<usize>) -> (ImageEnv<'_>, Option<Peaks>) {
+    let equirect = layout::Projection::Equirect;
+    let grid = Grid::Projection(equirect, base.width, base.height);
+    if levels.is_some_and(|l| l < 2) || base.height <= 8 {
+        let peaks = Peaks::find(grid, &[base]);
+        let env = ImageEnv::below(equirect, base, levels, ceiling(&peaks));
+        return (env, peaks);
+    }
+    let weights = layout::equirect::row_weights(base.width, base.height);
+    let (peaks, first) = Peaks::find_reducing(grid, base, &weights);
+    let env = ImageEnv::panorama_from_level_one(base, first, levels, ceiling(&peaks));
+    (env, peaks)
 }
 
 /// What loading an input will take, from its files' headers alone ([`io::claim`]).

@@ -3,10 +3,10 @@
 
 #![warn(missing_docs)]
 
-use crate::cube::{face_dir, CubeMap, Dirs, Environment, Interp, BATCH};
+use crate::cube::{face_dir, texel_footprint, CubeMap, Dirs, Environment, Interp, BATCH};
 use crate::flux::{Grid, Peaks};
 use crate::image::Image;
-use crate::layout::{equirect, octahedral, Projection};
+use crate::layout::{angular, equirect, octahedral, sphere, Projection};
 use glam::{Mat3, Vec3, Vec4};
 use std::marker::PhantomData;
 
@@ -126,13 +126,7 @@ impl Resampler {
                 env,
                 (size, size, 6 * size * size, 2.0 * inv),
                 |x, y| Some(face_dir(face, x * inv, y * inv)),
-                |x, y| {
-                    // Angle of one texel at (sc, tc) on the face plane, the larger axis.
-                    let sc = 2.0 * x * inv - 1.0;
-                    let tc = 2.0 * y * inv - 1.0;
-                    let q = 1.0 + sc * sc + tc * tc;
-                    2.0 * inv * (1.0 + sc.abs().max(tc.abs()).powi(2)).sqrt() / q
-                },
+                |x, y| texel_footprint(size, x, y),
                 |x, y| grid.density(x, y),
             )
         });
@@ -176,38 +170,24 @@ impl Resampler {
         let density = move |x: f32, y: f32| grid.density(x, y);
         // The output's size and texel count, and `widest` (see `render`).
         let dims = |widest: f32| (w, h, w * h, widest);
-        // The angle one texel spans, from each layout's formula (the larger of its radial and
-        // tangential rates times the texel's size in disc radii, 2 / w). One render per
-        // layout, so each inlines its own direction maths.
+        // The angle one texel spans, from each layout's formula (its file's `footprint`). One
+        // render per layout, so each inlines its own direction maths.
         let mut image = match proj {
             Projection::Equirect => {
-                let rows = std::f32::consts::PI * ih;
+                let rows = equirect::footprint(h);
                 let dir = move |x: f32, y: f32| Some(equirect::uv_to_dir(x * iw, y * ih));
                 self.render(env, dims(rows), dir, move |_, _| rows, density)
             }
-            // The angle from -Z is pi r: pi per unit radius, across and around.
             Projection::Angular => {
-                let texel = std::f32::consts::TAU * iw;
+                let texel = angular::footprint(w);
                 self.render(env, dims(texel), at(proj), move |_, _| texel, density)
             }
-            // The angle from -Z is 2 asin r: 2 / sqrt(1 - r^2) across the rings, more than the
-            // 2 sqrt(1 - r^2) around them; taken half a texel inside the rim for the texels
-            // the rim cuts.
             Projection::Sphere => {
-                let rim = 1.0 - iw;
-                let footprint = move |x: f32, y: f32| {
-                    let (sx, sy) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
-                    let rr = (sx * sx + sy * sy).min(rim * rim);
-                    4.0 * iw / (1.0 - rr).sqrt()
-                };
+                let footprint = move |x: f32, y: f32| sphere::footprint(w, h, x, y);
                 self.render(env, dims(f32::INFINITY), at(proj), footprint, density)
             }
-            // The larger singular value of the fold's map to directions, per texel.
             Projection::Octahedral => {
-                let footprint = move |x: f32, y: f32| {
-                    let (a, b) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
-                    2.0 * iw * octahedral::stretch(a, b)
-                };
+                let footprint = move |x: f32, y: f32| octahedral::footprint(w, h, x, y);
                 self.render(env, dims(f32::INFINITY), at(proj), footprint, density)
             }
         };

@@ -53,6 +53,28 @@ pub(crate) fn texel_solid_angle(n: usize, x: usize, y: usize) -> f32 {
         + corner_area(c(x + 1), c(y + 1))) as f32
 }
 
+/// Solid angle per unit texel area at continuous texel coordinates (x, y) of a face of edge
+/// `n`: the weight of a point when a texel is cut into sub-cells.
+#[inline(always)]
+pub(crate) fn texel_density(n: usize, x: f32, y: f32) -> f32 {
+    let inv = 2.0 / n as f32;
+    let (sc, tc) = (x * inv - 1.0, y * inv - 1.0);
+    let q = 1.0 + sc * sc + tc * tc;
+    inv * inv / (q * q.sqrt())
+}
+
+/// The angle one texel spans at continuous texel coordinates (x, y) of a face of edge `n`,
+/// along the larger axis: an output texel's footprint.
+#[inline(always)]
+pub(crate) fn texel_footprint(n: usize, x: f32, y: f32) -> f32 {
+    let inv = 1.0 / n as f32;
+    // Angle of one texel at (sc, tc) on the face plane, the larger axis.
+    let sc = 2.0 * x * inv - 1.0;
+    let tc = 2.0 * y * inv - 1.0;
+    let q = 1.0 + sc * sc + tc * tc;
+    2.0 * inv * (1.0 + sc.abs().max(tc.abs()).powi(2)).sqrt() / q
+}
+
 /// `texel_solid_angle` for every texel of a face (the same on all six), row by row: one
 /// arctangent per texel corner instead of four per texel. Remembered for the last few sizes:
 /// one command asks for the same size several times (its resample, bright split, mips), and

@@ -13,7 +13,7 @@
 
 #![warn(missing_docs)]
 
-use crate::cube::{dir_face, face_dir, solid_angle_table, texel_solid_angle};
+use crate::cube::{dir_face, face_dir, solid_angle_table, texel_density, texel_solid_angle};
 use crate::image::Image;
 use crate::layout::{equirect, Projection};
 use glam::Vec3;
@@ -29,6 +29,8 @@ pub use peaks::Peaks;
 pub(crate) const PEAK_RATIO: f32 = 8.0;
 
 /// The texel grid of a layout: where each texel looks and how much of the sphere it covers.
+/// The geometry is the layout's (`layout`'s file for each projection, `cube` for faces);
+/// a grid names it and adds what splatting needs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Grid {
     /// Six faces of edge n.
@@ -136,16 +138,8 @@ impl Grid {
                 (f, s * n as f32, t * n as f32)
             }
             Grid::Projection(p, w, h) => {
-                let mut uv = p.to_image(d);
-                if p.is_ball() {
-                    let c = uv * 2.0 - glam::Vec2::ONE;
-                    let max = 1.0 - 1.0 / w.max(h) as f32;
-                    let len = c.length();
-                    if len > max {
-                        uv = (c * (max / len) + glam::Vec2::ONE) * 0.5;
-                    }
-                }
-                (0, uv.x * w as f32, uv.y * h as f32)
+                let at = p.position(w, h, d);
+                (0, at.x, at.y)
             }
         }
     }
@@ -190,43 +184,8 @@ impl Grid {
     #[inline(always)]
     pub(crate) fn density(self, x: f32, y: f32) -> f32 {
         match self {
-            Grid::Cube(n) => {
-                let inv = 2.0 / n as f32;
-                let (sc, tc) = (x * inv - 1.0, y * inv - 1.0);
-                let q = 1.0 + sc * sc + tc * tc;
-                inv * inv / (q * q.sqrt())
-            }
-            Grid::Projection(p, w, h) => {
-                let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
-                match p {
-                    Projection::Equirect => {
-                        let lat = (0.5 - y * ih) * std::f32::consts::PI;
-                        std::f32::consts::TAU * iw * std::f32::consts::PI * ih * lat.cos().max(0.0)
-                    }
-                    Projection::Octahedral => {
-                        let (a, b) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
-                        4.0 * iw * ih * crate::layout::octahedral::density(a, b)
-                    }
-                    Projection::Sphere | Projection::Angular => {
-                        let (sx, sy) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
-                        let r = (sx * sx + sy * sy).sqrt();
-                        if r > 1.0 {
-                            return 0.0;
-                        }
-                        // Texel area in units of the disc radius squared.
-                        let area = 4.0 * iw * ih;
-                        area * if p == Projection::Sphere {
-                            // A mirror ball is equal-area: the angle from -Z is 2 asin r.
-                            4.0
-                        } else if r < 1e-6 {
-                            std::f32::consts::PI * std::f32::consts::PI
-                        } else {
-                            // Angle pi r: sin(pi r) / r times pi per unit of r.
-                            std::f32::consts::PI * (std::f32::consts::PI * r).sin() / r
-                        }
-                    }
-                }
-            }
+            Grid::Cube(n) => texel_density(n, x, y),
+            Grid::Projection(p, w, h) => p.texel_density(w, h, x, y),
         }
     }
 
@@ -236,31 +195,7 @@ impl Grid {
     pub fn solid_angle(self, x: usize, y: usize) -> f64 {
         match self {
             Grid::Cube(n) => texel_solid_angle(n, x, y) as f64,
-            Grid::Projection(Projection::Equirect, w, h) => equirect_row(w, h, y),
-            Grid::Projection(Projection::Octahedral, w, h) => {
-                crate::layout::octahedral::texel_solid_angle(w, h, x, y)
-            }
-            Grid::Projection(_, w, h) => {
-                let corner_in = |cx: usize, cy: usize| {
-                    let sx = 2.0 * cx as f64 / w as f64 - 1.0;
-                    let sy = 2.0 * cy as f64 / h as f64 - 1.0;
-                    sx * sx + sy * sy < 1.0
-                };
-                let inside = corner_in(x, y)
-                    && corner_in(x + 1, y)
-                    && corner_in(x, y + 1)
-                    && corner_in(x + 1, y + 1);
-                let k = if inside { 4 } else { 16 };
-                let mut sum = 0.0f64;
-                for j in 0..k {
-                    for i in 0..k {
-                        let px = x as f32 + (i as f32 + 0.5) / k as f32;
-                        let py = y as f32 + (j as f32 + 0.5) / k as f32;
-                        sum += self.density(px, py) as f64;
-                    }
-                }
-                sum / (k * k) as f64
-            }
+            Grid::Projection(p, w, h) => p.texel_solid_angle(w, h, x, y),
         }
     }
 
@@ -278,13 +213,6 @@ impl Grid {
                 .collect(),
         }
     }
-}
-
-/// Solid angle of one texel of row `y` of a w x h panorama: its longitude span times the
-/// difference of the sines of its edges' latitudes.
-fn equirect_row(w: usize, h: usize, y: usize) -> f64 {
-    let lat = |v: usize| (0.5 - v as f64 / h as f64) * PI;
-    2.0 * PI / w as f64 * (lat(y).sin() - lat(y + 1).sin())
 }
 
 /// The flux of a map: solid-angle-weighted mean radiance per channel (R, G, B). Sums run in
@@ -311,7 +239,7 @@ pub fn mean_radiance(grid: Grid, images: &[&Image]) -> [f64; 3] {
             let img = images[face];
             let mut acc = [0.0f64; 3];
             let mut total = 0.0;
-            let row = equirect.then(|| equirect_row(w, h, y));
+            let row = equirect.then(|| equirect::texel_solid_angle(w, h, y));
             for x in 0..w {
                 let a = row.unwrap_or_else(|| match face_table.get(y * w + x) {
                     Some(&t) => t as f64,

@@ -4,7 +4,7 @@
 #![warn(missing_docs)]
 
 use glam::{Vec2, Vec3};
-use std::f32::consts::PI;
+use std::f32::consts::{PI, TAU};
 
 /// (s, t) of a unit direction, t pointing up (row 0 is t = 1).
 #[inline]
@@ -22,6 +22,30 @@ pub fn dir_to_st(d: Vec3) -> Vec2 {
     }
     let r = a / PI / len;
     Vec2::new(0.5 + 0.5 * d.x * r, 0.5 + 0.5 * d.y * r)
+}
+
+/// Solid angle per unit texel area at continuous texel coordinates (x, y) of a w x h angular
+/// map, 0 outside the disc.
+#[inline(always)]
+pub(crate) fn texel_density(w: usize, h: usize, x: f32, y: f32) -> f32 {
+    match super::ball::radius_and_area(w, h, x, y) {
+        Some((r, area)) => {
+            area * if r < 1e-6 {
+                PI * PI
+            } else {
+                // Angle pi r: sin(pi r) / r times pi per unit of r.
+                PI * (PI * r).sin() / r
+            }
+        }
+        None => 0.0,
+    }
+}
+
+/// The angle one texel of a w x h angular map spans, everywhere: the angle from -Z is pi r,
+/// pi per unit radius, across and around.
+#[inline]
+pub(crate) fn footprint(w: usize) -> f32 {
+    TAU * (1.0 / w as f32)
 }
 
 /// The direction at (s, t), or None outside the disc.

@@ -52,6 +52,37 @@ pub fn uv_to_dir(u: f32, v: f32) -> Vec3 {
     Vec3::new(ct * sp, st, ct * cp)
 }
 
+/// Solid angle per unit texel area at continuous texel row coordinate `y` of a w x h
+/// panorama (the same along a row): the weight of a point when a texel is cut into sub-cells.
+#[inline(always)]
+pub(crate) fn texel_density(w: usize, h: usize, y: f32) -> f32 {
+    let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
+    let lat = (0.5 - y * ih) * PI;
+    TAU * iw * PI * ih * lat.cos().max(0.0)
+}
+
+/// A w x h panorama's texel weights, one per row: `texel_density` at the row's centre.
+pub(crate) fn row_weights(w: usize, h: usize) -> Vec<f32> {
+    (0..h)
+        .map(|y| texel_density(w, h, y as f32 + 0.5))
+        .collect()
+}
+
+/// Solid angle of one texel of row `y` of a w x h panorama: its longitude span times the
+/// difference of the sines of its edges' latitudes.
+pub(crate) fn texel_solid_angle(w: usize, h: usize, y: usize) -> f64 {
+    use std::f64::consts::PI;
+    let lat = |v: usize| (0.5 - v as f64 / h as f64) * PI;
+    2.0 * PI / w as f64 * (lat(y).sin() - lat(y + 1).sin())
+}
+
+/// The angle one texel of a panorama `h` texels high spans, everywhere: a row's height (its
+/// width is less, away from the equator).
+#[inline]
+pub(crate) fn footprint(h: usize) -> f32 {
+    PI * (1.0 / h as f32)
+}
+
 /// (sin a, cos a) within 2e-7 of libm's for |a| <= pi (panorama angles), inlined and
 /// branch-free: two libm calls per texel were most of the cost of writing a panorama.
 /// Angles beyond a right angle fold back (sin(pi - a) = sin a, cos(pi - a) = -cos a), then

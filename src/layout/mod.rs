@@ -1,9 +1,12 @@
 //! Layouts: each is a mapping between directions and image coordinates, written once and used
-//! both to read an input and to write an output.
+//! both to read an input and to write an output. Each layout's file owns its geometry: the
+//! mapping both ways, its texels' density and solid angles, and an output texel's footprint
+//! (`ball` what mirror balls and angular maps share); [`Projection`] dispatches to them.
 
 #![warn(missing_docs)]
 
 pub mod angular;
+mod ball;
 pub mod cross;
 pub mod equirect;
 pub mod octahedral;
@@ -190,6 +193,41 @@ impl Projection {
         matches!(self, Projection::Sphere | Projection::Angular)
     }
 
+    /// Solid angle per unit texel area at continuous texel coordinates (x, y) of a w x h
+    /// image (0 outside a ball): the weight of a point when a texel is cut into sub-cells.
+    #[inline(always)]
+    pub(crate) fn texel_density(self, w: usize, h: usize, x: f32, y: f32) -> f32 {
+        match self {
+            Projection::Equirect => equirect::texel_density(w, h, y),
+            Projection::Sphere => sphere::texel_density(w, h, x, y),
+            Projection::Angular => angular::texel_density(w, h, x, y),
+            Projection::Octahedral => octahedral::texel_density(w, h, x, y),
+        }
+    }
+
+    /// Solid angle of texel (x, y) of a w x h image: exact for panoramas and octahedral maps
+    /// (closed forms), a fine midpoint sum on balls (see [`ball::texel_solid_angle`]).
+    pub(crate) fn texel_solid_angle(self, w: usize, h: usize, x: usize, y: usize) -> f64 {
+        match self {
+            Projection::Equirect => equirect::texel_solid_angle(w, h, y),
+            Projection::Octahedral => octahedral::texel_solid_angle(w, h, x, y),
+            Projection::Sphere | Projection::Angular => {
+                ball::texel_solid_angle(w, h, x, y, |px, py| self.texel_density(w, h, px, py))
+            }
+        }
+    }
+
+    /// Continuous texel coordinates in a w x h image of a unit direction. On a ball the point
+    /// is kept inside [`ball::rim`], so the texel it names always covers some of the sphere.
+    #[inline]
+    pub(crate) fn position(self, w: usize, h: usize, d: Vec3) -> Vec2 {
+        let mut uv = self.to_image(d);
+        if self.is_ball() {
+            uv = ball::inside_rim(uv, w.max(h));
+        }
+        Vec2::new(uv.x * w as f32, uv.y * h as f32)
+    }
+
     /// How lookups read past the image's edges: a panorama's columns wrap, an octahedral
     /// map's edges fold onto themselves, a ball's (dark outside) edges clamp.
     pub(crate) fn edges(self) -> Edges {
@@ -260,32 +298,23 @@ impl<'a> ImageEnv<'a> {
         }
     }
 
-    /// `below` for a panorama whose peaks are not known yet: finds them in the same pass that
-    /// makes level 1 (when `levels` asks for it), and returns them with the environment.
-    pub(crate) fn split_panorama(
+    /// `below` for a panorama whose level 1 is already made: `first`, level 0 clamped to
+    /// `ceiling` and reduced with [`equirect::row_weights`] (in the same pass that finds the
+    /// peaks whose ceiling it is).
+    pub(crate) fn panorama_from_level_one(
         base: &'a Image,
+        first: Image,
         levels: Option<usize>,
-    ) -> (ImageEnv<'a>, Option<crate::flux::Peaks>) {
-        use crate::flux::{Grid, Peaks};
-        let grid = Grid::Projection(Projection::Equirect, base.width, base.height);
-        let ceiling_of = |p: &Option<Peaks>| p.as_ref().map_or(Vec4::INFINITY, Peaks::ceiling_vec);
-        if levels.is_some_and(|l| l < 2) || base.height <= 8 {
-            let peaks = Peaks::find(grid, &[base]);
-            let env = Self::below(Projection::Equirect, base, levels, ceiling_of(&peaks));
-            return (env, peaks);
-        }
-        let weights = row_weights(base.width, base.height);
-        let (peaks, first) = Peaks::find_reducing(grid, base, &weights);
-        let ceiling = ceiling_of(&peaks);
+        ceiling: Vec4,
+    ) -> ImageEnv<'a> {
         let mut pyramid = vec![first];
         grow(Projection::Equirect, base, &mut pyramid, levels, ceiling);
-        let env = ImageEnv {
+        ImageEnv {
             projection: Projection::Equirect,
             base,
             pyramid,
             ceiling,
-        };
-        (env, peaks)
+        }
     }
 
     fn level(&self, level: usize) -> &Image {
@@ -317,20 +346,17 @@ fn grow(
         } else {
             Vec4::INFINITY
         };
+        let (w, h) = (last.width, last.height);
         let next = if projection == Projection::Equirect {
-            last.downsample_2x_rows(&row_weights(last.width, last.height), clamp)
+            last.downsample_2x_rows(&equirect::row_weights(w, h), clamp)
         } else {
-            let grid = crate::flux::Grid::Projection(projection, last.width, last.height);
-            last.downsample_2x_weighted(|x, y| grid.density(x as f32 + 0.5, y as f32 + 0.5), clamp)
+            last.downsample_2x_weighted(
+                |x, y| projection.texel_density(w, h, x as f32 + 0.5, y as f32 + 0.5),
+                clamp,
+            )
         };
         pyramid.push(next);
     }
-}
-
-/// A panorama's texel weights, one per row (the solid angle per unit area at the row's centre).
-fn row_weights(w: usize, h: usize) -> Vec<f32> {
-    let grid = crate::flux::Grid::Projection(Projection::Equirect, w, h);
-    (0..h).map(|y| grid.density(0.5, y as f32 + 0.5)).collect()
 }
 
 impl ImageEnv<'_> {
@@ -340,13 +366,8 @@ impl ImageEnv<'_> {
         let img = self.level(level);
         let edges = self.projection.edges();
         if self.projection.is_ball() {
-            // Keep the taps half a texel inside the disc so its dark outside never bleeds in.
-            let c = uv * 2.0 - Vec2::ONE;
-            let max = 1.0 - 1.0 / img.width as f32;
-            let len = c.length();
-            if len > max {
-                uv = (c * (max / len) + Vec2::ONE) * 0.5;
-            }
+            // Keep the taps inside the rim so the disc's dark outside never bleeds in.
+            uv = ball::inside_rim(uv, img.width);
         }
         let x = uv.x * img.width as f32;
         let y = uv.y * img.height as f32;

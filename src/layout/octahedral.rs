@@ -87,6 +87,24 @@ pub(crate) fn stretch(a: f32, b: f32) -> f32 {
     (half + (diff * diff + g12 * g12).sqrt()).sqrt()
 }
 
+/// Solid angle per unit texel area at continuous texel coordinates (x, y) of a w x h
+/// octahedral map (`density` scaled to texels).
+#[inline(always)]
+pub(crate) fn texel_density(w: usize, h: usize, x: f32, y: f32) -> f32 {
+    let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
+    let (a, b) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
+    4.0 * iw * ih * density(a, b)
+}
+
+/// The angle one texel of a w x h octahedral map spans at continuous texel coordinates
+/// (x, y): `stretch` times the texel's size in units of (a, b).
+#[inline(always)]
+pub(crate) fn footprint(w: usize, h: usize, x: f32, y: f32) -> f32 {
+    let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
+    let (a, b) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
+    2.0 * iw * stretch(a, b)
+}
+
 /// The exact solid angle of texel (x, y) of a w x h octahedral map. The texel is cut where the
 /// map folds (the axes and the diamond's edges); each piece is a planar polygon on one face of
 /// the octahedron, whose solid angle is a sum of triangles' (Van Oosterom and Strackee).

@@ -17,6 +17,30 @@ pub fn dir_to_st(r: Vec3) -> Vec2 {
     Vec2::new(0.5 + r.x / m, 0.5 + r.y / m)
 }
 
+/// Solid angle per unit texel area at continuous texel coordinates (x, y) of a w x h mirror
+/// ball, 0 outside the disc.
+#[inline(always)]
+pub(crate) fn texel_density(w: usize, h: usize, x: f32, y: f32) -> f32 {
+    match super::ball::radius_and_area(w, h, x, y) {
+        // A mirror ball is equal-area: the angle from -Z is 2 asin r.
+        Some((_, area)) => area * 4.0,
+        None => 0.0,
+    }
+}
+
+/// The angle one texel of a w x h mirror ball spans at continuous texel coordinates (x, y):
+/// the angle from -Z is 2 asin r, 2 / sqrt(1 - r^2) across the rings, more than the
+/// 2 sqrt(1 - r^2) around them; taken at most [`super::ball::rim`] out, for the texels the
+/// rim cuts.
+#[inline(always)]
+pub(crate) fn footprint(w: usize, h: usize, x: f32, y: f32) -> f32 {
+    let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
+    let rim = super::ball::rim(w);
+    let (sx, sy) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
+    let rr = (sx * sx + sy * sy).min(rim * rim);
+    4.0 * iw / (1.0 - rr).sqrt()
+}
+
 /// The reflected direction seen at (s, t), or None outside the ball.
 #[inline]
 pub fn st_to_dir(s: f32, t: f32) -> Option<Vec3> {
