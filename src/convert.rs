@@ -106,18 +106,9 @@ impl Loaded {
         &self,
         max_footprint: Option<f32>,
     ) -> (Box<dyn Environment + '_>, Option<Peaks>) {
-        let levels = |texel_angle: f32| {
-            max_footprint.map(|f| {
-                // The deepest level the resampler picks for that footprint (it reads level 0
-                // up to 1.5 texels).
-                let ratio = f / texel_angle;
-                if ratio <= 1.5 {
-                    1
-                } else {
-                    crate::resample::deepest_level(ratio) + 1
-                }
-            })
-        };
+        // Down to the deepest level the resampler picks for that footprint.
+        let levels =
+            |texel_angle: f32| max_footprint.map(|f| crate::resample::levels_for(f / texel_angle));
         match &self.source {
             Source::Projection(p, img) => {
                 let angle = ImageEnv::new(*p, img, Some(1)).texel_angle();

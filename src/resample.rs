@@ -80,6 +80,9 @@ fn taps_per_axis(texels: usize) -> usize {
     ((TAP_BUDGET / texels.max(1) as f64).sqrt() as usize).clamp(MIN_SUB, MAX_SUB)
 }
 
+/// Source texels an output texel may span and still be one tap at its centre, on level 0.
+const ONE_TAP: f32 = 1.5;
+
 /// Subsamples per axis of a texel a ball's rim cuts (its centre outside the ball).
 const RIM_SUB: usize = 4;
 
@@ -100,9 +103,14 @@ fn footprint_level(ratio: f32, sub: usize) -> usize {
     ((bits >> 23) as usize - 127) + usize::from(bits & 0x7f_ffff != 0)
 }
 
-/// The deepest pyramid level any output reads for a footprint of `ratio` source texels.
-pub(crate) fn deepest_level(ratio: f32) -> usize {
-    footprint_level(ratio, MIN_SUB)
+/// The pyramid levels an input needs for outputs whose texels span at most `ratio` of its
+/// texels: level 0 alone up to `ONE_TAP`, else down to the deepest level any output reads.
+pub(crate) fn levels_for(ratio: f32) -> usize {
+    if ratio <= ONE_TAP {
+        1
+    } else {
+        footprint_level(ratio, MIN_SUB) + 1
+    }
 }
 
 impl Resampler {
@@ -217,7 +225,7 @@ impl Resampler {
         let sub = taps_per_axis(texels);
         // An output no sharper than the input anywhere takes one tap per texel: no texel's
         // footprint need be worked out (a square root and a division each).
-        let single = !self.antialias || widest / src_angle <= 1.5;
+        let single = !self.antialias || widest / src_angle <= ONE_TAP;
         Image::from_rows(w, h, |y, row| {
             let setup = (turn, src_angle, levels, sub, single);
             let lookups = (&dir, &footprint, &density);
@@ -263,7 +271,7 @@ impl Resampler {
             // The common case first: every texel of the run one tap at its centre (an
             // output about as sharp as the input), looked up straight into the row.
             if single_taps(&mut taps.dirs, run * RUN, y, out.len(), |cx, cy| {
-                if single || ratio(cx, cy) <= 1.5 {
+                if single || ratio(cx, cy) <= ONE_TAP {
                     dir(cx, cy)
                 } else {
                     None
@@ -286,7 +294,7 @@ impl Resampler {
                 let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
                 let ratio = ratio(cx, cy);
                 let centre = dir(cx, cy);
-                if ratio <= 1.5 && (centre.is_some() || !this.antialias) {
+                if ratio <= ONE_TAP && (centre.is_some() || !this.antialias) {
                     if let Some(d) = centre {
                         taps.push(d, 0, i, 1.0, &mut acc);
                         empty[i] = false;
