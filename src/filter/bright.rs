@@ -3,7 +3,7 @@
 
 #![warn(missing_docs)]
 
-use super::lobe::Lobe;
+use super::shape::Lobe;
 use crate::cube::{solid_angle_table, texel_dir, CubeMap, Faces};
 use glam::{Vec3, Vec4};
 use std::f32::consts::PI;

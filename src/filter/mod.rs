@@ -11,6 +11,7 @@ pub mod lobe;
 mod roughness;
 pub mod sh;
 pub mod sh_engines;
+mod shape;
 mod window;
 
 pub use diffuse::{irradiance, irradiance_with_progress, IrradianceMethod};
