@@ -134,7 +134,7 @@ impl Resampler {
                 env,
                 (size, size, 6 * size * size, 2.0 * inv),
                 |x, y| Some(face_dir(face, x * inv, y * inv)),
-                |x, y| texel_footprint(size, x, y),
+                |x, y| texel_footprint(inv, x, y),
                 |x, y| grid.density(x, y),
             )
         });
@@ -191,11 +191,11 @@ impl Resampler {
                 self.render(env, dims(texel), at(proj), move |_, _| texel, density)
             }
             Projection::Sphere => {
-                let footprint = move |x: f32, y: f32| sphere::footprint(w, h, x, y);
+                let footprint = move |x: f32, y: f32| sphere::footprint(iw, ih, x, y);
                 self.render(env, dims(f32::INFINITY), at(proj), footprint, density)
             }
             Projection::Octahedral => {
-                let footprint = move |x: f32, y: f32| octahedral::footprint(w, h, x, y);
+                let footprint = move |x: f32, y: f32| octahedral::footprint(iw, ih, x, y);
                 self.render(env, dims(f32::INFINITY), at(proj), footprint, density)
             }
         };

@@ -64,10 +64,10 @@ pub(crate) fn texel_density(n: usize, x: f32, y: f32) -> f32 {
 }
 
 /// The angle one texel spans at continuous texel coordinates (x, y) of a face of edge `n`,
-/// along the larger axis: an output texel's footprint.
+/// along the larger axis: an output texel's footprint. `inv`: 1 / n, worked out once per
+/// face by the caller (not a division per texel).
 #[inline(always)]
-pub(crate) fn texel_footprint(n: usize, x: f32, y: f32) -> f32 {
-    let inv = 1.0 / n as f32;
+pub(crate) fn texel_footprint(inv: f32, x: f32, y: f32) -> f32 {
     // Angle of one texel at (sc, tc) on the face plane, the larger axis.
     let sc = 2.0 * x * inv - 1.0;
     let tc = 2.0 * y * inv - 1.0;

@@ -33,9 +33,10 @@ pub(crate) fn texel_density(w: usize, h: usize, x: f32, y: f32) -> f32 {
 /// 2 sqrt(1 - r^2) around them; taken at most [`super::ball::rim`] out, for the texels the
 /// rim cuts.
 #[inline(always)]
-pub(crate) fn footprint(w: usize, h: usize, x: f32, y: f32) -> f32 {
-    let (iw, ih) = (1.0 / w as f32, 1.0 / h as f32);
-    let rim = super::ball::rim(w);
+/// `iw`, `ih`: 1 / w and 1 / h, worked out once per image by the caller.
+pub(crate) fn footprint(iw: f32, ih: f32, x: f32, y: f32) -> f32 {
+    // The rim of super::ball::rim(w).
+    let rim = 1.0 - iw;
     let (sx, sy) = (2.0 * x * iw - 1.0, 2.0 * y * ih - 1.0);
     let rr = (sx * sx + sy * sy).min(rim * rim);
     4.0 * iw / (1.0 - rr).sqrt()

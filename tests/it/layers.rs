@@ -203,3 +203,60 @@ fn crate_paths_are_read_as_written() {
     let got: Vec<String> = named(&text, &known).into_iter().collect();
     assert_eq!(got, ["cube", "flux", "image", "io"]);
 }
+
+/// Within each module folder, its files import each other without a cycle either
+/// (`filter::bright` and `filter::lobe` did, until the lobes' shapes moved below both).
+#[test]
+fn submodules_form_no_cycle() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    for top in std::fs::read_dir(&src).unwrap().flatten() {
+        let dir = top.path();
+        let name = dir.file_name().unwrap().to_string_lossy().into_owned();
+        if !dir.is_dir() || name == "cli" {
+            continue;
+        }
+        let mut files = Vec::new();
+        walk(&dir, &mut files);
+        // Each file's submodule: the first path component under the folder (mod.rs is the
+        // folder itself).
+        let sub = |f: &Path| -> String {
+            let rel = f.strip_prefix(&dir).unwrap();
+            rel.components()
+                .next()
+                .unwrap()
+                .as_os_str()
+                .to_string_lossy()
+                .trim_end_matches(".rs")
+                .to_owned()
+        };
+        let subs: BTreeSet<String> = files
+            .iter()
+            .map(|f| sub(f))
+            .filter(|s| s != "mod")
+            .collect();
+        let known: BTreeMap<&str, u32> = subs.iter().map(|s| (s.as_str(), 0)).collect();
+        let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+        for f in &files {
+            let from = sub(f);
+            if from == "mod" {
+                continue;
+            }
+            let text = std::fs::read_to_string(f).unwrap();
+            let text = match text.find("#[cfg(test)]") {
+                Some(i) => &text[..i],
+                None => &text[..],
+            };
+            let text = code(text)
+                .replace("super::", "crate::")
+                .replace(&format!("crate::{name}::"), "crate::");
+            let mut to = named(&text, &known);
+            to.remove(&from);
+            edges.entry(from).or_default().extend(to);
+        }
+        let found = cycles(&edges);
+        assert!(
+            found.is_empty(),
+            "src/{name}: its files import each other in a cycle: {found:?}"
+        );
+    }
+}
