@@ -127,3 +127,8 @@ pub use output::Destination;
 pub use preview::{Background, Options as View, Parallax, ParallaxMode, Shading};
 pub use resample::{Orientation, Resampler};
 pub use tonemap::Tonemap;
+
+/// The README's Rust example, compiled and run with the doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

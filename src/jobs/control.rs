@@ -47,13 +47,7 @@ impl ControlJob {
     }
 
     fn format(&self) -> Result<FileFormat> {
-        match FileFormat::from_extension(&self.output) {
-            Some(f @ (FileFormat::Png | FileFormat::Exr | FileFormat::Ktx2)) => Ok(f),
-            _ => Err(Error::file(
-                &self.output,
-                format!("a control map is written as {}", super::lut::TABLE_FORMATS),
-            )),
-        }
+        super::lut::table_format(&self.output, "a control map", self.png16)
     }
 
     /// `mask.png` -> `mask.png.json`.
@@ -65,12 +59,6 @@ impl ControlJob {
 impl Job for ControlJob {
     fn validate(&self) -> Result<Vec<Warning>> {
         let format = self.format()?;
-        if self.png16 && format != FileFormat::Png {
-            return Err(Error::usage(format!(
-                "{} applies to PNG output only",
-                param("png16")
-            )));
-        }
         if self.levels.is_some() && format != FileFormat::Ktx2 {
             return Err(Error::usage(format!(
                 "{} applies to KTX2 output only",

@@ -5,7 +5,7 @@ use crate::error::{param, Error, Result};
 use crate::io::{self, ktx2, FileFormat, GpuFormat, Limits, WriteOptions};
 use crate::lut::{self, LutOptions};
 use crate::output::{self, Destination, Files};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The files a table (or a control map) is written as: 8- or 16-bit PNG, half-float EXR,
 /// or a one-level KTX2.
@@ -54,25 +54,34 @@ impl LutJob {
     }
 
     fn format(&self) -> Result<FileFormat> {
-        match FileFormat::from_extension(&self.output) {
-            Some(f @ (FileFormat::Png | FileFormat::Exr | FileFormat::Ktx2)) => Ok(f),
-            _ => Err(Error::file(
-                &self.output,
-                format!("a lookup table is written as {}", TABLE_FORMATS),
-            )),
-        }
+        table_format(&self.output, "a lookup table", self.png16)
     }
+}
+
+/// The file type of a table or a control map at `output` ([`TABLE_FORMATS`]); `png16` is
+/// refused for any other than PNG. `what` names the output in the message.
+pub(crate) fn table_format(output: &Path, what: &str, png16: bool) -> Result<FileFormat> {
+    let format = match FileFormat::from_extension(output) {
+        Some(f @ (FileFormat::Png | FileFormat::Exr | FileFormat::Ktx2)) => f,
+        _ => {
+            return Err(Error::file(
+                output,
+                format!("{what} is written as {TABLE_FORMATS}"),
+            ))
+        }
+    };
+    if png16 && format != FileFormat::Png {
+        return Err(Error::usage(format!(
+            "{} applies to PNG output only",
+            param("png16")
+        )));
+    }
+    Ok(format)
 }
 
 impl Job for LutJob {
     fn validate(&self) -> Result<Vec<Warning>> {
-        let format = self.format()?;
-        if self.png16 && format != FileFormat::Png {
-            return Err(Error::usage(format!(
-                "{} applies to PNG output only",
-                param("png16")
-            )));
-        }
+        self.format()?;
         if !(2..=4096).contains(&self.size) || self.samples == 0 {
             return Err(Error::usage(format!(
                 "{} {} with {} {}: use a size of 2 to 4096 and at least 1 sample",

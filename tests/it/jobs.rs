@@ -160,7 +160,7 @@ fn command_line_runs_are_short() {
 fn only_the_output_module_writes_files() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();
-    walk(&src, &mut files);
+    crate::layers::walk(&src, &mut files);
     let writes = [
         "fs::write(",
         "File::create(",
@@ -191,17 +191,6 @@ fn only_the_output_module_writes_files() {
                 })
                 .any(|l| l.contains(w));
             assert!(!used, "src/{rel} calls {w}: write through output::deliver");
-        }
-    }
-}
-
-fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
-    for e in std::fs::read_dir(dir).unwrap().flatten() {
-        let p = e.path();
-        if p.is_dir() {
-            walk(&p, out);
-        } else if p.extension().is_some_and(|x| x == "rs") {
-            out.push(p);
         }
     }
 }

@@ -80,7 +80,7 @@ fn named(text: &str, known: &BTreeMap<&str, u32>) -> BTreeSet<String> {
     out
 }
 
-fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+pub(crate) fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
     for e in std::fs::read_dir(dir).unwrap().flatten() {
         let p = e.path();
         if p.is_dir() {
