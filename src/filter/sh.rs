@@ -105,6 +105,14 @@ pub fn irradiance(radiance: &[[f64; 3]; 9]) -> [[f64; 3]; 9] {
     std::array::from_fn(|i| radiance[i].map(|v| v * COSINE_BAND[band(i)]))
 }
 
+/// Coefficients of E(n) / pi, the diffuse light a white Lambertian surface reflects: what
+/// shaders multiply by the albedo (the `sh.json` file's, the preview's, Babylon's polynomial's
+/// source).
+pub fn irradiance_over_pi(radiance: &[[f64; 3]; 9]) -> [[f64; 3]; 9] {
+    let e = irradiance(radiance);
+    std::array::from_fn(|i| e[i].map(|v| v / PI))
+}
+
 /// Evaluates coefficients at a direction.
 pub(crate) fn eval(coeffs: &[[f64; 3]; 9], d: Vec3) -> Vec4 {
     let y = basis(d);
@@ -171,7 +179,7 @@ impl ShFile {
                 .collect(),
             radiance: radiance.to_vec(),
             irradiance: e.to_vec(),
-            irradiance_over_pi: e.iter().map(|c| c.map(|v| v / PI)).collect(),
+            irradiance_over_pi: irradiance_over_pi(radiance).to_vec(),
             note: "shader: color = albedo * sum_i irradiance_over_pi[i] * Y_i(n), Y_i = constant * polynomial above",
         }
     }

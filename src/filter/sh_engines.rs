@@ -2,7 +2,7 @@
 //! (KTX 1's `sh` key, Babylon's .env manifest) only serialise numbers: Filament's irradiance
 //! over pi with the basis constants folded in, and Babylon's irradiance polynomial.
 
-use super::sh::{basis, irradiance, BASIS};
+use super::sh::{basis, irradiance, irradiance_over_pi, BASIS};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -62,8 +62,10 @@ impl SphericalPolynomial {
     /// basis differs from cubeforge's only by Condon-Shortley signs, which cancel here) put
     /// through Babylon's `updateFromHarmonics`, constants and all. Non-finite values become 0.
     pub fn from_radiance_sh(radiance: &[[f64; 3]; 9]) -> SphericalPolynomial {
-        let e = irradiance(radiance);
-        let h = |i: usize| e[i].map(|v| if v.is_finite() { v / PI } else { 0.0 });
+        // E / pi; a finite value stays finite when divided by pi, so this is the test Babylon's
+        // coefficients had.
+        let e = irradiance_over_pi(radiance);
+        let h = |i: usize| e[i].map(|v| if v.is_finite() { v } else { 0.0 });
         let lin = |i: usize, k: f64| h(i).map(|v| k * v / PI);
         let comb = |a: f64, b: f64, c: f64| -> [f64; 3] {
             std::array::from_fn(|ch| (a * h(0)[ch] + b * h(6)[ch] + c * h(8)[ch]) / PI)

@@ -137,10 +137,9 @@ impl SplitSum {
     /// Split-sum lighting from a chain's mapping and the order-2 SH coefficients of its
     /// radiance ([`crate::filter::sh::project`] order).
     pub fn new(mapping: LevelMapping, radiance_sh: &[[f64; 3]; 9]) -> SplitSum {
-        let e = filter::sh::irradiance(radiance_sh);
         SplitSum {
             mapping,
-            irradiance_over_pi: std::array::from_fn(|i| e[i].map(|v| v / std::f64::consts::PI)),
+            irradiance_over_pi: filter::sh::irradiance_over_pi(radiance_sh),
             dfg: dfg_table(),
         }
     }
