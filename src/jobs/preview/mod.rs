@@ -178,10 +178,10 @@ fn tone_mapped(output: &Destination) -> bool {
         .is_some_and(|f| io::largest_value(f, Default::default()).is_none())
 }
 
-impl Job for PreviewJob {
+impl PreviewJob {
     /// Everything that can be checked before anything is read, in the order the errors are
-    /// reported.
-    fn validate(&self) -> Result<Vec<Warning>> {
+    /// reported; the materials resolved on the way (a material file is read once a run).
+    fn checked(&self) -> Result<(Vec<Warning>, Vec<Material>)> {
         let name = self.output.name();
         let mut warnings = Vec::new();
         match FileFormat::from_extension(&name) {
@@ -223,17 +223,16 @@ impl Job for PreviewJob {
                 param("max_pixels")
             )));
         }
-        Ok(warnings)
+        Ok((warnings, materials))
     }
 
     /// Each cell's picture and its samples' buffers, RGBA f32, beside the environment as its
     /// headers describe it (its decode's peak too) and the textures on the sphere (the
     /// largest one's decode on top).
-    fn memory_estimate(&self) -> Result<u64> {
+    fn estimate_with(&self, materials: &[Material]) -> Result<u64> {
         let read = self.read();
         let mut input =
             chain::plan(std::slice::from_ref(&self.env), self.from, &read)?.working_bytes();
-        let materials = self.materials()?;
         let mut textures: Vec<&PathBuf> = self.decal.iter().chain(&self.control).collect();
         if self.decal.is_none() {
             textures.extend(materials.iter().filter_map(|m| m.decal.as_ref()));
@@ -253,14 +252,24 @@ impl Job for PreviewJob {
             .saturating_mul(16 * 3)
             .saturating_add(input.saturating_add(peak)))
     }
+}
+
+impl Job for PreviewJob {
+    fn validate(&self) -> Result<Vec<Warning>> {
+        Ok(self.checked()?.0)
+    }
+
+    fn memory_estimate(&self) -> Result<u64> {
+        self.estimate_with(&self.materials()?)
+    }
 
     fn run(&self, progress: &dyn Progress) -> Result<Report> {
         let mut warnings = Warnings::new(progress);
-        warnings.extend(self.validate()?);
-        let materials = self.materials()?;
+        let (checked, materials) = self.checked()?;
+        warnings.extend(checked);
         self.limits.check_memory(
             format_args!("{} {}", param("size"), self.view.size),
-            self.memory_estimate()?,
+            self.estimate_with(&materials)?,
         )?;
         let env = preview::load_environment(&self.env, self.from, &self.read())?;
         if let Some(w) = super::replaced_values(&self.env, env.replaced_values as u64) {
