@@ -115,7 +115,7 @@ pub fn plan(
                 if !sub.is_dir() {
                     break;
                 }
-                files.extend(convert::find_faces(&sub)?);
+                files.extend(convert::find_faces(&sub)?.0);
             }
             convert::plan_files(&files, from, opts)
         }
@@ -306,16 +306,12 @@ pub fn encode(
 ) -> Result<crate::output::Encoded> {
     let refuse = |p: &[PathBuf]| crate::output::refuse_inputs(p, inputs);
     let container = FileFormat::from_extension(path).filter(|f| f.is_container());
-    let clamped = io::clamp_warning(
-        path,
-        container.unwrap_or(face_format),
-        gpu_format,
-        chain.levels.iter().flatten(),
-    );
     let opts = WriteOptions {
         gpu_format,
         ..*write
     };
+    let format = container.unwrap_or(face_format);
+    let clamped = io::clamp_warning_with(path, format, &opts, chain.levels.iter().flatten());
     let files = match container {
         Some(FileFormat::Ktx2) => {
             refuse(&[path.to_path_buf()])?;

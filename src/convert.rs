@@ -4,7 +4,8 @@
 #![warn(missing_docs)]
 
 use crate::cube::{
-    faces_from_images, CubeMap, CubeSampler, Environment, FACE_LONG_NAMES, FACE_NAMES,
+    face_of_stem, faces_from_images, CubeMap, CubeSampler, Environment, FaceNaming,
+    FACE_LONG_NAMES, FACE_NAMES, SKYBOX_WORDS,
 };
 use crate::error::{Error, Result};
 use crate::flux::{Grid, Peaks};
@@ -53,6 +54,22 @@ impl Loaded {
                 stored_levels: 1,
             },
             files: Vec::new(),
+        }
+    }
+
+    /// Scales the input's radiance by 2^`exposure` (every level, alpha unchanged): what
+    /// `--exposure` does before a chain, an irradiance map or an engine's files are computed.
+    pub fn expose(&mut self, exposure: f32) {
+        if exposure == 0.0 {
+            return;
+        }
+        match &mut self.source {
+            Source::Cube(c) => c
+                .levels
+                .iter_mut()
+                .flatten()
+                .for_each(|f| crate::tonemap::scale(f, exposure)),
+            Source::Projection(_, img) => crate::tonemap::scale(img, exposure),
         }
     }
 
@@ -206,7 +223,7 @@ impl InputPlan {
 /// folder's every level: [`crate::chain::plan`].
 pub fn plan_input(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Result<InputPlan> {
     let files: Vec<PathBuf> = match inputs {
-        [dir] if dir.is_dir() => find_faces(dir)?,
+        [dir] if dir.is_dir() => find_faces(dir)?.0,
         files => files.to_vec(),
     };
     plan_files(&files, from, opts)
@@ -272,7 +289,7 @@ pub fn load(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Resul
 pub fn load_planned(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Result<Loaded> {
     match inputs {
         [] => Err(Error::usage("no input given")),
-        [dir] if dir.is_dir() => load_faces(&find_faces(dir)?, opts),
+        [dir] if dir.is_dir() => load_faces(&find_faces(dir)?.0, opts),
         [file] => load_single(file, from, opts),
         files if files.len() == 6 => load_faces(files, opts),
         files => Err(Error::usage(format!(
@@ -282,27 +299,47 @@ pub fn load_planned(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) 
     }
 }
 
-/// Finds px/nx/... or posx/negx/... files (any supported extension) in a folder.
-pub(crate) fn find_faces(dir: &Path) -> Result<Vec<PathBuf>> {
-    let entries: Vec<PathBuf> = std::fs::read_dir(dir)
+/// Finds px/nx/... or posx/negx/... files (any supported extension) in a folder, or else a
+/// skybox pack's (right left top bottom front back, or NAME_rt NAME_lf ...), and says which.
+pub(crate) fn find_faces(dir: &Path) -> Result<(Vec<PathBuf>, FaceNaming)> {
+    let entries: Vec<(PathBuf, usize, FaceNaming)> = std::fs::read_dir(dir)
         .map_err(|e| Error::io(dir, e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| FileFormat::from_extension(p).is_some())
+        .filter_map(|p| {
+            let (face, naming) = face_of_stem(&p.file_stem()?.to_string_lossy())?;
+            Some((p, face, naming))
+        })
         .collect();
+    // Axis names win over skybox words when a folder holds both.
+    let naming = if entries.iter().any(|e| e.2 == FaceNaming::Axes) {
+        FaceNaming::Axes
+    } else {
+        FaceNaming::Skybox
+    };
     let mut found = Vec::new();
     for i in 0..6 {
         let mut hits: Vec<&PathBuf> = entries
             .iter()
-            .filter(|p| {
-                let stem = p
-                    .file_stem()
-                    .map(|s| s.to_string_lossy().to_ascii_lowercase())
-                    .unwrap_or_default();
-                stem == FACE_NAMES[i] || stem == FACE_LONG_NAMES[i]
-            })
+            .filter(|e| e.1 == i && e.2 == naming)
+            .map(|e| &e.0)
             .collect();
         hits.sort();
         match hits.as_slice() {
+            [] if naming == FaceNaming::Skybox => {
+                let word = SKYBOX_WORDS[i];
+                return Err(Error::file(
+                    dir,
+                    format!(
+                        "face {} ({}) of a skybox pack is missing (expected {}.EXT or \
+                         NAME_{}.EXT)",
+                        word[0],
+                        FACE_NAMES[i],
+                        word[0],
+                        word[word.len() - 1]
+                    ),
+                ));
+            }
             [] => {
                 return Err(Error::file(
                     dir,
@@ -328,7 +365,28 @@ pub(crate) fn find_faces(dir: &Path) -> Result<Vec<PathBuf>> {
             }
         }
     }
-    Ok(found)
+    Ok((found, naming))
+}
+
+/// The warning that says how a folder's skybox names were read (None for any other input).
+pub fn skybox_note(inputs: &[PathBuf]) -> Option<String> {
+    let [dir] = inputs else { return None };
+    match find_faces(dir) {
+        Ok((files, FaceNaming::Skybox)) if dir.is_dir() => {
+            let names: Vec<String> = files
+                .iter()
+                .filter_map(|f| Some(f.file_name()?.to_string_lossy().into_owned()))
+                .collect();
+            Some(format!(
+                "{}: faces named as a skybox pack, read as +X -X +Y -Y +Z -Z in OpenGL's order \
+                 (as LearnOpenGL loads them): {}; if the sky comes out turned or mirrored, name \
+                 them px nx py ny pz nz",
+                dir.display(),
+                names.join(" ")
+            ))
+        }
+        _ => None,
+    }
 }
 
 fn load_faces(files: &[PathBuf], opts: &ReadOptions) -> Result<Loaded> {

@@ -57,23 +57,35 @@ pub enum Error {
     InvalidOption(String),
 }
 
+/// A path as messages name it: standard output's stand-in name (`-.EXT`, which picks the
+/// encoder) as "standard output".
+pub fn shown(path: &Path) -> String {
+    let name = path.to_string_lossy();
+    match name.strip_prefix("-.") {
+        Some(ext) if !ext.is_empty() && !ext.contains(['/', '\\']) => {
+            format!("standard output ({ext})")
+        }
+        _ => path.display().to_string(),
+    }
+}
+
 impl Error {
     /// The message with each parameter marked, before it is named one way or the other.
     fn marked(&self) -> String {
         match self {
-            Error::Io { path, source } => format!("{}: {}", path.display(), io_msg(source)),
+            Error::Io { path, source } => format!("{}: {}", shown(path), io_msg(source)),
             Error::Decode { path, msg } | Error::Unsupported { path, msg } => {
-                format!("{}: {msg}", path.display())
+                format!("{}: {msg}", shown(path))
             }
             Error::Limit { path, msg, .. } => format!(
                 "{}{msg}",
                 path.as_ref()
-                    .map(|p| format!("{}: ", p.display()))
+                    .map(|p| format!("{}: ", shown(p)))
                     .unwrap_or_default()
             ),
             Error::Recipe { path, line, msg } => format!(
                 "{}: {}{msg}",
-                path.display(),
+                shown(path),
                 line.map(|l| format!("line {l}: ")).unwrap_or_default()
             ),
             Error::InvalidOption(msg) => msg.clone(),

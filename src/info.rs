@@ -5,7 +5,7 @@
 
 use crate::chain::{self, LevelsFile};
 use crate::convert::{self, Source};
-use crate::cube::{Faces, FACE_LONG_NAMES, FACE_NAMES};
+use crate::cube::Faces;
 use crate::error::{param, Error, Result};
 use crate::flux;
 use crate::image::{luminance, Image};
@@ -391,9 +391,9 @@ fn holds_a_face(dir: &Path) -> bool {
         return true; // find_faces says why it cannot be read
     };
     entries.filter_map(|e| e.ok()).any(|e| {
-        let name = e.file_name().to_string_lossy().to_ascii_lowercase();
-        let stem = name.split('.').next().unwrap_or_default().to_owned();
-        FACE_NAMES.contains(&stem.as_str()) || FACE_LONG_NAMES.contains(&stem.as_str())
+        let path = std::path::PathBuf::from(e.file_name());
+        let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+        crate::cube::face_of_stem(&stem).is_some()
     })
 }
 

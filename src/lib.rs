@@ -103,6 +103,7 @@ pub mod lut;
 pub mod output;
 #[doc(hidden)]
 pub mod preview;
+mod progress;
 #[doc(hidden)]
 pub mod resample;
 mod simd;
@@ -117,7 +118,7 @@ pub use error::{Error, LimitKind, Result};
 pub use filter::{ChainOptions, FilterKind, IrradianceMethod, LightingModel};
 pub use ibl::{Engine, IblOptions};
 pub use image::Image;
-pub use io::{FileFormat, GpuFormat, Limits, ReadOptions};
+pub use io::{ExrFloat, FileFormat, GpuFormat, Limits, ReadOptions};
 pub use jobs::{
     ControlJob, ConvertJob, IblJob, IrradianceJob, Job, LutJob, LutKind, PrefilterJob, PreviewJob,
     Progress, Quality, Report, Warning,

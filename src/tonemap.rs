@@ -1,5 +1,6 @@
 //! Display transforms for tone-mapped (8-bit, sRGB) outputs: an exposure in stops, then a
-//! curve taking radiance to [0, 1]. EXR and HDR outputs keep linear radiance and skip this.
+//! curve taking radiance to [0, 1]. EXR and HDR outputs keep linear radiance, scaled by the
+//! exposure alone.
 
 #![warn(missing_docs)]
 
@@ -54,6 +55,50 @@ pub fn apply(img: &mut Image, tonemap: Tonemap, exposure: f32) {
     img.pixels
         .par_iter_mut()
         .for_each(|p| *p = tonemap.map(*p, exposure));
+}
+
+/// Scales every pixel's radiance by 2^`exposure` (alpha unchanged): what `--exposure` does to
+/// outputs that keep linear radiance (EXR, HDR, float containers).
+pub fn scale(img: &mut Image, exposure: f32) {
+    use rayon::prelude::*;
+    let k = exposure.exp2();
+    img.pixels.par_iter_mut().for_each(|p| {
+        *p = Vec4::new(p.x * k, p.y * k, p.z * k, p.w);
+    });
+}
+
+/// Texels that an 8-bit output clips to white: those with a channel above 1 (by more than one
+/// 8-bit step) once exposed by 2^`exposure`, with the brightest channel value among them.
+/// Tone curves other than `None` roll every value off below 1 and clip nothing.
+pub fn clipped<'a>(
+    images: impl IntoIterator<Item = &'a Image>,
+    tonemap: Tonemap,
+    exposure: f32,
+) -> (u64, f32) {
+    use rayon::prelude::*;
+    if tonemap != Tonemap::None {
+        return (0, 0.0);
+    }
+    let k = exposure.exp2();
+    let limit = 1.0 + 1.0 / 255.0;
+    images
+        .into_iter()
+        .map(|img| {
+            img.pixels
+                .par_chunks(4096)
+                .map(|run| {
+                    run.iter().fold((0u64, 0f32), |(n, top), p| {
+                        let m = p.x.max(p.y).max(p.z) * k;
+                        if m > limit {
+                            (n + 1, top.max(m))
+                        } else {
+                            (n, top)
+                        }
+                    })
+                })
+                .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1.max(b.1)))
+        })
+        .fold((0, 0.0), |a, b| (a.0 + b.0, a.1.max(b.1)))
 }
 
 #[cfg(test)]

@@ -62,6 +62,8 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     pub level: usize,
     #[command(flatten)]
+    pub exr: super::ExrArg,
+    #[command(flatten)]
     pub tone: super::ToneArgs,
     #[command(flatten)]
     pub input: super::InputArgs,
@@ -96,6 +98,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         levels: a.levels,
         level: a.level,
         tone: (a.tone.exposure, a.tone.tonemap),
+        exr_float: a.exr.exr_float,
         read: a.input.read_options(),
         ..ConvertJob::new(a.inputs, output)
     };

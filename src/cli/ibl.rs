@@ -43,6 +43,10 @@ pub struct Args {
     #[arg(long)]
     pub sheen: bool,
     #[command(flatten)]
+    pub exposure: super::ExposureArg,
+    #[command(flatten)]
+    pub exr: super::ExrArg,
+    #[command(flatten)]
     pub input: super::InputArgs,
 }
 
@@ -58,6 +62,8 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             gpu_format: a.gpu_format,
             zstd: a.zstd.zstd,
             sheen: a.sheen,
+            exposure: a.exposure.exposure,
+            exr_float: a.exr.exr_float,
             yaw: a.yaw,
         },
         read: a.input.read_options(),

@@ -37,6 +37,8 @@ pub struct Args {
     #[command(flatten)]
     pub zstd: super::ZstdArg,
     #[command(flatten)]
+    pub exr: super::ExrArg,
+    #[command(flatten)]
     pub tone: super::ToneArgs,
     #[command(flatten)]
     pub input: super::InputArgs,
@@ -58,6 +60,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         gpu_format: a.gpu_format,
         zstd: a.zstd.zstd,
         tone: (a.tone.exposure, a.tone.tonemap),
+        exr_float: a.exr.exr_float,
         read: a.input.read_options(),
         ..IrradianceJob::new(a.inputs, output)
     };

@@ -123,6 +123,24 @@ pub struct MemoryArg {
     pub max_memory: Option<u64>,
 }
 
+/// The sample type of EXR outputs.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct ExrArg {
+    /// Sample type of EXR output: half (16-bit floats, largest 65504) or f32 (twice the size;
+    /// keeps an unclipped sun, which photographs put at 1e5 and more).
+    #[arg(long, value_enum, value_name = "TYPE", default_value_t = cubeforge::io::ExrFloat::Half)]
+    pub exr_float: cubeforge::io::ExrFloat,
+}
+
+/// Radiance scaled for outputs that keep it linear.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct ExposureArg {
+    /// Scale the radiance by 2^EV before anything is computed (0 keeps it): brings a sun
+    /// within a format's range, or a dim scan up.
+    #[arg(value_parser = exposure, long, value_name = "EV", default_value_t = 0.0, allow_hyphen_values = true)]
+    pub exposure: f32,
+}
+
 /// Zstandard supercompression of KTX2 outputs.
 #[derive(clap::Args, Debug, Clone, Copy)]
 pub struct ZstdArg {
@@ -136,7 +154,8 @@ pub struct ZstdArg {
 /// Exposure and tone curve for outputs of 8 bits a channel: HDR input would clip at 1.
 #[derive(clap::Args, Debug, Clone, Copy)]
 pub struct ToneArgs {
-    /// Exposure in stops before the tone curve (8-bit outputs only).
+    /// Exposure in stops: radiance scaled by 2^EV, before the tone curve of 8-bit outputs (float
+    /// outputs keep it linear, scaled).
     #[arg(value_parser = exposure, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub exposure: f32,
     /// Tone curve for 8-bit outputs (PNG, JPEG, TGA, rgba8 KTX2 and DDS); EXR, HDR and
@@ -368,7 +387,15 @@ fn one_line(e: &clap::Error) -> String {
             !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information")
         })
         .collect();
-    parts.join("; ").trim_start_matches("error: ").to_owned()
+    // A line ending in a colon introduces the next ("not provided:" then the flags).
+    let mut line = String::new();
+    for p in parts {
+        if !line.is_empty() {
+            line.push_str(if line.ends_with(':') { " " } else { "; " });
+        }
+        line.push_str(p);
+    }
+    line.trim_start_matches("error: ").to_owned()
 }
 
 /// The library names the limit; the command line says which flag raises it.
@@ -388,16 +415,17 @@ fn how_to_raise(e: &cubeforge::Error) -> &'static str {
 
 pub fn run() -> i32 {
     use std::io::Write;
-    let cli = match Cli::try_parse() {
+    let cli = match Cli::try_parse_from(zstd_level_joined(std::env::args_os())) {
         Ok(cli) => cli,
         Err(e) => {
             use clap::error::ErrorKind;
-            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion)
-                || matches!(
-                    e.kind(),
-                    ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
-                )
-            {
+            if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+                // `cubeforge` alone, or a command without its arguments: the usage, on
+                // standard error, and the status of a usage error (as clap gives).
+                let _ = e.print();
+                return 2;
+            }
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
                 // Help and the version go to standard output, as asked: a closed pipe is
                 // not an error, a full disk or a closed standard output is.
                 if !e.use_stderr() {
@@ -441,6 +469,28 @@ pub fn run() -> i32 {
             1
         }
     }
+}
+
+/// The arguments with `--zstd N` read as `--zstd=N` when N is a number: the level is optional,
+/// so clap alone would take N for an input file ("9: No such file"); clap checks its range.
+fn zstd_level_joined(args: impl Iterator<Item = std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    let mut out: Vec<std::ffi::OsString> = Vec::new();
+    let mut options = true;
+    for a in args {
+        let level = a
+            .to_str()
+            .filter(|s| (1..=3).contains(&s.len()) && s.bytes().all(|b| b.is_ascii_digit()));
+        match (level, out.last()) {
+            (Some(n), Some(prev)) if options && prev == "--zstd" => {
+                *out.last_mut().expect("checked") = format!("--zstd={n}").into();
+            }
+            _ => {
+                options &= a != "--";
+                out.push(a);
+            }
+        }
+    }
+    out
 }
 
 /// The clap definition, for the man pages.

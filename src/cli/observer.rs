@@ -34,6 +34,13 @@ impl Observer {
 }
 
 impl Progress for Observer {
+    fn begin(&self, what: &str) {
+        use std::io::IsTerminal;
+        // On a terminal, as the progress bars: logs and pipelines get the report alone.
+        if !super::quiet() && std::io::stderr().is_terminal() {
+            super::tell(cubeforge::error::name_params(what, true));
+        }
+    }
     fn stage(&self, name: &str) {
         self.stages
             .lock()

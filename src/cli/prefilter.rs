@@ -22,12 +22,12 @@ pub struct Args {
     /// Face edge of level 0 (default: the input's).
     #[arg(long)]
     pub size: Option<usize>,
-    /// Number of levels (default: the full chain down to 1 x 1).
+    /// Number of levels (default: down to 16 x 16 faces; see --min-size).
     #[arg(long)]
     pub levels: Option<usize>,
     /// Stop the chain at the level whose faces are N texels (the smallest at least N); the
-    /// roughness m / (levels - 1) then reaches 1 there. Filament stops at 16: a 1 x 1 rough
-    /// level shows the cube's corners at a high LOD bias.
+    /// roughness m / (levels - 1) then reaches 1 there. Default 16, as Filament: a 1 x 1 rough
+    /// level shows the cube's corners at a high LOD bias. 1 makes the full chain.
     #[arg(value_parser = clap::value_parser!(u32).range(1..=16384), long, value_name = "N", conflicts_with = "levels")]
     pub min_size: Option<u32>,
     /// Importance samples per texel at the sharpest filtered level (charlie: 4 times as many,
@@ -52,6 +52,10 @@ pub struct Args {
     pub gpu_format: GpuFormat,
     #[command(flatten)]
     pub zstd: super::ZstdArg,
+    #[command(flatten)]
+    pub exr: super::ExrArg,
+    #[command(flatten)]
+    pub exposure: super::ExposureArg,
     #[command(flatten)]
     pub input: super::InputArgs,
 }
@@ -83,6 +87,8 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         face_format,
         gpu_format: a.gpu_format,
         zstd: a.zstd.zstd,
+        exr_float: a.exr.exr_float,
+        exposure: a.exposure.exposure,
         read: a.input.read_options(),
         ..PrefilterJob::new(a.inputs, output)
     };

@@ -3,6 +3,7 @@
 
 use cubeforge::ibl::Engine;
 use cubeforge::image::srgb_to_linear;
+use cubeforge::io::FileFormat;
 use cubeforge::layout::Kind;
 use cubeforge::preview::material;
 use cubeforge::preview::{Background, Options, Parallax, ParallaxMode, Shading};
@@ -174,7 +175,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             "preview needs an environment and an output: cubeforge preview ENV -o OUTPUT",
         ));
     };
-    let output = super::destination(&output, a.format.as_deref(), |_| true)?;
+    let output = super::destination(&output, a.format.as_deref(), FileFormat::is_image)?;
     if a.env_radius.is_none() && (a.env_center.is_some() || a.parallax.is_some()) {
         return Err(Error::usage(
             "--env-center and --parallax need --env-radius (the environment's distance)",

@@ -10,6 +10,46 @@ pub const FACE_NAMES: [&str; 6] = ["px", "nx", "py", "ny", "pz", "nz"];
 /// Long names some tools use for the same faces.
 pub const FACE_LONG_NAMES: [&str; 6] = ["posx", "negx", "posy", "negy", "posz", "negz"];
 
+/// How a face image's file name says which face it is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaceNaming {
+    /// `px nx py ny pz nz` or `posx negx ...`: the axes themselves.
+    Axes,
+    /// Skybox packs' words (`right left top bottom front back`, or `up down`) or their
+    /// two-letter suffixes (`_rt _lf _up _dn _ft _bk`): read in OpenGL's order, right +X,
+    /// left -X, top +Y, bottom -Y, front +Z, back -Z (as LearnOpenGL loads its skybox).
+    Skybox,
+}
+
+/// Skybox words for each face (+X -X +Y -Y +Z -Z), whole or after `_`, `-`, `.` or a space.
+pub(crate) const SKYBOX_WORDS: [&[&str]; 6] = [
+    &["right", "rt"],
+    &["left", "lf"],
+    &["top", "up"],
+    &["bottom", "down", "dn"],
+    &["front", "ft"],
+    &["back", "bk"],
+];
+
+/// Which face a file's stem names (case-insensitive), and how: `px`/`posx` for +X; `right`,
+/// `sky_right` or `sky_rt` for +X in a skybox pack. Two-letter words count only as suffixes
+/// (`rt` alone is no face).
+pub fn face_of_stem(stem: &str) -> Option<(usize, FaceNaming)> {
+    let stem = stem.to_ascii_lowercase();
+    if let Some(i) = (0..6).find(|&i| stem == FACE_NAMES[i] || stem == FACE_LONG_NAMES[i]) {
+        return Some((i, FaceNaming::Axes));
+    }
+    let last = stem.rsplit(['_', '-', '.', ' ']).next().unwrap_or_default();
+    let suffixed = last.len() < stem.len();
+    (0..6)
+        .find(|&i| {
+            SKYBOX_WORDS[i]
+                .iter()
+                .any(|w| last == *w && (w.len() > 2 || suffixed))
+        })
+        .map(|i| (i, FaceNaming::Skybox))
+}
+
 /// The direction through face coordinates (s, t) (0..1, row 0 is t = 0). Values outside
 /// 0..1 continue the face's plane, which is how border texels find their neighbours.
 #[inline]

@@ -12,7 +12,11 @@ mod map;
 mod sampler;
 
 pub use environment::{Dirs, Environment, Interp, BATCH};
-pub use face::{dir_face, face_dir, solid_angle_table, texel_dir, FACE_LONG_NAMES, FACE_NAMES};
+pub(crate) use face::SKYBOX_WORDS;
+pub use face::{
+    dir_face, face_dir, face_of_stem, solid_angle_table, texel_dir, FaceNaming, FACE_LONG_NAMES,
+    FACE_NAMES,
+};
 pub(crate) use face::{texel_angle, texel_density, texel_footprint, texel_solid_angle};
 pub(crate) use map::{box_reduce_face, faces_from_images};
 pub use map::{CubeMap, Faces};

@@ -120,6 +120,11 @@ impl Default for ChainOptions {
     }
 }
 
+/// Where `prefilter` chains stop when no floor is given: 16 px faces, as Filament's cmgen and
+/// its `IBLPrefilterContext` do. Below that a level is so coarse that sampling it at a high LOD
+/// bias shows the cube's faces as flat patches with a box outline on a chrome ball.
+pub const DEFAULT_MIN_SIZE: usize = 16;
+
 /// Importance samples per texel when none are asked for: enough for smooth GGX levels at interactive sizes.
 pub const DEFAULT_SAMPLES: u32 = 64;
 
@@ -175,6 +180,16 @@ impl ChainOptions {
         }
         count
     }
+}
+
+/// A level's work, for progress bars: an exact sum costs about what 64 samples do.
+pub fn level_cost(i: &LevelInfo) -> u64 {
+    let per_texel = match (i.samples, i.power.or(i.sigma)) {
+        (Some(s), _) => s as u64,
+        (None, Some(_)) => 64,
+        _ => 1,
+    };
+    (6 * i.size * i.size) as u64 * per_texel
 }
 
 /// Per-level lobes (None: the level is copied or box-reduced, not convolved).

@@ -145,11 +145,15 @@ pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<De
         .clamp(1, 8192);
     let img = crate::convert::to_image(ctx.loaded, Kind::Equirect, face, &ctx.resampler());
     let path = ctx.path(&format!(".{ext}"));
-    let bytes = io::encode_image(&path, &img, &io::WriteOptions::default())?;
-    let clamped = io::clamp_warning(
+    let write = io::WriteOptions {
+        exr_float: ctx.opts.exr_float,
+        ..Default::default()
+    };
+    let bytes = io::encode_image(&path, &img, &write)?;
+    let clamped = io::clamp_warning_with(
         &path,
         FileFormat::from_ext_str(ext).unwrap_or(FileFormat::Exr),
-        GpuFormat::Rgba16f,
+        &write,
         [&img],
     );
     let snippet = snippet.replace("{f}", &file_name(&path));
@@ -366,11 +370,25 @@ fn filament(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     }
     let snippet = format!(
         r#"// Filament (as cmgen --deploy): roughness r sits at lod = (levels - 1) * r * (2 - r).
-auto ibl = ktxreader::Ktx1Reader::createTexture(engine, new image::Ktx1Bundle(iblData, iblSize), false);   // {i}
-math::float3 sh[9];
+// C++: iblData/skyData hold the files' bytes; createTexture takes (and frees) each bundle.
+auto* iblBundle = new image::Ktx1Bundle(iblData, iblSize);   // {i}
+auto* skyBundle = new image::Ktx1Bundle(skyData, skySize);   // {k}
+filament::math::float3 sh[9];
 iblBundle->getSphericalHarmonics(sh);   // the "sh" key (also in sh.txt)
-auto light = IndirectLight::Builder().reflections(ibl).irradiance(3, sh).intensity(30000.0f).build(*engine);
-auto sky = Skybox::Builder().environment(ktxreader::Ktx1Reader::createTexture(engine, skyBundle, false)).build(*engine);   // {k}"#,
+filament::Texture* reflections = ktxreader::Ktx1Reader::createTexture(engine, iblBundle, false);
+filament::Texture* skyTexture = ktxreader::Ktx1Reader::createTexture(engine, skyBundle, false);
+filament::IndirectLight* light = filament::IndirectLight::Builder().reflections(reflections).irradiance(3, sh).intensity(30000.0f).build(*engine);
+filament::Skybox* sky = filament::Skybox::Builder().environment(skyTexture).build(*engine);
+scene->setIndirectLight(light);
+scene->setSkybox(sky);
+
+// JavaScript (npm filament), after Filament.init(['{i}', '{k}'], ...): createIblFromKtx1
+// lights with the reflections alone, so the "sh" key is read and passed here.
+const reflections = engine.createTextureFromKtx1('{i}');
+const sh = new Filament.Ktx1Bundle(Filament.Buffer(Filament.assets['{i}'])).getMetadata('sh').split(/\s+/, 27).map(parseFloat);
+const light = Filament.IndirectLight.Builder().reflections(reflections).irradianceSh(3, sh).intensity(30000).build(engine);
+scene.setIndirectLight(light);
+scene.setSkybox(engine.createSkyFromKtx1('{k}'));"#,
         i = file_name(&ibl),
         k = file_name(&sky),
     );

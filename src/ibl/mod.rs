@@ -15,6 +15,7 @@ use crate::cube::CubeMap;
 use crate::error::{Error, Result};
 use crate::filter::{self, ChainOptions, FilterKind, IrradianceMethod, LevelInfo};
 use crate::io::GpuFormat;
+use crate::progress::Progress;
 use crate::resample::Orientation;
 use std::path::{Path, PathBuf};
 
@@ -82,6 +83,10 @@ pub struct IblOptions {
     /// Turn the environment about +Y first (degrees; 90 brings +Z to +X), e.g. to put the sun
     /// where the scene wants it.
     pub yaw: f32,
+    /// Scale the radiance by 2^EV first (0 keeps it): a sun within a format's range.
+    pub exposure: f32,
+    /// Sample type of EXR files (the panorama Godot and Unity import).
+    pub exr_float: crate::io::ExrFloat,
 }
 
 /// The files for one engine, and how to load them.
@@ -147,13 +152,14 @@ pub struct Defaults {
 }
 
 /// Builds the specular chain, irradiance and SH for `engine` from `loaded`, then packs them as
-/// the engine loads them into files under `out`. `progress` hears each finished stage's name.
+/// the engine loads them into files under `out`. `progress` hears each finished stage and
+/// follows the chains and the irradiance integral texel by texel.
 pub fn deliver(
     loaded: &Loaded,
     engine: Engine,
     out: &Path,
     opts: &IblOptions,
-    progress: &(dyn Fn(&str) + Sync),
+    progress: &dyn Progress,
 ) -> Result<Delivery> {
     let d = engines::defaults(engine);
     let specular_size = opts.specular_size.unwrap_or(d.specular_size);
@@ -206,7 +212,7 @@ pub fn deliver(
             progress,
         );
         let mut delivery = engines::pack(engine, &lighting, &ctx)?;
-        progress("encode");
+        progress.stage("encode");
         delivery.levels = lighting.levels;
         delivery
     };
@@ -222,25 +228,42 @@ fn compute(
     specular_size: usize,
     min_size: usize,
     diffuse_size: usize,
-    progress: &(dyn Fn(&str) + Sync),
+    progress: &dyn Progress,
 ) -> Lighting {
     let opts = ctx.opts;
     let resampler = ctx.resampler();
     let base = convert::to_cube(loaded, specular_size, &resampler);
-    progress("resample");
+    progress.stage("resample");
     let samples = opts.samples.unwrap_or(filter::DEFAULT_SAMPLES);
-    let chain = |filter: FilterKind| mapped_chain(&base, filter, d.mapping, min_size, samples);
+    let chain = |filter: FilterKind| {
+        let (opts, plan) = mapped_plan(filter, d.mapping, specular_size, min_size, samples);
+        let costs: Vec<u64> = plan.iter().map(|(i, _)| filter::level_cost(i)).collect();
+        let label = format!("{} {specular_size}", filter.name());
+        progress.start(costs.iter().sum(), &label);
+        let out =
+            filter::prefilter_planned(&base, &opts, plan, &|level| progress.advance(costs[level]));
+        progress.finish();
+        out
+    };
     let (specular, levels) = chain(FilterKind::Ggx);
     let sheen = opts.sheen.then(|| chain(FilterKind::Charlie));
-    progress("specular");
+    progress.stage("specular");
     // The irradiance integral needs no more than 256 faces of the turned source.
     let small = if specular_size > 256 {
         convert::to_cube(loaded, 256, &resampler)
     } else {
         base
     };
-    let (diffuse, sh) = filter::irradiance(&small, diffuse_size, IrradianceMethod::Brute);
-    progress("diffuse");
+    progress.start(
+        6 * diffuse_size as u64,
+        &format!("irradiance {diffuse_size}"),
+    );
+    let (diffuse, sh) =
+        filter::irradiance_with_progress(&small, diffuse_size, IrradianceMethod::Brute, &|n| {
+            progress.advance(n)
+        });
+    progress.finish();
+    progress.stage("diffuse");
     Lighting {
         specular,
         levels,
@@ -260,7 +283,18 @@ pub(crate) fn mapped_chain(
     min_size: usize,
     samples: u32,
 ) -> (CubeMap, Vec<LevelInfo>) {
-    let size = base.size();
+    let (chain_opts, plan) = mapped_plan(filter, mapping, base.size(), min_size, samples);
+    filter::prefilter_planned(base, &chain_opts, plan, &|_| {})
+}
+
+/// The options and per-level plan of [`mapped_chain`] for a base of face edge `size`.
+fn mapped_plan(
+    filter: FilterKind,
+    mapping: RoughnessMapping,
+    size: usize,
+    min_size: usize,
+    samples: u32,
+) -> (ChainOptions, Vec<(LevelInfo, Option<filter::lobe::Lobe>)>) {
     let chain_opts = ChainOptions {
         filter,
         min_size: Some(min_size),
@@ -268,7 +302,7 @@ pub(crate) fn mapped_chain(
         ..ChainOptions::default()
     };
     let plan = filter::plan_mapped(&chain_opts, size, mapping);
-    filter::prefilter_planned(base, &chain_opts, plan, &|_| {})
+    (chain_opts, plan)
 }
 
 /// The caller's turn about +Y first, then the engine's view (a turn about +Y and perhaps a

@@ -332,8 +332,8 @@ fn decode_face(png_bytes: &[u8], size: usize) -> std::result::Result<Image, Stri
         }
         if d.color_type() != ColorType::Rgba8 {
             return Err(format!(
-                "the PNG is {:?}, but RGBD images are 8-bit RGBA",
-                d.color_type()
+                "the PNG is {}, but RGBD images are 8-bit RGBA",
+                super::raster::pixel_format_name(d.color_type(), super::FileFormat::Png)
             ));
         }
         let mut limits = ::image::Limits::default();

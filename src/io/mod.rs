@@ -28,10 +28,12 @@ pub use atomic::{
     Staged,
 };
 pub use gpu::{finite, unorm8, GpuFormat, HALF_MAX};
+mod range;
 pub use input::claim;
 use input::read_with;
 pub(crate) use input::{read_file, regular_file};
 pub use limits::{Claim, Limits};
+pub use range::{clamp_warning, clamp_warning_with, count_out_of_range, largest_value};
 
 /// File formats, told apart by their content (TGA, which has no signature, by its name).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -221,99 +223,6 @@ impl FileFormat {
     }
 }
 
-/// The largest magnitude `format` (with `gpu` for containers) stores as a finite float; None
-/// where values are clamped to [0, 1] as a matter of course (8-bit formats, BC7).
-pub fn largest_value(format: FileFormat, gpu: GpuFormat) -> Option<f32> {
-    match format {
-        FileFormat::Exr => Some(HALF_MAX),
-        FileFormat::Hdr => Some(f32::MAX),
-        FileFormat::Env => Some(babylon_env::RGBD_MAX),
-        FileFormat::Ktx2 | FileFormat::Dds | FileFormat::Ktx1 => gpu.largest_value(),
-        _ => None,
-    }
-}
-
-/// How many channel values of `images` are NaN or beyond +-`max`: what the encoders clamp.
-pub fn count_out_of_range<'a>(images: impl IntoIterator<Item = &'a Image>, max: f32) -> u64 {
-    count_outside(images, -max, max, 4)
-}
-
-/// How many of the first `channels` values of each texel are NaN or outside [`min`, `max`].
-/// Counted per channel in float lanes over runs of texels (exact: a run's counts stay far below
-/// 2^24), which compiles to a few vector instructions a texel; a count per texel through a
-/// bit mask did not vectorise and read the faces at half the memory's speed.
-fn count_outside<'a>(
-    images: impl IntoIterator<Item = &'a Image>,
-    min: f32,
-    max: f32,
-    channels: usize,
-) -> u64 {
-    use glam::Vec4;
-    use rayon::prelude::*;
-    let keep = Vec4::from_array(std::array::from_fn(|c| f32::from(u8::from(c < channels))));
-    let (lo, hi) = (Vec4::splat(min), Vec4::splat(max));
-    images
-        .into_iter()
-        .map(|img| {
-            img.pixels
-                .par_chunks(1 << 12)
-                .map(|run| {
-                    let lanes = run.iter().fold(Vec4::ZERO, |n, p| {
-                        // NaN compares false: it is not inside.
-                        let inside = p.cmpge(lo) & p.cmple(hi);
-                        n + Vec4::select(inside, Vec4::ZERO, Vec4::ONE)
-                    });
-                    (lanes * keep).element_sum() as u64
-                })
-                .sum::<u64>()
-        })
-        .sum()
-}
-
-/// The warning for an output whose values `format` cannot hold, None when all fit. Unsigned
-/// float formats (BC6H, E5B9G9R9, B10G11R11) count negative values too, and only the RGB they
-/// store.
-pub fn clamp_warning<'a>(
-    path: &Path,
-    format: FileFormat,
-    gpu: GpuFormat,
-    images: impl IntoIterator<Item = &'a Image>,
-) -> Option<String> {
-    let max = largest_value(format, gpu)?;
-    let unsigned = format.is_container() && gpu.is_unsigned_float();
-    if unsigned {
-        let n = count_outside(images, 0.0, max, 3);
-        return (n > 0).then(|| {
-            format!(
-                "{}: {n} values negative or beyond {max} (the range of {}) written as 0 or that value",
-                path.display(),
-                gpu.name()
-            )
-        });
-    }
-    let n = count_out_of_range(images, max);
-    (n > 0).then(|| {
-        format!(
-            "{}: {n} values beyond {} (the largest {}) written as that value",
-            path.display(),
-            if max == HALF_MAX {
-                "65504"
-            } else if max == babylon_env::RGBD_MAX {
-                "255"
-            } else {
-                "3.4e38"
-            },
-            if max == HALF_MAX {
-                "half float"
-            } else if max == babylon_env::RGBD_MAX {
-                "RGBD value"
-            } else {
-                "float"
-            }
-        )
-    })
-}
-
 /// What a reader found besides the pixels.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Meta {
@@ -427,13 +336,29 @@ pub struct WriteOptions {
     pub gpu_format: GpuFormat,
     /// Zstandard level (1 to 22) of KTX2 supercompression; None writes the levels plain.
     pub zstd: Option<i32>,
+    /// Sample type of EXR output.
+    pub exr_float: ExrFloat,
+}
+
+/// The sample type of EXR output: half floats (what tools expect, largest 65504) or 32-bit
+/// floats (twice the size, for radiance beyond that: an unclipped sun reaches 1e5 and more).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+pub enum ExrFloat {
+    /// 16-bit half floats.
+    #[default]
+    Half,
+    /// 32-bit floats.
+    F32,
 }
 
 /// Encodes an image in the format its name asks for.
 pub fn encode_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<Vec<u8>> {
     let format = FileFormat::from_extension(path).ok_or_else(|| unknown_ext(path))?;
     match format {
-        FileFormat::Exr => exr::encode(img).map_err(|e| Error::file(path, e)),
+        FileFormat::Exr => {
+            exr::encode(img, opts.exr_float == ExrFloat::F32).map_err(|e| Error::file(path, e))
+        }
         FileFormat::Hdr => Ok(rgbe::encode(img)),
         f if f.is_container() => Err(Error::file(
             path,
@@ -544,58 +469,3 @@ pub fn unknown_ext(path: &Path) -> Error {
 
 /// An I/O error as a short phrase (kept here for callers of `io::io_msg`).
 pub use crate::error::io_msg;
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The lane counts agree with a count value by value, for NaN, infinities, the bounds
-    /// themselves, -0.0 and ordinary values, in images of several runs (and a partial one).
-    #[test]
-    fn out_of_range_counts_match_a_plain_count() {
-        let special = [
-            f32::NAN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            HALF_MAX,
-            -HALF_MAX,
-            HALF_MAX * 1.0001,
-            -0.0,
-            0.0,
-            1e-30,
-            -1e-30,
-            7.5,
-            -3.0,
-        ];
-        let img = |n: usize, seed: usize| {
-            let mut img = Image::new(n, 1);
-            for (i, p) in img.pixels.iter_mut().enumerate() {
-                let v = |c: usize| special[(i * 7 + c * 3 + seed) % special.len()];
-                *p = glam::Vec4::new(v(0), v(1), v(2), v(3));
-            }
-            img
-        };
-        let images = [img(10_007, 0), img(1, 5), img(4096 * 3, 2)];
-        let plain = |min: f32, max: f32, channels: usize| -> u64 {
-            let inside = |v: f32| v >= min && v <= max;
-            images
-                .iter()
-                .flat_map(|i| &i.pixels)
-                .map(|p| (0..channels).filter(|&c| !inside(p[c])).count() as u64)
-                .sum()
-        };
-        for (min, max, channels) in [(-HALF_MAX, HALF_MAX, 4), (0.0, HALF_MAX, 3), (0.0, 1.0, 4)] {
-            let n = count_outside(&images, min, max, channels);
-            assert_eq!(
-                n,
-                plain(min, max, channels),
-                "[{min}, {max}], {channels} channels"
-            );
-            assert!(n > 0);
-        }
-        assert_eq!(
-            count_out_of_range(&images, HALF_MAX),
-            plain(-HALF_MAX, HALF_MAX, 4)
-        );
-    }
-}

@@ -5,7 +5,7 @@ use crate::chain;
 use crate::convert;
 use crate::cube::CubeMap;
 use crate::error::{param, Error, Result};
-use crate::io::{self, FileFormat, GpuFormat, Limits, ReadOptions, WriteOptions};
+use crate::io::{self, ExrFloat, FileFormat, GpuFormat, Limits, ReadOptions, WriteOptions};
 use crate::layout::Kind;
 use crate::output::{self, Destination, Target};
 use crate::resample::Resampler;
@@ -51,6 +51,8 @@ pub struct ConvertJob {
     pub gpu_format: Option<GpuFormat>,
     /// Zstandard level of KTX2 supercompression.
     pub zstd: Option<i32>,
+    /// Sample type of EXR output (half by default; f32 keeps radiance beyond 65504).
+    pub exr_float: ExrFloat,
     /// Mip levels of KTX2 and DDS output (None: the full chain).
     pub levels: Option<usize>,
     /// Which level of a mip chain input to read.
@@ -75,6 +77,7 @@ impl ConvertJob {
             png16: false,
             gpu_format: None,
             zstd: None,
+            exr_float: ExrFloat::Half,
             levels: None,
             level: 0,
             tone: (0.0, Tonemap::None),
@@ -205,6 +208,9 @@ impl Job for ConvertJob {
         }
         let loaded = chain::load_level_planned(&self.inputs, self.from, &self.read, self.level)?;
         progress.stage("decode");
+        if let Some(w) = convert::skybox_note(&self.inputs) {
+            warnings.push(w);
+        }
         if let Some(w) = replaced_values(&loaded.files[0], loaded.meta.replaced_values as u64) {
             warnings.push(w);
         }
@@ -245,6 +251,7 @@ impl Job for ConvertJob {
             png16: self.png16,
             gpu_format: self.gpu_format.unwrap_or_default(),
             zstd: self.zstd.filter(|_| container),
+            exr_float: self.exr_float,
         };
         target.levels = self.levels;
         let (tone, tone_warning) = output::tone_for(&target, self.tone.0, self.tone.1);

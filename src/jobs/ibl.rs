@@ -56,18 +56,51 @@ impl IblJob {
         }
     }
 
-    /// The specular and diffuse face edges.
-    fn sizes(&self) -> (u64, u64) {
+    /// The specular chain's face edge for an input of `input_face` px faces (None: not known
+    /// yet): `--size`, else the engine's default, but never larger than the input's faces
+    /// (rounded to the nearest power of two): enlarging adds bytes, not detail.
+    fn specular_size(&self, input_face: Option<usize>) -> usize {
         let d = ibl::engines::defaults(self.engine);
-        let size = self.options.specular_size.unwrap_or(d.specular_size) as u64;
+        match (self.options.specular_size, input_face) {
+            (Some(s), _) => s,
+            (None, Some(face)) => d.specular_size.min(nearest_power_of_two(face)),
+            (None, None) => d.specular_size,
+        }
+    }
+
+    /// What the run will make, in one line.
+    fn plan_line(&self, loaded: &convert::Loaded, options: &IblOptions) -> String {
+        let d = ibl::engines::defaults(self.engine);
+        let input = match loaded.files.as_slice() {
+            [one] => one.display().to_string(),
+            files => format!("{} files", files.len()),
+        };
+        let made = if ibl::engines::filters_itself(self.engine) {
+            "a panorama the engine prefilters itself".to_owned()
+        } else {
+            let size = options.specular_size.unwrap_or(d.specular_size);
+            let min = options.min_size.unwrap_or(d.min_size.min(size));
+            let diffuse = options.diffuse_size.unwrap_or(d.diffuse_size);
+            format!(
+                "a GGX chain of {size} px faces down to {min} px, a {diffuse} px irradiance map \
+                 and its SH"
+            )
+        };
+        format!("ibl {}: {made} from {input}", self.engine.name())
+    }
+
+    /// The specular and diffuse face edges.
+    fn sizes(&self, input_face: Option<usize>) -> (u64, u64) {
+        let d = ibl::engines::defaults(self.engine);
+        let size = self.specular_size(input_face) as u64;
         let diffuse = self.options.diffuse_size.unwrap_or(d.diffuse_size) as u64;
         (size, diffuse)
     }
 
     /// Each chain: the base faces, the chain (4/3 of them), a bordered sampler copy and the
     /// encoding; the diffuse map: its faces, the encoding and a sampler copy.
-    fn plan_bytes(&self, input: u64) -> u64 {
-        let (size, diffuse) = self.sizes();
+    fn plan_bytes(&self, input_face: Option<usize>, input: u64) -> u64 {
+        let (size, diffuse) = self.sizes(input_face);
         let face = |n: u64| 6 * 16 * n * n;
         let chains = if self.options.sheen { 2 } else { 1 };
         (chains * 4 * face(size))
@@ -88,7 +121,7 @@ impl Job for IblJob {
 
     fn memory_estimate(&self) -> Result<u64> {
         let plan = chain::plan(&self.inputs, self.from, &self.read)?;
-        Ok(self.plan_bytes(plan.working_bytes()))
+        Ok(self.plan_bytes(plan.face_size, plan.working_bytes()))
     }
 
     fn run(&self, progress: &dyn Progress) -> Result<Report> {
@@ -96,7 +129,8 @@ impl Job for IblJob {
         warnings.extend(self.validate()?);
         // The whole plan against the budget before any file is decoded: the input, the
         // specular chain (and the sheen chain), the diffuse map.
-        let (size, diffuse) = self.sizes();
+        let plan = chain::plan(&self.inputs, self.from, &self.read)?;
+        let (size, diffuse) = self.sizes(plan.face_size);
         self.read.limits.check_memory(
             format_args!(
                 "{} {size} and {} {diffuse}",
@@ -105,11 +139,40 @@ impl Job for IblJob {
             ),
             self.memory_estimate()?,
         )?;
-        let loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
+        let mut loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
+        loaded.expose(self.options.exposure);
         progress.stage("decode");
-        let delivery = ibl::deliver(&loaded, self.engine, &self.output, &self.options, &|s| {
-            progress.stage(s)
-        })?;
+        if let Some(w) = convert::skybox_note(&self.inputs) {
+            warnings.push(w);
+        }
+        if let Some(w) = super::display_referred(&loaded) {
+            warnings.push(w);
+        }
+        let face = loaded.face_size();
+        let mut options = self.options.clone();
+        let mut notes = Vec::new();
+        if !ibl::engines::filters_itself(self.engine) {
+            let size = self.specular_size(Some(face));
+            let default = ibl::engines::defaults(self.engine).specular_size;
+            if self.options.specular_size.is_none() && size < default {
+                notes.push(format!(
+                    "specular chain at {size} px, the input's face size ({face} px): the \
+                     target's {default} px would only enlarge it ({} {default} to have it anyway)",
+                    param("size")
+                ));
+            }
+            options.specular_size = Some(size);
+        }
+        if let Some(asked) = self.options.specular_size.filter(|&s| s > face) {
+            warnings.push(format!(
+                "{} {asked} enlarges the input's {face} px faces {:.1} times: the files grow, \
+                 the detail does not",
+                param("size"),
+                asked as f64 / face as f64
+            ));
+        }
+        progress.begin(&self.plan_line(&loaded, &options));
+        let delivery = ibl::deliver(&loaded, self.engine, &self.output, &options, progress)?;
         if let Some(w) = &delivery.clamped {
             warnings.push(w);
         }
@@ -129,6 +192,7 @@ impl Job for IblJob {
             .iter()
             .map(|(p, bytes)| format!("{} ({} bytes)", p.display(), bytes.len()))
             .collect();
+        summary.extend(notes);
         summary.push(delivery.snippet);
         Ok(Report {
             written: files.paths(),
@@ -136,5 +200,16 @@ impl Job for IblJob {
             summary: super::texts(summary),
             quality,
         })
+    }
+}
+
+/// The power of two nearest `n` (in ratio: 724 -> 512, 725 -> 1024), at least 1.
+fn nearest_power_of_two(n: usize) -> usize {
+    let up = n.max(1).next_power_of_two();
+    let down = up / 2;
+    if down > 0 && (n as f64 / down as f64) < (up as f64 / n as f64) {
+        down
+    } else {
+        up
     }
 }

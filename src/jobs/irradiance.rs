@@ -5,7 +5,7 @@ use crate::chain;
 use crate::convert::{self, Loaded, Output};
 use crate::error::{param, Error, Result};
 use crate::filter::{self, sh, IrradianceMethod};
-use crate::io::{self, FileFormat, GpuFormat, ReadOptions, WriteOptions};
+use crate::io::{self, ExrFloat, FileFormat, GpuFormat, ReadOptions, WriteOptions};
 use crate::layout::Kind;
 use crate::output::{self, Destination, Target};
 use crate::resample::Resampler;
@@ -42,6 +42,8 @@ pub struct IrradianceJob {
     pub gpu_format: GpuFormat,
     /// Zstandard level of KTX2 supercompression.
     pub zstd: Option<i32>,
+    /// Sample type of EXR output (half by default; f32 keeps radiance beyond 65504).
+    pub exr_float: ExrFloat,
     /// Exposure (stops) and tone curve for 8-bit outputs.
     pub tone: (f32, Tonemap),
     /// Limits and colour handling of the inputs.
@@ -62,6 +64,7 @@ impl IrradianceJob {
             face_format: FileFormat::Exr,
             gpu_format: GpuFormat::Rgba16f,
             zstd: None,
+            exr_float: ExrFloat::Half,
             tone: (0.0, Tonemap::None),
             read: ReadOptions::default(),
         }
@@ -77,6 +80,7 @@ impl IrradianceJob {
             linear: self.read.linear,
             gpu_format: self.gpu_format,
             zstd: self.zstd,
+            exr_float: self.exr_float,
             ..WriteOptions::default()
         };
         target.levels = Some(1);
@@ -153,6 +157,12 @@ impl Job for IrradianceJob {
         )?;
         let loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
         progress.stage("decode");
+        if let Some(w) = convert::skybox_note(&self.inputs) {
+            warnings.push(w);
+        }
+        if let Some(w) = super::display_referred(&loaded) {
+            warnings.push(w);
+        }
         let base_size = loaded.face_size().min(BASE);
         let base = convert::to_cube(&loaded, base_size, &Resampler::default());
         progress.stage("resample");
@@ -181,6 +191,9 @@ impl Job for IrradianceJob {
             psnr_db,
         });
         let mut files = encoded.into_files();
+        // The exposure scales the map as it is written, and the coefficients here.
+        let k = f64::from(self.tone.0).exp2();
+        let coeffs = coeffs.map(|c| c.map(|v| v * k));
         if let Some(p) = &self.sh {
             let json = serde_json::to_vec_pretty(&sh::ShFile::new(&coeffs))
                 .map_err(|e| Error::usage(e.to_string()))?;
@@ -194,8 +207,15 @@ impl Job for IrradianceJob {
             written: files.paths(),
             warnings: warnings.into_vec(),
             summary: vec![Text::new(format!(
-                "irradiance {} px ({:?}); mean radiance {:.4} {:.4} {:.4}",
-                self.size, self.method, dc[0], dc[1], dc[2]
+                "irradiance {} px ({}); mean radiance {:.4} {:.4} {:.4}",
+                self.size,
+                match self.method {
+                    filter::IrradianceMethod::Brute => "exact sum over the texels",
+                    filter::IrradianceMethod::Sh => "from 9 SH coefficients",
+                },
+                dc[0],
+                dc[1],
+                dc[2]
             ))],
             quality,
         })

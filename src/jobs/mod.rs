@@ -25,25 +25,7 @@ pub use lut::{LutJob, LutKind};
 pub use prefilter::PrefilterJob;
 pub use preview::PreviewJob;
 
-/// What a long call tells its caller while it works. Every method has a default that does
-/// nothing, so `&()` is a silent observer.
-pub trait Progress: Sync {
-    /// A stage ended (decode, resample, filter, encode, write), for timings.
-    fn stage(&self, _name: &str) {}
-    /// Work of `total` units starts, named `label` (a progress bar's length and prefix).
-    fn start(&self, _total: u64, _label: &str) {}
-    /// `units` more of the work started last are done.
-    fn advance(&self, _units: u64) {}
-    /// The work started last is over.
-    fn finish(&self) {}
-    /// A warning, as soon as it is known (it is in the report too).
-    fn warning(&self, _w: &Warning) {}
-    /// A detail of how the work is done (a chain's mapping, where a setting came from), for
-    /// a verbose front end.
-    fn note(&self, _text: &str) {}
-}
-
-impl Progress for () {}
+pub use crate::progress::Progress;
 
 /// Something the user should know that did not stop the work: an option that does not apply,
 /// values clamped or replaced, a result that differs from what was asked.
@@ -124,6 +106,26 @@ pub(crate) fn texts(lines: Vec<String>) -> Vec<Text> {
 }
 
 /// The warning for decoded values that were not radiance.
+/// The warning for lighting computed from an 8- or 16-bit image: display-referred colour, whose
+/// brightest light is white, makes lighting dim and flat (a sun is 1e4 times brighter than
+/// the sky around it in a photograph's radiance, not 1 time).
+pub(crate) fn display_referred(loaded: &crate::convert::Loaded) -> Option<String> {
+    (!loaded.hdr).then(|| {
+        format!(
+            "{}: an {} image holds display colours, not radiance: the lighting it makes is dim \
+             and flat (nothing in it is brighter than white); give an HDR panorama (.hdr, \
+             .exr; Poly Haven's are free), or lift it with {}",
+            loaded
+                .files
+                .first()
+                .map(|f| f.display().to_string())
+                .unwrap_or_default(),
+            loaded.meta.pixel_format,
+            crate::error::param("exposure")
+        )
+    })
+}
+
 pub(crate) fn replaced_values(file: &std::path::Path, n: u64) -> Option<String> {
     (n > 0).then(|| {
         format!(

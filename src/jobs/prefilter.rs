@@ -6,9 +6,10 @@ use crate::convert;
 use crate::cube::CubeMap;
 use crate::error::{param, Error, Result};
 use crate::filter::{self, ChainOptions, LevelInfo};
-use crate::io::{self, FileFormat, GpuFormat, ReadOptions, WriteOptions};
+use crate::io::{self, ExrFloat, FileFormat, GpuFormat, ReadOptions, WriteOptions};
 use crate::output::{self, Destination, Files};
 use crate::resample::Resampler;
+use crate::tonemap::{self, Tonemap};
 use std::path::PathBuf;
 
 /// The largest face edge of a chain's first level.
@@ -44,7 +45,8 @@ pub struct PrefilterJob {
     pub from: Option<crate::layout::Kind>,
     /// Face edge of level 0 (None: the input's).
     pub size: Option<usize>,
-    /// The filter and the levels.
+    /// The filter and the levels. With neither `levels` nor `min_size` set the chain stops at
+    /// [`filter::DEFAULT_MIN_SIZE`] px faces; `min_size: Some(1)` makes the full chain.
     pub chain: ChainOptions,
     /// File type of a folder's level images.
     pub face_format: FileFormat,
@@ -52,11 +54,27 @@ pub struct PrefilterJob {
     pub gpu_format: GpuFormat,
     /// Zstandard level of KTX2 supercompression.
     pub zstd: Option<i32>,
+    /// Sample type of EXR output (half by default; f32 keeps radiance beyond 65504).
+    pub exr_float: ExrFloat,
+    /// Scale the radiance by 2^EV before filtering (0 keeps it).
+    pub exposure: f32,
     /// Limits and colour handling of the inputs.
     pub read: ReadOptions,
 }
 
 impl PrefilterJob {
+    /// The chain as built from a level 0 of `size`: with no level count and no floor given it
+    /// stops at [`filter::DEFAULT_MIN_SIZE`] px faces (at level 0 when that is smaller), but
+    /// for Babylon's .env, which holds every level down to 1 x 1.
+    fn chain_for(&self, size: usize) -> ChainOptions {
+        let mut chain = self.chain;
+        let env = self.container() == Some(FileFormat::Env);
+        if chain.levels.is_none() && chain.min_size.is_none() && !env {
+            chain.min_size = Some(filter::DEFAULT_MIN_SIZE.min(size.max(1)));
+        }
+        chain
+    }
+
     /// A chain of `inputs` at `output` with every option at its default (GGX).
     pub fn new(inputs: Vec<PathBuf>, output: Destination) -> PrefilterJob {
         PrefilterJob {
@@ -68,6 +86,8 @@ impl PrefilterJob {
             face_format: FileFormat::Exr,
             gpu_format: GpuFormat::Rgba16f,
             zstd: None,
+            exr_float: ExrFloat::Half,
+            exposure: 0.0,
             read: ReadOptions::default(),
         }
     }
@@ -107,7 +127,10 @@ impl Job for PrefilterJob {
         if container.is_none() && name.extension().is_some() && !name.is_dir() {
             return Err(Error::file(
                 &name,
-                "prefilter writes a .ktx2 or .dds cube map, or a folder (no extension)",
+                format!(
+                    "prefilter writes a cube map ({}) or a folder (a name without an extension)",
+                    FileFormat::list(FileFormat::is_container, true)
+                ),
             ));
         }
         if self.face_format.is_container() {
@@ -164,6 +187,9 @@ impl Job for PrefilterJob {
         }
         let loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
         progress.stage("decode");
+        if let Some(w) = convert::skybox_note(&self.inputs) {
+            warnings.push(w);
+        }
         if let Some(w) = replaced_values(&loaded.files[0], loaded.meta.replaced_values as u64) {
             warnings.push(w);
         }
@@ -176,24 +202,30 @@ impl Job for PrefilterJob {
             )));
         }
         self.check_memory(size, loaded.working_bytes())?;
-        let base = convert::to_cube(&loaded, size, &Resampler::default());
+        let mut base = convert::to_cube(&loaded, size, &Resampler::default());
+        base.levels[0]
+            .iter_mut()
+            .for_each(|f| crate::tonemap::scale(f, self.exposure));
         progress.stage("resample");
 
-        let levels = filter::plan(&self.chain, size);
-        let costs: Vec<u64> = levels.iter().map(|(i, _)| cost(i)).collect();
+        let chain_options = self.chain_for(size);
+        let levels = filter::plan(&chain_options, size);
+        let costs: Vec<u64> = levels.iter().map(|(i, _)| filter::level_cost(i)).collect();
         progress.start(
             costs.iter().sum(),
             &format!("{} {size}", self.chain.filter.name()),
         );
-        let (chain, infos) =
-            filter::prefilter(&base, &self.chain, &|level| progress.advance(costs[level]));
+        let (chain, infos) = filter::prefilter(&base, &chain_options, &|level| {
+            progress.advance(costs[level])
+        });
         progress.finish();
         progress.stage("filter");
 
-        let description = LevelsFile::new(&self.chain, size, infos);
+        let description = LevelsFile::new(&chain_options, size, infos);
         let write = WriteOptions {
             linear: self.read.linear,
             zstd: self.zstd.filter(|_| container == Some(FileFormat::Ktx2)),
+            exr_float: self.exr_float,
             ..WriteOptions::default()
         };
         let encoded = chain::encode(
@@ -207,6 +239,15 @@ impl Job for PrefilterJob {
         )?;
         if let Some(w) = &encoded.clamped {
             warnings.push(w);
+        }
+        // 8-bit files clip at 1.
+        let format = container.unwrap_or(self.face_format);
+        if io::largest_value(format, self.gpu_format).is_none() {
+            let (n, top) = tonemap::clipped(chain.levels.iter().flatten(), Tonemap::None, 0.0);
+            if n > 0 {
+                let name = self.output.name();
+                warnings.push(output::clip_warning(&name, n, top, self.exposure, false));
+            }
         }
         let quality = encoded.psnr.map(|psnr_db| Quality {
             format: self.gpu_format,
@@ -224,14 +265,21 @@ impl Job for PrefilterJob {
         output::deliver(&files, &self.output, &loaded.files)?;
         progress.stage("write");
         let mut summary: Vec<String> = description.levels.iter().map(level_line).collect();
-        if let (Some(min), Some(last)) = (self.chain.min_size, description.levels.last()) {
-            summary.push(format!(
-                "stopped at {} px ({} {min}): {} levels instead of {}",
-                last.size,
-                param("min_size"),
-                description.levels.len(),
-                CubeMap::full_chain_len(size)
-            ));
+        let full = CubeMap::full_chain_len(size);
+        if let (Some(min), Some(last)) = (chain_options.min_size, description.levels.last()) {
+            if description.levels.len() < full {
+                let default = if self.chain.min_size.is_none() {
+                    format!(", the default; {} 1 for the full chain", param("min_size"))
+                } else {
+                    String::new()
+                };
+                summary.push(format!(
+                    "stopped at {} px ({} {min}{default}): {} levels instead of {full}",
+                    last.size,
+                    param("min_size"),
+                    description.levels.len(),
+                ));
+            }
         }
         Ok(Report {
             written: files.paths(),
@@ -240,16 +288,6 @@ impl Job for PrefilterJob {
             quality,
         })
     }
-}
-
-/// A level's work for the progress bar: an exact sum costs about what 64 samples do.
-fn cost(i: &LevelInfo) -> u64 {
-    let per_texel = match (i.samples, i.power.or(i.sigma)) {
-        (Some(s), _) => s as u64,
-        (None, Some(_)) => 64,
-        _ => 1,
-    };
-    (6 * i.size * i.size) as u64 * per_texel
 }
 
 /// One level as the report lists it: its size, its lobe and how it was summed.

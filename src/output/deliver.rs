@@ -34,20 +34,18 @@ impl Destination {
                 Ok(Destination::Stdout(f))
             }
             _ => {
-                let list: Vec<&str> = FileFormat::ALL
-                    .iter()
-                    .filter(|&&f| allowed(f))
-                    .map(|f| f.extension())
-                    .collect();
-                let says = if FileFormat::ALL.iter().all(|&f| allowed(f)) {
-                    "needs"
+                let why = if FileFormat::ALL.iter().all(|&f| allowed(f)) {
+                    ""
+                } else if allowed(FileFormat::Ktx2) {
+                    " (one file: a cube-map container)"
                 } else {
-                    "takes one file, a container: add"
+                    " (one file: an image)"
                 };
+                let given = format.map(|f| format!(", not {f}")).unwrap_or_default();
                 Err(Error::usage(format!(
-                    "-o - (standard output) {says} {} {}",
+                    "-o - (standard output) needs {} {}{why}{given}",
                     param("format"),
-                    list.join(", ")
+                    FileFormat::list(&allowed, false),
                 )))
             }
         }

@@ -29,7 +29,8 @@ pub struct Target {
     pub write: WriteOptions,
     /// Mip levels of a KTX2 or DDS container (None: the full chain down to 1x1).
     pub levels: Option<usize>,
-    /// Exposure (stops) and tone curve for 8-bit outputs; float outputs stay linear.
+    /// Exposure (stops) and tone curve: both for 8-bit outputs; float outputs stay linear,
+    /// scaled by the exposure alone.
     pub tone: Option<(f32, Tonemap)>,
 }
 
@@ -116,10 +117,21 @@ impl Target {
             Output::Cube(c) => c.levels[0].iter_mut().collect(),
             Output::Image(img) => vec![img],
         };
-        if let (Some((exposure, curve)), true) = (self.tone, self.is_8bit()) {
-            for img in images {
-                crate::tonemap::apply(img, curve, exposure);
-            }
+        let (exposure, curve) = self.tone.unwrap_or((0.0, Tonemap::None));
+        let clipped = if self.is_8bit() {
+            let (n, top) = crate::tonemap::clipped(images.iter().map(|i| &**i), curve, exposure);
+            (n > 0).then(|| clip_warning(&self.path, n, top, exposure, true))
+        } else {
+            None
+        };
+        match (self.tone, self.is_8bit()) {
+            (Some(_), true) => images
+                .into_iter()
+                .for_each(|img| crate::tonemap::apply(img, curve, exposure)),
+            (Some(_), false) if exposure != 0.0 => images
+                .into_iter()
+                .for_each(|img| crate::tonemap::scale(img, exposure)),
+            _ => {}
         }
         // Box mips are means of level 0: they fit where it fits.
         let clamped = self.format().and_then(|f| {
@@ -127,8 +139,9 @@ impl Target {
                 Output::Cube(c) => c.levels[0].iter().collect(),
                 Output::Image(img) => vec![img],
             };
-            io::clamp_warning(&self.path, f, self.write.gpu_format, images)
+            io::clamp_warning_with(&self.path, f, &self.write, images)
         });
+        let clamped = clamped.or(clipped);
         let mut psnr = None;
         let folders = if self.kind == Kind::Faces {
             vec![self.path.clone()]
@@ -204,11 +217,13 @@ pub(crate) fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
         (Some(k), Some(f)) if f.is_container() => Err(Error::file(
             output,
             format!(
-                "{} holds cube maps, not a {} image: use {} {}",
+                "{} holds cube maps and {} {} is a single image: name the output {}, or \
+                 leave out {} for a cube map",
                 f.name(),
-                k.name(),
                 param("to"),
-                f.container_kind().name()
+                k.name(),
+                FileFormat::list(FileFormat::is_image, true),
+                param("to"),
             ),
         )),
         (Some(k), Some(_)) => Ok(k),
@@ -316,25 +331,53 @@ pub fn refuse_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<()> {
     Ok(())
 }
 
-/// The exposure and tone curve `target` gets: the curve for 8-bit outputs. For others, None,
-/// and a warning when they were asked for (float outputs keep linear radiance).
+/// The exposure and tone curve `target` gets: both for 8-bit outputs; for others the exposure
+/// alone (linear radiance scaled by 2^EV), and a warning when a curve was asked for.
 pub fn tone_for(
     target: &Target,
     exposure: f32,
     tonemap: Tonemap,
 ) -> (Option<(f32, Tonemap)>, Option<String>) {
     let given = exposure != 0.0 || tonemap != Tonemap::None;
-    let eight_bit = target.is_8bit();
-    let warning = (given && !eight_bit).then(|| tone_ignored(&target.path));
-    ((given && eight_bit).then_some((exposure, tonemap)), warning)
+    if target.is_8bit() {
+        return (given.then_some((exposure, tonemap)), None);
+    }
+    let warning = (tonemap != Tonemap::None).then(|| tone_ignored(&target.path));
+    (
+        (exposure != 0.0).then_some((exposure, Tonemap::None)),
+        warning,
+    )
 }
 
-/// The warning for exposure and tone options given for an output that keeps linear radiance.
+/// The warning for a tone curve given for an output that keeps linear radiance.
 pub fn tone_ignored(output: &Path) -> String {
     format!(
-        "{}: {} and {} apply to 8-bit outputs; this one keeps linear radiance",
-        output.display(),
+        "{}: {} applies to 8-bit outputs; this one keeps linear radiance ({} scales it)",
+        crate::error::shown(output),
+        param("tonemap"),
+        param("exposure")
+    )
+}
+
+/// The warning for texels an 8-bit output clips to white, `top` the brightest value, with the
+/// ways to keep them (a tone curve where the command has `--tonemap`).
+pub fn clip_warning(output: &Path, texels: u64, top: f32, exposure: f32, tonemap: bool) -> String {
+    let ev = exposure - top.log2().ceil().max(1.0);
+    let curve = if tonemap {
+        format!(", {} aces rolls highlights off", param("tonemap"))
+    } else {
+        String::new()
+    };
+    let top = if top >= 100.0 {
+        format!("{top:.0}")
+    } else {
+        format!("{top:.2}")
+    };
+    format!(
+        "{}: {texels} texels brighter than 1 clip to white in an 8-bit file (the brightest is \
+         {top}): {} {ev} brings it to 1{curve}, or a float output (.exr, .hdr) keeps the \
+         radiance",
+        crate::error::shown(output),
         param("exposure"),
-        param("tonemap")
     )
 }

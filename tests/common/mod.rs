@@ -309,6 +309,24 @@ pub fn babylon_core() -> Option<PathBuf> {
     )
 }
 
+/// The folder holding `node_modules/filament` (Filament's web build), for
+/// `tests/tools/filament_snippet.cjs`.
+pub fn filament_js() -> Option<PathBuf> {
+    node_package(
+        "filament",
+        "npm install filament@1 in target/tools or $CUBEFORGE_TOOLS; node from your system",
+    )
+}
+
+/// A C++ compiler (`c++`), to check printed C++ snippets against stand-in declarations.
+pub fn cxx() -> bool {
+    reader_found(
+        "a C++ compiler (c++)",
+        "apt-get install g++",
+        runs("c++", &["--version"], false),
+    )
+}
+
 /// The folder holding `node_modules/playcanvas`, for `tests/tools/ktx1_check.mjs`.
 pub fn playcanvas() -> Option<PathBuf> {
     node_package(

@@ -59,9 +59,9 @@ fn exposure_and_tonemap_change_8bit_outputs_only() {
     );
     assert!(dark < plain * 0.6, "{dark} vs {plain}");
     assert!(soft < plain, "{soft} vs {plain}");
-    // A float output keeps radiance, and says the options were ignored.
-    let o = with(&["--tonemap", "aces", "--exposure", "3"], "linear.exr");
-    assert!(err(&o).contains("apply to 8-bit outputs"), "{}", err(&o));
+    // A float output keeps radiance linear, and says the curve was ignored.
+    let o = with(&["--tonemap", "aces"], "linear.exr");
+    assert!(err(&o).contains("applies to 8-bit outputs"), "{}", err(&o));
     let o = with(&[], "plain.exr");
     assert!(err(&o).is_empty(), "{}", err(&o));
     let a = std::fs::read(t.path().join("linear.exr")).unwrap();
@@ -124,6 +124,8 @@ fn convert_reads_one_level_of_a_chain() {
             "16",
             "--filter",
             "gaussian",
+            "--min-size",
+            "1",
         ],
         t.path(),
     );

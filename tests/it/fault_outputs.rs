@@ -18,6 +18,12 @@ fn prefilter(out: &Path, extra: &[&str]) -> std::process::Output {
         "--size".as_ref(),
         "16".as_ref(),
     ];
+    if !extra.contains(&"--levels") {
+        args.extend([
+            std::ffi::OsStr::new("--min-size"),
+            std::ffi::OsStr::new("1"),
+        ]);
+    }
     args.extend(extra.iter().map(std::ffi::OsStr::new));
     run(args)
 }

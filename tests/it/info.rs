@@ -249,6 +249,8 @@ fn prefilter_folder(dir: &Path) -> PathBuf {
         "8".as_ref(),
         "--samples".as_ref(),
         "4".as_ref(),
+        "--min-size".as_ref(),
+        "1".as_ref(),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     chain

@@ -17,9 +17,13 @@ struct Record {
     stages: Mutex<Vec<String>>,
     warnings: Mutex<Vec<String>>,
     units: Mutex<(u64, u64)>,
+    begun: Mutex<Vec<String>>,
 }
 
 impl Progress for Record {
+    fn begin(&self, what: &str) {
+        self.begun.lock().unwrap().push(what.to_owned());
+    }
     fn stage(&self, name: &str) {
         self.stages.lock().unwrap().push(name.to_owned());
     }
@@ -56,11 +60,15 @@ fn a_conversion_reports_its_stages_files_and_warnings() {
         ["decode", "resample", "encode", "write"]
     );
     // Warnings are data, named by the library's field names, and heard as they come.
-    assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+    assert_eq!(report.warnings.len(), 2, "{:?}", report.warnings);
     assert!(report.warnings[0]
         .to_string()
         .contains("`gpu_format` applies to KTX2 and DDS"));
-    assert_eq!(record.warnings.lock().unwrap().len(), 1);
+    // The sun of sky.exr clips in an 8-bit cross.
+    assert!(report.warnings[1]
+        .to_string()
+        .contains("clip to white in an 8-bit file"));
+    assert_eq!(record.warnings.lock().unwrap().len(), 2);
 }
 
 #[test]
@@ -70,6 +78,7 @@ fn a_chain_counts_its_progress_and_lists_its_levels() {
     let mut job = PrefilterJob::new(vec![sky()], Destination::Path(out.clone()));
     job.size = Some(16);
     job.chain.samples = 4;
+    job.chain.min_size = Some(1);
     let record = Record::default();
     let report = job.run(&record).unwrap();
     let (total, done) = *record.units.lock().unwrap();
@@ -193,4 +202,33 @@ fn only_the_output_module_writes_files() {
             assert!(!used, "src/{rel} calls {w}: write through output::deliver");
         }
     }
+}
+
+/// `ibl` says in one line what it will make before the long part, then counts the chain and
+/// the irradiance integral texel by texel.
+#[test]
+fn ibl_says_what_it_makes_and_counts_its_progress() {
+    let dir = tempfile::tempdir().unwrap();
+    let job = cubeforge::IblJob {
+        options: cubeforge::IblOptions {
+            specular_size: Some(16),
+            samples: Some(4),
+            ..Default::default()
+        },
+        ..cubeforge::IblJob::new(
+            vec![sky()],
+            dir.path().join("bevy"),
+            cubeforge::Engine::Bevy,
+        )
+    };
+    let record = Record::default();
+    job.run(&record).unwrap();
+    let begun = record.begun.lock().unwrap().clone();
+    assert_eq!(begun.len(), 1, "{begun:?}");
+    assert!(
+        begun[0].starts_with("ibl bevy: a GGX chain of 16 px faces down to 8 px"),
+        "{begun:?}"
+    );
+    let (total, done) = *record.units.lock().unwrap();
+    assert!(total > 0 && total == done, "{total} units, {done} done");
 }

@@ -12,6 +12,7 @@ const RANKS: &[(&str, u32)] = &[
     ("alloc", 0),
     ("simd", 0),
     ("error", 0),
+    ("progress", 0),
     ("image", 1),
     ("synthetic", 2),
     ("tonemap", 2),

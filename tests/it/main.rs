@@ -16,6 +16,7 @@ mod engine_containers;
 mod fault_campaign;
 mod fault_outputs;
 mod finite;
+mod first_hour;
 mod flux;
 mod formats;
 mod gpu_formats;

@@ -550,6 +550,8 @@ fn chains_into_the_engines_containers() {
             "box",
             "--size",
             "16",
+            "--min-size",
+            "1",
         ]);
         assert!(o.status.success(), "{}", common::stderr(&o));
         assert!(out.is_file(), "{name}");

@@ -486,7 +486,7 @@ fn info_json_on_each_kind() {
             (512, 256),
             128,
             "linear",
-            "DWAB",
+            "dwab compression",
         ),
         expect(
             "zip/venice.exr",
@@ -495,7 +495,7 @@ fn info_json_on_each_kind() {
             (512, 256),
             128,
             "linear",
-            "ZIP",
+            "zip block compression",
         ),
         expect("hdr/park.hdr", "hdr", eq, (512, 256), 128, "linear", "RGBE"),
         expect("png/city.png", "png", eq, (512, 256), 128, "srgb", "RGB8"),

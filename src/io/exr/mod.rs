@@ -88,7 +88,7 @@ pub(crate) fn decode_with(
     };
     let alpha = channel("A").is_some();
     let pixel_format = format!(
-        "{}{sample} ({:?})",
+        "{}{sample} ({})",
         if alpha { "RGBA" } else { "RGB" },
         header.compression
     );
@@ -236,10 +236,11 @@ const ZIP_LINES: usize = 16;
 
 /// Half-float RGB(A), ZIP-compressed in 16-line blocks: what most tools read and write. Alpha
 /// is left out when every texel is opaque (readers take a missing A as 1), a quarter less data.
+/// `full_float` stores 32-bit floats instead, for radiance beyond half's 65504 (a sun).
 /// The exr crate writes the file (header, offset table, chunks); the blocks are compressed
 /// here, in parallel, with libdeflate: about 2x faster than the crate's deflate for files no
 /// larger, and ZIP encoding was the largest stage of converting a panorama to faces.
-pub fn encode(img: &Image) -> std::result::Result<Vec<u8>, String> {
+pub fn encode(img: &Image, full_float: bool) -> std::result::Result<Vec<u8>, String> {
     use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
     use exr::block::writer::ChunksWriter;
     use exr::meta::attribute::{ChannelDescription, LineOrder};
@@ -253,7 +254,14 @@ pub fn encode(img: &Image) -> std::result::Result<Vec<u8>, String> {
     let names = ["R", "G", "B", "A"];
     let list = order
         .iter()
-        .map(|&c| ChannelDescription::new(names[c], SampleType::F16, c == 3))
+        .map(|&c| {
+            let sample = if full_float {
+                SampleType::F32
+            } else {
+                SampleType::F16
+            };
+            ChannelDescription::new(names[c], sample, c == 3)
+        })
         .collect();
     let header = Header::new(Text::from(""), (img.width, img.height), list)
         .with_attributes(LayerAttributes::default())
@@ -265,7 +273,11 @@ pub fn encode(img: &Image) -> std::result::Result<Vec<u8>, String> {
     let blocks: Vec<Vec<u8>> = (0..img.height.div_ceil(ZIP_LINES))
         .into_par_iter()
         .map_init(ZipRoom::new, |room, b| {
-            zip_block(img, b * ZIP_LINES, order, room)
+            if full_float {
+                zip_block_f32(img, b * ZIP_LINES, order, room)
+            } else {
+                zip_block(img, b * ZIP_LINES, order, room)
+            }
         })
         .collect();
     // The blocks, their offset table and line headers, and room for the header: one
@@ -308,6 +320,7 @@ struct ZipRoom {
     samples: Vec<u16>,
     split: Vec<u8>,
     packed: Vec<u8>,
+    raw: Vec<u8>,
 }
 
 impl ZipRoom {
@@ -320,6 +333,7 @@ impl ZipRoom {
             samples: Vec::new(),
             split: Vec::new(),
             packed: Vec::new(),
+            raw: Vec::new(),
         }
     }
 }
@@ -340,6 +354,7 @@ fn zip_block(img: &Image, y0: usize, order: &[usize], room: &mut ZipRoom) -> Vec
         samples,
         split,
         packed,
+        ..
     } = room;
     floats.resize(w, 0.0);
     halves.resize(w, f16::ZERO);
@@ -384,6 +399,46 @@ fn zip_block(img: &Image, y0: usize, order: &[usize], room: &mut ZipRoom) -> Vec
         // The block keeps only its bytes.
         Ok(len) if len < n => packed[..len].to_vec(),
         _ => samples.iter().flat_map(|h| h.to_le_bytes()).collect(),
+    }
+}
+
+/// [`zip_block`] for 32-bit float samples: each line's channels as little-endian floats, the
+/// bytes split into even and odd positions, differenced and compressed the same way.
+fn zip_block_f32(img: &Image, y0: usize, order: &[usize], room: &mut ZipRoom) -> Vec<u8> {
+    let w = img.width;
+    let lines = ZIP_LINES.min(img.height - y0);
+    let ZipRoom {
+        deflate,
+        split,
+        packed,
+        raw,
+        ..
+    } = room;
+    raw.clear();
+    for y in y0..y0 + lines {
+        let row = &img.pixels[y * w..(y + 1) * w];
+        for &c in order {
+            for p in row {
+                raw.extend_from_slice(&super::finite(p[c], f32::MAX).to_le_bytes());
+            }
+        }
+    }
+    let n = raw.len();
+    split.resize(n, 0);
+    let half = n.div_ceil(2);
+    for (i, &b) in raw.iter().enumerate() {
+        split[if i % 2 == 0 { i / 2 } else { half + i / 2 }] = b;
+    }
+    let mut prev = split[0];
+    for b in split[1..].iter_mut() {
+        let here = *b;
+        *b = here.wrapping_sub(prev).wrapping_add(128);
+        prev = here;
+    }
+    packed.resize(deflate.zlib_compress_bound(n), 0);
+    match deflate.zlib_compress(split, packed) {
+        Ok(len) if len < n => packed[..len].to_vec(),
+        _ => raw.clone(),
     }
 }
 

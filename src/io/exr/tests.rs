@@ -88,9 +88,26 @@ fn blocks_match_the_crate_reader() {
             (x % 5) as f32 / 4.0,
         )
     });
-    both(&encode(&img).unwrap(), "ours, RGBA half");
+    both(&encode(&img, false).unwrap(), "ours, RGBA half");
     let opaque = Image::from_fn(37, 41, |x, y| img.get(x, y).truncate().extend(1.0));
-    both(&encode(&opaque).unwrap(), "ours, RGB half");
+    both(&encode(&opaque, false).unwrap(), "ours, RGB half");
+    // Full floats keep what half cannot: a sun of 2e5, and 1e-9.
+    let sun = Image::from_fn(37, 41, |x, y| {
+        let v = if (x, y) == (3, 4) {
+            2.0e5
+        } else {
+            x as f32 * 1e-9 + y as f32
+        };
+        Vec4::new(v, v * 0.5, v * 0.25, if x == 0 { 0.5 } else { 1.0 })
+    });
+    let bytes = encode(&sun, true).unwrap();
+    both(&bytes, "ours, RGBA float");
+    assert_eq!(crate_reader(&bytes), sun);
+    let opaque_sun = Image::from_fn(37, 41, |x, y| sun.get(x, y).truncate().extend(1.0));
+    assert_eq!(
+        crate_reader(&encode(&opaque_sun, true).unwrap()),
+        opaque_sun
+    );
     // Noise that does not shrink: its blocks are stored as they are.
     let noisy = |x: usize, y: usize, c: usize| {
         let mut h = (((x * 131 + y) * 4 + c) as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
@@ -107,7 +124,7 @@ fn blocks_match_the_crate_reader() {
             noisy(x, y, 3),
         )
     });
-    let bytes = encode(&noise).unwrap();
+    let bytes = encode(&noise, false).unwrap();
     assert!(bytes.len() > 33 * 17 * 8, "stored, not compressed");
     both(&bytes, "ours, noise");
     assert_eq!(crate_reader(&bytes), noise);

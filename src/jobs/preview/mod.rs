@@ -278,6 +278,9 @@ impl Job for PreviewJob {
         let mut inputs: Vec<PathBuf> = env.files.clone();
         let textures = cells::load_textures(self, &materials, progress, &mut inputs)?;
         progress.stage("decode");
+        if let Some(w) = crate::convert::skybox_note(std::slice::from_ref(&self.env)) {
+            warnings.push(w);
+        }
         let split_sum = if materials.iter().any(|m| m.model == Model::Pbr) {
             let setup = pbr::prepare(&env, &self.env, self.target)?;
             if let Some(w) = &setup.warning {

@@ -76,15 +76,23 @@ fn chains_hold_the_engines_roughness_per_level() {
             assert!((l.alpha.unwrap() - r * r).abs() < 1e-6, "{target}: {l:?}");
         }
     }
-    // Default sizes: Bevy's chain from 512 stops at 8 px (7 levels), the diffuse cube is 32.
+    // Default sizes: Bevy's chain from 512 stops at 8 px (7 levels), the diffuse cube is 32;
+    // the marker panorama's 64 px faces cap it at 64 (4 levels), and --size 512 has it anyway.
     let out = dir.path().join("bevy_default");
     ibl(&input, &out, "bevy", &["--samples", "4"]);
     let spec = read_cube(&out.join("env_specular.ktx2"));
     assert_eq!(
         spec.levels.iter().map(|l| l[0].width).collect::<Vec<_>>(),
-        [512, 256, 128, 64, 32, 16, 8]
+        [64, 32, 16, 8]
     );
     assert_eq!(read_cube(&out.join("env_diffuse.ktx2")).size(), 32);
+    let out = dir.path().join("bevy_512");
+    ibl(&input, &out, "bevy", &["--samples", "4", "--size", "512"]);
+    let spec = read_cube(&out.join("env_specular.ktx2"));
+    assert_eq!(
+        spec.levels.iter().map(|l| l[0].width).collect::<Vec<_>>(),
+        [512, 256, 128, 64, 32, 16, 8]
+    );
 }
 
 #[test]

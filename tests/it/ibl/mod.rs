@@ -7,6 +7,7 @@
 mod command_line;
 mod engines;
 mod readers;
+mod snippets;
 
 use crate::common::{self, run, stderr};
 use cubeforge::chain::LevelsFile;
