@@ -436,6 +436,12 @@ fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Lo
         Decoded::Cube(cube) => (Source::Cube(cube), meta.file_format.container_kind()),
         Decoded::Image(img) => {
             let (w, h) = (img.width, img.height);
+            let cannot_hold = |k: Kind| {
+                Error::file(
+                    path,
+                    format!("a {w}x{h} image cannot hold a {} layout", k.name()),
+                )
+            };
             let kind = match from {
                 Some(k) if k == Kind::Faces || k.is_container() => {
                     return Err(Error::file(
@@ -447,21 +453,18 @@ fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Lo
                         ),
                     ))
                 }
-                Some(k) if !k.fits(w, h) => {
-                    return Err(Error::file(
-                        path,
-                        format!("a {w}x{h} image cannot hold a {} layout", k.name()),
-                    ))
-                }
+                Some(k) if !k.fits(w, h) => return Err(cannot_hold(k)),
                 Some(k) => k,
                 None => layout::detect(w, h).map_err(|e| Error::file(path, e))?,
             };
-            let source = match kind.projection() {
-                Some(p) => Source::Projection(p, img),
-                None => Source::Cube(
-                    CubeMap::from_faces(cross::extract(kind, &img))
+            // `fits` holds for projections and cells only.
+            let source = match (kind.projection(), kind.cells()) {
+                (Some(p), _) => Source::Projection(p, img),
+                (None, Some(cells)) => Source::Cube(
+                    CubeMap::from_faces(cross::extract(cells, &img))
                         .map_err(|e| Error::file(path, e.to_string()))?,
                 ),
+                (None, None) => return Err(cannot_hold(kind)),
             };
             (source, kind)
         }
@@ -522,7 +525,7 @@ pub fn to_image(loaded: &Loaded, to: Kind, size: usize, resampler: &Resampler) -
             resampler.to_projection_with_peaks(env.as_ref(), peaks.as_ref(), p, w, h)
         }
         None => {
-            let cells = if to.is_cells() { to } else { Kind::Hcross };
+            let cells = to.cells().unwrap_or(cross::Cells::Hcross);
             cross::assemble(cells, &to_cube(loaded, size, resampler).levels[0])
         }
     }

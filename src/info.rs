@@ -102,20 +102,19 @@ pub fn stats<'a>(images: impl IntoIterator<Item = &'a Image>) -> Stats {
 /// corners outside it), every texel of a panorama or octahedral map. With no layout, every
 /// texel.
 pub(crate) fn layout_stats(kind: Option<Kind>, img: &Image) -> Stats {
-    match kind {
-        Some(k) if k.is_cells() => stats(&layout::cross::extract(k, img)),
-        Some(k) => match k.projection() {
-            Some(p @ (layout::Projection::Sphere | layout::Projection::Angular)) => {
-                let (w, h) = (img.width, img.height);
-                stats_of(img.pixels.iter().enumerate().filter_map(|(i, px)| {
-                    let u = ((i % w) as f32 + 0.5) / w as f32;
-                    let v = ((i / w) as f32 + 0.5) / h as f32;
-                    p.to_dir(u, v).map(|_| px)
-                }))
-            }
-            _ => stats([img]),
-        },
-        None => stats([img]),
+    if let Some(cells) = kind.and_then(Kind::cells) {
+        return stats(&layout::cross::extract(cells, img));
+    }
+    match kind.and_then(Kind::projection) {
+        Some(p @ (layout::Projection::Sphere | layout::Projection::Angular)) => {
+            let (w, h) = (img.width, img.height);
+            stats_of(img.pixels.iter().enumerate().filter_map(|(i, px)| {
+                let u = ((i % w) as f32 + 0.5) / w as f32;
+                let v = ((i / w) as f32 + 0.5) / h as f32;
+                p.to_dir(u, v).map(|_| px)
+            }))
+        }
+        _ => stats([img]),
     }
 }
 
@@ -215,10 +214,8 @@ fn image_flux(kind: Kind, img: &Image) -> Option<[f64; 3]> {
         let grid = flux::Grid::Projection(p, img.width, img.height);
         return Some(flux::mean_radiance(grid, &[img]));
     }
-    kind.is_cells().then(|| {
-        let faces = layout::cross::extract(kind, img);
-        cube_flux(&faces)
-    })
+    kind.cells()
+        .map(|cells| cube_flux(&layout::cross::extract(cells, img)))
 }
 
 fn cube_flux(faces: &Faces) -> [f64; 3] {

@@ -98,7 +98,7 @@ impl ConvertJob {
     /// encoding) beside the input's texels and pyramid (`input` bytes).
     fn plan_bytes(to: Kind, size: usize, input: u64) -> u64 {
         let (w, h) = to.image_size(size);
-        let texels = if to.projection().is_some() || to.is_cells() {
+        let texels = if to.projection().is_some() || to.cells().is_some() {
             (w as u64).saturating_mul(h as u64)
         } else {
             (size as u64).saturating_mul(size as u64).saturating_mul(6)

@@ -9,7 +9,7 @@ use crate::image::Image;
 
 /// Where one face sits: its cell (column, row) and whether it is turned 180 degrees.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Cell {
+struct Cell {
     pub col: usize,
     pub row: usize,
     pub rotated: bool,
@@ -23,16 +23,46 @@ const fn c(col: usize, row: usize) -> Cell {
     }
 }
 
-/// Grid size (columns, rows) and the cell of each face in px nx py ny pz nz order.
-pub(crate) fn cells(kind: Kind) -> Option<((usize, usize), [Cell; 6])> {
-    Some(match kind {
-        Kind::Hcross => (
-            (4, 3),
-            [c(2, 1), c(0, 1), c(1, 0), c(1, 2), c(1, 1), c(3, 1)],
-        ),
-        Kind::Vcross => (
-            (3, 4),
-            [
+/// The layouts made of cells: a type that can only be a cross or a strip, so laying faces out
+/// and cutting them out need no check that the layout has cells.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cells {
+    /// Horizontal cross, 4:3.
+    Hcross,
+    /// Vertical cross, 3:4 (-Z turned 180 degrees).
+    Vcross,
+    /// Horizontal strip, 6:1.
+    Hstrip,
+    /// Vertical strip, 1:6.
+    Vstrip,
+}
+
+impl Cells {
+    /// The layout these cells are.
+    pub fn kind(self) -> Kind {
+        match self {
+            Cells::Hcross => Kind::Hcross,
+            Cells::Vcross => Kind::Vcross,
+            Cells::Hstrip => Kind::Hstrip,
+            Cells::Vstrip => Kind::Vstrip,
+        }
+    }
+
+    /// Grid size (columns, rows).
+    pub fn grid(self) -> (usize, usize) {
+        match self {
+            Cells::Hcross => (4, 3),
+            Cells::Vcross => (3, 4),
+            Cells::Hstrip => (6, 1),
+            Cells::Vstrip => (1, 6),
+        }
+    }
+
+    /// The cell of each face in px nx py ny pz nz order.
+    fn cells(self) -> [Cell; 6] {
+        match self {
+            Cells::Hcross => [c(2, 1), c(0, 1), c(1, 0), c(1, 2), c(1, 1), c(3, 1)],
+            Cells::Vcross => [
                 c(2, 1),
                 c(0, 1),
                 c(1, 0),
@@ -44,16 +74,15 @@ pub(crate) fn cells(kind: Kind) -> Option<((usize, usize), [Cell; 6])> {
                     rotated: true,
                 },
             ],
-        ),
-        Kind::Hstrip => ((6, 1), std::array::from_fn(|i| c(i, 0))),
-        Kind::Vstrip => ((1, 6), std::array::from_fn(|i| c(0, i))),
-        _ => return None,
-    })
+            Cells::Hstrip => std::array::from_fn(|i| c(i, 0)),
+            Cells::Vstrip => std::array::from_fn(|i| c(0, i)),
+        }
+    }
 }
 
 /// Lays the faces out; unused cells are transparent black.
-pub fn assemble(kind: Kind, faces: &Faces) -> Image {
-    let ((cols, rows), cells) = cells(kind).expect("assemble needs a cross or strip kind");
+pub fn assemble(layout: Cells, faces: &Faces) -> Image {
+    let ((cols, rows), cells) = (layout.grid(), layout.cells());
     let n = faces[0].width;
     let mut out = Image::new(cols * n, rows * n);
     for (face, cell) in faces.iter().zip(cells) {
@@ -67,8 +96,8 @@ pub fn assemble(kind: Kind, faces: &Faces) -> Image {
 }
 
 /// Cuts the faces out of a cross or strip whose size fits the grid exactly.
-pub fn extract(kind: Kind, img: &Image) -> Faces {
-    let ((cols, _), cells) = cells(kind).expect("extract needs a cross or strip kind");
+pub fn extract(layout: Cells, img: &Image) -> Faces {
+    let ((cols, _), cells) = (layout.grid(), layout.cells());
     let n = img.width / cols;
     // The six faces at once (each cut row by row in parallel too).
     let mut faces: [Option<Image>; 6] = Default::default();

@@ -74,9 +74,15 @@ impl Kind {
         matches!(self, Kind::Ktx2 | Kind::Dds | Kind::Ktx | Kind::Env)
     }
 
-    /// Crosses and strips: faces placed in cells.
-    pub fn is_cells(self) -> bool {
-        cross::cells(self).is_some()
+    /// Crosses and strips (faces placed in cells) as the type [`cross`] lays out and cuts.
+    pub fn cells(self) -> Option<cross::Cells> {
+        match self {
+            Kind::Hcross => Some(cross::Cells::Hcross),
+            Kind::Vcross => Some(cross::Cells::Vcross),
+            Kind::Hstrip => Some(cross::Cells::Hstrip),
+            Kind::Vstrip => Some(cross::Cells::Vstrip),
+            _ => None,
+        }
     }
 
     /// The single-image layouts resampled by direction (not made of faces).
@@ -95,8 +101,11 @@ impl Kind {
         match self {
             Kind::Equirect => w == 2 * h,
             Kind::Sphere | Kind::Angular | Kind::Octahedral => w == h,
-            _ => match cross::cells(self) {
-                Some(((c, r), _)) => w.is_multiple_of(c) && h.is_multiple_of(r) && w / c == h / r,
+            _ => match self.cells() {
+                Some(cells) => {
+                    let (c, r) = cells.grid();
+                    w.is_multiple_of(c) && h.is_multiple_of(r) && w / c == h / r
+                }
                 None => false,
             },
         }
@@ -107,8 +116,11 @@ impl Kind {
         match self {
             Kind::Equirect => (4 * n, 2 * n),
             Kind::Sphere | Kind::Angular | Kind::Octahedral => (2 * n, 2 * n),
-            _ => match cross::cells(self) {
-                Some(((c, r), _)) => (c * n, r * n),
+            _ => match self.cells() {
+                Some(cells) => {
+                    let (c, r) = cells.grid();
+                    (c * n, r * n)
+                }
                 None => (n, n),
             },
         }
@@ -119,8 +131,8 @@ impl Kind {
         match self {
             Kind::Equirect => w / 4,
             Kind::Sphere | Kind::Angular | Kind::Octahedral => w / 2,
-            _ => match cross::cells(self) {
-                Some(((c, _), _)) => w / c,
+            _ => match self.cells() {
+                Some(cells) => w / cells.grid().0,
                 None => w.min(h),
             },
         }

@@ -8,7 +8,7 @@ use crate::common;
 use common::{read_image, run, stderr, write_image};
 use cubeforge::cube::FACE_NAMES;
 use cubeforge::image::Image;
-use cubeforge::layout::{cross, Kind, Projection};
+use cubeforge::layout::{cross, Projection};
 use cubeforge::resample::{FnEnv, Resampler};
 use cubeforge::synthetic::smooth;
 use glam::Vec4;
@@ -335,7 +335,7 @@ fn ktx2_with_png_name() {
 #[test]
 fn output_over_input_refused() {
     let s = Scratch::new();
-    let cross = cross::assemble(Kind::Hcross, &faces(16));
+    let cross = cross::assemble(cross::Cells::Hcross, &faces(16));
     let p = s.write("cross.png", &encode("a.png", &cross));
     let before = std::fs::read(&p).unwrap();
     let out = run([

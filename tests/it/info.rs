@@ -9,7 +9,8 @@ use cubeforge::cube::FACE_NAMES;
 use cubeforge::image::Image;
 use cubeforge::info::{self, Report};
 use cubeforge::io::ReadOptions;
-use cubeforge::layout::{cross, Kind};
+use cubeforge::layout::cross::{self, Cells};
+use cubeforge::layout::Kind;
 use glam::Vec4;
 use std::path::{Path, PathBuf};
 
@@ -156,9 +157,10 @@ fn from_applies_to_other_shapes() {
 fn cross_statistics_leave_out_empty_cells() {
     let dir = tempfile::tempdir().unwrap();
     let faces: [Image; 6] = std::array::from_fn(|i| flat(8, 8, 2.0 + i as f32));
-    for kind in [Kind::Hcross, Kind::Vcross, Kind::Hstrip] {
+    for cells in [Cells::Hcross, Cells::Vcross, Cells::Hstrip] {
+        let kind = cells.kind();
         let p = dir.path().join(format!("{}.exr", kind.name()));
-        write_image(&p, &cross::assemble(kind, &faces));
+        write_image(&p, &cross::assemble(cells, &faces));
         let r = describe(&p, None).unwrap();
         assert_eq!((r.kind, r.face_size), (Some(kind), Some(8)));
         let s = &r.stats;
