@@ -10,7 +10,7 @@ use crate::cube::{
 use crate::error::{Error, Result};
 use crate::flux::{Grid, Peaks};
 use crate::image::Image;
-use crate::io::{self, Decoded, FileFormat, Meta, ReadOptions};
+use crate::io::{self, Decoded, FileFormat, MapKind, Meta, ReadOptions};
 use crate::layout::{self, cross, ImageEnv, Kind};
 use crate::resample::Resampler;
 use glam::Vec4;
@@ -28,8 +28,9 @@ pub enum Source {
 pub struct Loaded {
     /// The pixels, as a cube map or a projection.
     pub source: Source,
-    /// The input's layout (`Faces` for containers and face folders).
-    pub kind: Kind,
+    /// What the input was: a layout (`Faces` for face folders and six files) or the
+    /// container read.
+    pub kind: MapKind,
     /// Holds values above 1: float outputs are the natural default.
     pub hdr: bool,
     /// The first file's format, pixel format and colour space, and what was replaced on reading.
@@ -43,7 +44,7 @@ impl Loaded {
     pub fn from_cube(cube: CubeMap) -> Loaded {
         Loaded {
             source: Source::Cube(cube),
-            kind: Kind::Faces,
+            kind: Kind::Faces.into(),
             hdr: true,
             meta: Meta {
                 file_format: FileFormat::Exr,
@@ -111,7 +112,7 @@ impl Loaded {
     pub fn face_size(&self) -> usize {
         match &self.source {
             Source::Cube(c) => c.size(),
-            Source::Projection(_, img) => self.kind.face_size(img.width, img.height),
+            Source::Projection(_, img) => self.kind.layout().face_size(img.width, img.height),
         }
     }
 
@@ -258,8 +259,7 @@ pub(crate) fn plan_files(
             return Some(w);
         }
         let kind = from.or_else(|| layout::detect(w, h).ok())?;
-        (kind != Kind::Faces && !kind.is_container() && kind.fits(w, h))
-            .then(|| kind.face_size(w, h))
+        kind.fits(w, h).then(|| kind.face_size(w, h))
     });
     let what = match files {
         [one] => one.display().to_string(),
@@ -421,7 +421,7 @@ fn load_faces(files: &[PathBuf], opts: &ReadOptions) -> Result<Loaded> {
     let cube = faces_from_images(images, files)?;
     Ok(Loaded {
         source: Source::Cube(cube),
-        kind: Kind::Faces,
+        kind: Kind::Faces.into(),
         hdr: meta.hdr,
         meta,
         files: files.to_vec(),
@@ -433,7 +433,14 @@ fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Lo
     let files = vec![path.to_path_buf()];
     let hdr = meta.hdr;
     let (source, kind) = match decoded {
-        Decoded::Cube(cube) => (Source::Cube(cube), meta.file_format.container_kind()),
+        Decoded::Cube(cube) => {
+            // Only containers decode to cube maps.
+            let kind = meta
+                .file_format
+                .container()
+                .map_or(Kind::Faces.into(), MapKind::from);
+            (Source::Cube(cube), kind)
+        }
         Decoded::Image(img) => {
             let (w, h) = (img.width, img.height);
             let cannot_hold = |k: Kind| {
@@ -443,13 +450,12 @@ fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Lo
                 )
             };
             let kind = match from {
-                Some(k) if k == Kind::Faces || k.is_container() => {
+                Some(Kind::Faces) => {
                     return Err(Error::file(
                         path,
                         format!(
-                            "{} {} does not describe a single image",
-                            crate::error::param("from"),
-                            k.name()
+                            "{} faces does not describe a single image",
+                            crate::error::param("from")
                         ),
                     ))
                 }
@@ -466,7 +472,7 @@ fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Lo
                 ),
                 (None, None) => return Err(cannot_hold(kind)),
             };
-            (source, kind)
+            (source, kind.into())
         }
     };
     Ok(Loaded {
@@ -486,11 +492,11 @@ pub enum Output {
     Cube(CubeMap),
 }
 
-/// Renders `to` at face edge `size`: a cube map for faces and containers, an image for the
-/// others.
+/// Renders layout `to` at face edge `size`: a cube map for faces, an image for the others. A
+/// container holds faces ([`MapKind::layout`]).
 pub fn convert(loaded: &Loaded, to: Kind, size: usize, resampler: &Resampler) -> Output {
     match to {
-        k if k == Kind::Faces || k.is_container() => Output::Cube(to_cube(loaded, size, resampler)),
+        Kind::Faces => Output::Cube(to_cube(loaded, size, resampler)),
         _ => Output::Image(to_image(loaded, to, size, resampler)),
     }
 }
@@ -510,7 +516,7 @@ pub fn to_cube(loaded: &Loaded, size: usize, resampler: &Resampler) -> CubeMap {
 }
 
 /// The input as one image in layout `to` (a projection, cross or strip) for face edge
-/// `size`; `to` naming faces or a container gives a horizontal cross.
+/// `size`; `to` naming faces gives a horizontal cross.
 pub fn to_image(loaded: &Loaded, to: Kind, size: usize, resampler: &Resampler) -> Image {
     match to.projection() {
         Some(p) => {

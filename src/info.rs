@@ -9,7 +9,7 @@ use crate::cube::Faces;
 use crate::error::{param, Error, Result};
 use crate::flux;
 use crate::image::{luminance, Image};
-use crate::io::{self, Decoded, ReadOptions};
+use crate::io::{self, Decoded, MapKind, ReadOptions};
 use crate::layout::{self, Kind};
 use glam::Vec4;
 use serde::Serialize;
@@ -60,8 +60,8 @@ pub struct Report {
     pub file: String,
     /// The format of the (first) file, by content.
     pub file_format: io::FileFormat,
-    /// The layout, when the shape tells it.
-    pub kind: Option<Kind>,
+    /// The layout or container, when the file or the shape tells it.
+    pub kind: Option<MapKind>,
     /// Why the layout is unknown or ambiguous.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub kind_note: Option<String>,
@@ -250,8 +250,12 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
     let file = path.display().to_string();
     Ok(match decoded {
         Decoded::Cube(cube) => {
-            let kind = meta.file_format.container_kind();
-            if let Some(k) = from.filter(|&k| k != kind) {
+            // Only containers decode to cube maps.
+            let kind = meta
+                .file_format
+                .container()
+                .map_or(Kind::Faces.into(), MapKind::from);
+            if let Some(k) = from {
                 return Err(Error::file(
                     path,
                     format!(
@@ -285,13 +289,12 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
         Decoded::Image(img) => {
             let (w, h) = (img.width, img.height);
             let (kind, note) = match from {
-                Some(k) if k == Kind::Faces || k.is_container() => {
+                Some(Kind::Faces) => {
                     return Err(Error::file(
                         path,
                         format!(
-                            "{} {} does not describe a single image (give a folder of faces, or a .ktx2, .dds, .ktx or .env file)",
-                            param("from"),
-                            k.name()
+                            "{} faces does not describe a single image (give a folder of faces, or a .ktx2, .dds, .ktx or .env file)",
+                            param("from")
                         ),
                     ))
                 }
@@ -311,7 +314,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
             Report {
                 file,
                 file_format: meta.file_format,
-                kind,
+                kind: kind.map(MapKind::Layout),
                 kind_note: note,
                 width: w,
                 height: h,
@@ -367,7 +370,7 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
     Ok(Report {
         file: dir.display().to_string(),
         file_format: meta.file_format,
-        kind: Some(Kind::Faces),
+        kind: Some(Kind::Faces.into()),
         kind_note: None,
         width: n,
         height: n,
@@ -402,12 +405,14 @@ impl std::fmt::Display for Report {
         writeln!(f, "{}", self.file.replace('\n', "\\n").replace('\r', "\\r"))?;
         writeln!(f, "  format:       {}", self.file_format.name())?;
         match (&self.kind, &self.kind_note) {
-            (Some(Kind::Faces), _) if self.mip_levels > 1 => writeln!(
+            (Some(MapKind::Layout(Kind::Faces)), _) if self.mip_levels > 1 => writeln!(
                 f,
                 "  layout:       faces, a prefiltered chain (folders m0 to m{})",
                 self.mip_levels - 1
             )?,
-            (Some(Kind::Faces), _) => writeln!(f, "  layout:       faces (a folder of six)")?,
+            (Some(MapKind::Layout(Kind::Faces)), _) => {
+                writeln!(f, "  layout:       faces (a folder of six)")?
+            }
             (Some(k), _) => writeln!(f, "  layout:       {}", k.name())?,
             (None, Some(n)) => writeln!(f, "  layout:       unknown: {n}")?,
             _ => {}

@@ -9,7 +9,9 @@
 //! refused over [`Limits::max_memory`] before anything is decoded), and writes through
 //! [`output::deliver`]: inputs are never overwritten, outputs land whole or not at all, and
 //! [`Destination::Stdout`] is standard output. [`Progress`] hears stages, progress and warnings
-//! while a job runs; `&()` hears nothing.
+//! while a job runs; `&()` hears nothing. A map is laid out as a [`Layout`] (a panorama, a
+//! ball, a cross, six faces, ...) or stored in a [`Container`] (KTX2, DDS, KTX, .env); a
+//! [`MapKind`] is either, as a job's `to` and `info`'s report name it.
 //!
 //! A panorama to a KTX2 cube map with its mip chain:
 //!
@@ -118,7 +120,7 @@ pub use error::{Error, LimitKind, Result};
 pub use filter::{ChainOptions, FilterKind, IrradianceMethod, LightingModel};
 pub use ibl::{Engine, IblOptions};
 pub use image::Image;
-pub use io::{ExrFloat, FileFormat, GpuFormat, Limits, ReadOptions};
+pub use io::{Container, ExrFloat, FileFormat, GpuFormat, Limits, MapKind, ReadOptions};
 pub use jobs::{
     ControlJob, ConvertJob, IblJob, IrradianceJob, Job, LutJob, LutKind, PrefilterJob, PreviewJob,
     Progress, Quality, Report, Warning,

@@ -1,8 +1,7 @@
 //! `cubeforge convert`: any layout to any other.
 
 use cubeforge::cube::Interp;
-use cubeforge::io::{FileFormat, GpuFormat};
-use cubeforge::layout::Kind;
+use cubeforge::io::{FileFormat, GpuFormat, MapKind};
 use cubeforge::output;
 use cubeforge::resample::{Orientation, Resampler};
 use cubeforge::{ConvertJob, Destination, Job, Result};
@@ -18,7 +17,7 @@ pub struct Args {
     pub output: PathBuf,
     /// Output layout (default: from the output's extension; hcross for images, faces for a folder).
     #[arg(long, value_enum)]
-    pub to: Option<Kind>,
+    pub to: Option<MapKind>,
     /// Cube face edge in texels (equirect output is 4N x 2N; sphere, angular and octahedral
     /// 2N x 2N).
     #[arg(long)]

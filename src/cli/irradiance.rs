@@ -1,8 +1,7 @@
 //! `cubeforge irradiance`: the diffuse side: an irradiance cube map and 9 SH coefficients.
 
 use cubeforge::filter::IrradianceMethod;
-use cubeforge::io::{FileFormat, GpuFormat};
-use cubeforge::layout::Kind;
+use cubeforge::io::{FileFormat, GpuFormat, MapKind};
 use cubeforge::output;
 use cubeforge::{Destination, IrradianceJob, Job, Result};
 use std::path::PathBuf;
@@ -18,7 +17,7 @@ pub struct Args {
     pub output: PathBuf,
     /// Output layout (default: from the output's name, as for convert).
     #[arg(long, value_enum)]
-    pub to: Option<Kind>,
+    pub to: Option<MapKind>,
     /// Face edge of the irradiance map (it holds no detail: 32 is plenty).
     #[arg(long, default_value_t = 32)]
     pub size: usize,

@@ -14,6 +14,7 @@ mod input;
 pub mod ktx1;
 pub mod ktx2;
 mod limits;
+mod map_kind;
 pub mod raster;
 pub mod rgbe;
 
@@ -33,6 +34,7 @@ pub use input::claim;
 use input::read_with;
 pub(crate) use input::{read_file, regular_file};
 pub use limits::{Claim, Limits};
+pub use map_kind::{Container, MapKind};
 pub use range::{clamp_warning, clamp_warning_with, count_out_of_range, largest_value};
 
 /// File formats, told apart by their content (TGA, which has no signature, by its name).
@@ -181,31 +183,18 @@ impl FileFormat {
 
     /// KTX2, DDS, KTX and Babylon env: cube maps with mip levels, not single images.
     pub fn is_container(self) -> bool {
-        matches!(
-            self,
-            FileFormat::Ktx2 | FileFormat::Dds | FileFormat::Ktx1 | FileFormat::Env
-        )
+        self.container().is_some()
     }
 
-    /// The container layout of a container file format (KTX2 for any other): the layout
-    /// knows no file formats, the formats know their layouts.
-    pub fn container_kind(self) -> crate::layout::Kind {
-        use crate::layout::Kind;
+    /// The container a format is (None for image formats): the layouts know no file
+    /// formats, the formats know their containers.
+    pub fn container(self) -> Option<Container> {
         match self {
-            FileFormat::Dds => Kind::Dds,
-            FileFormat::Ktx1 => Kind::Ktx,
-            FileFormat::Env => Kind::Env,
-            _ => Kind::Ktx2,
-        }
-    }
-
-    /// The `--to` name of a container format ("ktx2", "dds", "ktx", "env").
-    pub(crate) fn container_kind_name(self) -> &'static str {
-        match self {
-            FileFormat::Dds => "dds",
-            FileFormat::Ktx1 => "ktx",
-            FileFormat::Env => "env",
-            _ => "ktx2",
+            FileFormat::Ktx2 => Some(Container::Ktx2),
+            FileFormat::Dds => Some(Container::Dds),
+            FileFormat::Ktx1 => Some(Container::Ktx),
+            FileFormat::Env => Some(Container::Env),
+            _ => None,
         }
     }
 
@@ -360,16 +349,18 @@ pub fn encode_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<Vec
             exr::encode(img, opts.exr_float == ExrFloat::F32).map_err(|e| Error::file(path, e))
         }
         FileFormat::Hdr => Ok(rgbe::encode(img)),
-        f if f.is_container() => Err(Error::file(
-            path,
-            format!(
-                "{} holds cube maps: write a cube map ({} {})",
-                f.name(),
-                crate::error::param("to"),
-                FileFormat::container_kind_name(f)
-            ),
-        )),
-        f => raster::encode(img, f, opts).map_err(|e| Error::file(path, e)),
+        f => match f.container() {
+            Some(c) => Err(Error::file(
+                path,
+                format!(
+                    "{} holds cube maps: write a cube map ({} {})",
+                    f.name(),
+                    crate::error::param("to"),
+                    c.name()
+                ),
+            )),
+            None => raster::encode(img, f, opts).map_err(|e| Error::file(path, e)),
+        },
     }
 }
 

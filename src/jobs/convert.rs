@@ -5,7 +5,9 @@ use crate::chain;
 use crate::convert;
 use crate::cube::CubeMap;
 use crate::error::{param, Error, Result};
-use crate::io::{self, ExrFloat, FileFormat, GpuFormat, Limits, ReadOptions, WriteOptions};
+use crate::io::{
+    self, Container, ExrFloat, FileFormat, GpuFormat, Limits, MapKind, ReadOptions, WriteOptions,
+};
 use crate::layout::Kind;
 use crate::output::{self, Destination, Target};
 use crate::resample::Resampler;
@@ -37,8 +39,8 @@ pub struct ConvertJob {
     pub output: Destination,
     /// The input's layout (None: from the aspect ratio).
     pub from: Option<Kind>,
-    /// The output's layout (None: from the output's name).
-    pub to: Option<Kind>,
+    /// The output's layout or container (None: from the output's name).
+    pub to: Option<MapKind>,
     /// Face edge in texels (None: the input's).
     pub size: Option<usize>,
     /// File type of face images (faces only; None: EXR for HDR input, PNG otherwise).
@@ -98,7 +100,7 @@ impl ConvertJob {
     /// encoding) beside the input's texels and pyramid (`input` bytes).
     fn plan_bytes(to: Kind, size: usize, input: u64) -> u64 {
         let (w, h) = to.image_size(size);
-        let texels = if to.projection().is_some() || to.cells().is_some() {
+        let texels = if to != Kind::Faces {
             (w as u64).saturating_mul(h as u64)
         } else {
             (size as u64).saturating_mul(size as u64).saturating_mul(6)
@@ -122,7 +124,7 @@ impl Job for ConvertJob {
         let name = self.output.name();
         let mut warnings = Vec::new();
         let mut warn = |s: String| warnings.push(Warning::new(s));
-        if !to.is_container() {
+        if to.container().is_none() {
             if self.levels.is_some() {
                 warn(format!(
                     "{} applies to KTX2 and DDS outputs: ignored",
@@ -141,7 +143,7 @@ impl Job for ConvertJob {
                     param("zstd")
                 ));
             }
-        } else if to == Kind::Dds && self.zstd.is_some() {
+        } else if to == MapKind::Container(Container::Dds) && self.zstd.is_some() {
             return Err(io::zstd_needs_ktx2(&name));
         }
         if self.levels == Some(0) {
@@ -150,7 +152,8 @@ impl Job for ConvertJob {
                 param("levels")
             )));
         }
-        if to == Kind::Faces && self.to.is_none() && name.extension().is_none() && !name.exists() {
+        let faces = to == MapKind::Layout(Kind::Faces);
+        if faces && self.to.is_none() && name.extension().is_none() && !name.exists() {
             warn(format!(
                 "{}: no file extension, so six faces go into this new folder ({} faces)",
                 name.display(),
@@ -158,7 +161,7 @@ impl Job for ConvertJob {
             ));
         }
         if let Some(f) = self.face_format.filter(|f| f.is_container()) {
-            if to == Kind::Faces {
+            if faces {
                 return Err(Error::usage(format!(
                     "{} {}: face images are {}",
                     param("format"),
@@ -186,7 +189,7 @@ impl Job for ConvertJob {
     }
 
     fn memory_estimate(&self) -> Result<u64> {
-        let to = self.target()?.kind;
+        let to = self.target()?.kind.layout();
         let plan = chain::plan_level(&self.inputs, self.from, &self.read, self.level)?;
         Ok(match self.size.or(plan.face_size).filter(|&s| s > 0) {
             Some(size) => Self::plan_bytes(to, size, plan.working_bytes()),
@@ -198,8 +201,8 @@ impl Job for ConvertJob {
         let mut warnings = Warnings::new(progress);
         warnings.extend(self.validate()?);
         let mut target = self.target()?;
-        let to = target.kind;
-        let container = to.is_container();
+        let to = target.kind.layout();
+        let container = target.kind.container().is_some();
         // The whole plan against the budget before any file is decoded: the input as the
         // headers describe it, the output at the size it will have.
         let plan = chain::plan_level(&self.inputs, self.from, &self.read, self.level)?;

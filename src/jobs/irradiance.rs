@@ -5,7 +5,9 @@ use crate::chain;
 use crate::convert::{self, Loaded, Output};
 use crate::error::{param, Error, Result};
 use crate::filter::{self, sh, IrradianceMethod};
-use crate::io::{self, ExrFloat, FileFormat, GpuFormat, ReadOptions, WriteOptions};
+use crate::io::{
+    self, Container, ExrFloat, FileFormat, GpuFormat, MapKind, ReadOptions, WriteOptions,
+};
 use crate::layout::Kind;
 use crate::output::{self, Destination, Target};
 use crate::resample::Resampler;
@@ -28,8 +30,8 @@ pub struct IrradianceJob {
     pub output: Destination,
     /// The input's layout (None: from the aspect ratio).
     pub from: Option<Kind>,
-    /// The map's layout (None: from the output's name).
-    pub to: Option<Kind>,
+    /// The map's layout or container (None: from the output's name).
+    pub to: Option<MapKind>,
     /// Face edge of the map.
     pub size: usize,
     /// Where the SH coefficients go (None: not written).
@@ -108,7 +110,7 @@ impl Job for IrradianceJob {
             )));
         }
         let (target, tone_warning) = self.target()?;
-        if target.kind == Kind::Faces {
+        if target.kind == MapKind::Layout(Kind::Faces) {
             // Replaced whole: refuse a folder that is not cubeforge's before the work.
             output::check_folder_output(&name, &self.inputs, self.sh.as_slice())?;
             if self.face_format.is_container() {
@@ -121,9 +123,9 @@ impl Job for IrradianceJob {
             }
         }
         let mut warnings = Vec::new();
-        match target.kind {
-            Kind::Ktx2 => {}
-            Kind::Dds if self.zstd.is_some() => return Err(io::zstd_needs_ktx2(&name)),
+        match target.kind.container() {
+            Some(Container::Ktx2) => {}
+            Some(Container::Dds) if self.zstd.is_some() => return Err(io::zstd_needs_ktx2(&name)),
             _ if self.zstd.is_some() => warnings.push(Warning::new(format!(
                 "{} applies to KTX2 outputs: ignored",
                 param("zstd")
@@ -173,8 +175,8 @@ impl Job for IrradianceJob {
         progress.finish();
         progress.stage("filter");
 
-        let out = match target.kind {
-            k if k == Kind::Faces || k.is_container() => Output::Cube(irr),
+        let out = match target.kind.layout() {
+            Kind::Faces => Output::Cube(irr),
             to => Output::Image(convert::to_image(
                 &Loaded::from_cube(irr),
                 to,

@@ -16,7 +16,9 @@ use crate::cube::{Dirs, Environment, Interp, BATCH};
 use crate::image::{Edges, Image};
 use glam::{Vec2, Vec3, Vec4};
 
-/// Every kind of environment map cubeforge reads or writes.
+/// The layouts: how an environment map's directions lie on images (one image, or six faces).
+/// Cube-map containers (KTX2, DDS, ...) are file formats that hold faces: `io::Container`, a
+/// layer up; `io::MapKind` names either.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
@@ -39,18 +41,10 @@ pub enum Kind {
     Angular,
     /// Octahedral map (engines' probes), square: +Y at the centre, -Y in the corners.
     Octahedral,
-    /// KTX2 cube-map container.
-    Ktx2,
-    /// DDS cube-map container.
-    Dds,
-    /// KTX 1 cube-map container (Filament).
-    Ktx,
-    /// Babylon.js .env prefiltered environment.
-    Env,
 }
 
 impl Kind {
-    /// The name on the command line (`--to`) and in `info`.
+    /// The name on the command line (`--from`, `--to`) and in `info`.
     pub fn name(self) -> &'static str {
         match self {
             Kind::Equirect => "equirect",
@@ -62,16 +56,7 @@ impl Kind {
             Kind::Sphere => "sphere",
             Kind::Angular => "angular",
             Kind::Octahedral => "octahedral",
-            Kind::Ktx2 => "ktx2",
-            Kind::Dds => "dds",
-            Kind::Ktx => "ktx",
-            Kind::Env => "env",
         }
-    }
-
-    /// Cube-map containers: KTX2, DDS, KTX, Babylon env.
-    pub fn is_container(self) -> bool {
-        matches!(self, Kind::Ktx2 | Kind::Dds | Kind::Ktx | Kind::Env)
     }
 
     /// Crosses and strips (faces placed in cells) as the type [`cross`] lays out and cuts.
@@ -111,7 +96,7 @@ impl Kind {
         }
     }
 
-    /// Output image size for a face edge `n`.
+    /// Output image size for a face edge `n` (one face's for faces).
     pub fn image_size(self, n: usize) -> (usize, usize) {
         match self {
             Kind::Equirect => (4 * n, 2 * n),

@@ -8,7 +8,7 @@ use crate::convert::Output;
 use crate::cube::{CubeMap, Faces, FACE_NAMES};
 use crate::error::{param, Error, Result};
 use crate::image::Image;
-use crate::io::{self, FileFormat, WriteOptions};
+use crate::io::{self, Container, FileFormat, MapKind, WriteOptions};
 use crate::layout::Kind;
 use crate::tonemap::Tonemap;
 use std::path::{Path, PathBuf};
@@ -21,8 +21,8 @@ pub use deliver::{deliver, is_closed_pipe, stdout_open, write_stdout, Destinatio
 pub struct Target {
     /// Where the result goes (a folder for faces).
     pub path: PathBuf,
-    /// The layout written.
-    pub kind: Kind,
+    /// The layout or container written.
+    pub kind: MapKind,
     /// File type of face images (faces only; others take theirs from the name).
     pub face_format: FileFormat,
     /// Pixel format, colour space and compression of the written files.
@@ -67,7 +67,7 @@ impl Target {
     /// The output at `path`: layout `to`, or what the name implies (a container for .ktx2 and
     /// .dds, a horizontal cross for other images, six faces for a name with no extension).
     /// Faces are EXR for HDR results and PNG otherwise until `face_format` is set.
-    pub fn new(path: &Path, to: Option<Kind>, hdr: bool) -> Result<Target> {
+    pub fn new(path: &Path, to: Option<MapKind>, hdr: bool) -> Result<Target> {
         Ok(Target {
             path: path.to_path_buf(),
             kind: kind_for(path, to)?,
@@ -85,7 +85,7 @@ impl Target {
     /// The file type the result is encoded in (None: a name with an unknown extension).
     pub fn format(&self) -> Option<FileFormat> {
         match self.kind {
-            Kind::Faces => Some(self.face_format),
+            MapKind::Layout(Kind::Faces) => Some(self.face_format),
             _ => FileFormat::from_extension(&self.path),
         }
     }
@@ -105,13 +105,10 @@ impl Target {
                 format!("a {what} cannot be written as {}", self.kind.name()),
             )
         };
-        match (&out, self.kind) {
-            (Output::Cube(_), k) if k == Kind::Faces || k.is_container() => {}
-            (Output::Cube(_), _) => return Err(wrong("cube map")),
-            (Output::Image(_), k) if k == Kind::Faces || k.is_container() => {
-                return Err(wrong("single image"))
-            }
-            (Output::Image(_), _) => {}
+        match (&out, self.kind.is_cube()) {
+            (Output::Cube(_), true) | (Output::Image(_), false) => {}
+            (Output::Cube(_), false) => return Err(wrong("cube map")),
+            (Output::Image(_), true) => return Err(wrong("single image")),
         }
         let images: Vec<&mut Image> = match &mut out {
             Output::Cube(c) => c.levels[0].iter_mut().collect(),
@@ -143,13 +140,14 @@ impl Target {
         });
         let clamped = clamped.or(clipped);
         let mut psnr = None;
-        let folders = if self.kind == Kind::Faces {
+        let faces = self.kind == MapKind::Layout(Kind::Faces);
+        let folders = if faces {
             vec![self.path.clone()]
         } else {
             Vec::new()
         };
         let files = match out {
-            Output::Cube(cube) if self.kind == Kind::Faces => {
+            Output::Cube(cube) if faces => {
                 refuse_folder(&self.path, inputs)?;
                 encode_faces(
                     &self.path,
@@ -162,7 +160,7 @@ impl Target {
             Output::Cube(cube) => {
                 refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
                 // Babylon needs the whole chain down to 1x1.
-                let levels = if self.kind == Kind::Env {
+                let levels = if self.kind == MapKind::Container(Container::Env) {
                     None
                 } else {
                     self.levels
@@ -190,44 +188,46 @@ impl Target {
     }
 }
 
-/// The layout an output gets: `to`, checked against the name, or what the name implies.
-pub(crate) fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
+/// The layout or container an output gets: `to`, checked against the name, or what the name
+/// implies.
+pub(crate) fn kind_for(output: &Path, to: Option<MapKind>) -> Result<MapKind> {
     let by_name = FileFormat::from_extension(output);
+    let named = by_name.and_then(FileFormat::container);
     match (to, by_name) {
-        (Some(k), Some(f)) if k.is_container() && f.is_container() && f.container_kind() == k => {
-            Ok(k)
-        }
-        (Some(k), _) if k.is_container() => Err(Error::file(
+        (Some(MapKind::Container(c)), _) if named == Some(c) => Ok(MapKind::Container(c)),
+        (Some(MapKind::Container(c)), _) => Err(Error::file(
             output,
             format!(
                 "{} {} needs an output named .{}",
                 param("to"),
-                k.name(),
-                k.name()
+                c.name(),
+                c.name()
             ),
         )),
-        (Some(Kind::Faces), Some(_)) => Err(Error::file(
+        (Some(MapKind::Layout(Kind::Faces)), Some(_)) => Err(Error::file(
             output,
             format!(
                 "{} faces writes a folder: give a folder name without an image extension",
                 param("to")
             ),
         )),
-        (Some(Kind::Faces), None) => Ok(Kind::Faces),
-        (Some(k), Some(f)) if f.is_container() => Err(Error::file(
-            output,
-            format!(
-                "{} holds cube maps and {} {} is a single image: name the output {}, or \
-                 leave out {} for a cube map",
-                f.name(),
-                param("to"),
-                k.name(),
-                FileFormat::list(FileFormat::is_image, true),
-                param("to"),
-            ),
-        )),
-        (Some(k), Some(_)) => Ok(k),
-        (Some(k), None) => Err(Error::file(
+        (Some(MapKind::Layout(Kind::Faces)), None) => Ok(Kind::Faces.into()),
+        (Some(MapKind::Layout(k)), Some(f)) => match named {
+            Some(_) => Err(Error::file(
+                output,
+                format!(
+                    "{} holds cube maps and {} {} is a single image: name the output {}, or \
+                     leave out {} for a cube map",
+                    f.name(),
+                    param("to"),
+                    k.name(),
+                    FileFormat::list(FileFormat::is_image, true),
+                    param("to"),
+                ),
+            )),
+            None => Ok(k.into()),
+        },
+        (Some(MapKind::Layout(k)), None) => Err(Error::file(
             output,
             format!(
                 "a {} image needs a file name ending in {}",
@@ -235,12 +235,11 @@ pub(crate) fn kind_for(output: &Path, to: Option<Kind>) -> Result<Kind> {
                 FileFormat::list(FileFormat::is_image, true)
             ),
         )),
-        (None, Some(f)) if f.is_container() => Ok(f.container_kind()),
-        (None, Some(_)) => Ok(Kind::Hcross),
+        (None, Some(_)) => Ok(named.map_or(Kind::Hcross.into(), MapKind::Container)),
         (None, None) if output.extension().is_some() && !output.is_dir() => {
             Err(io::unknown_ext(output))
         }
-        (None, None) => Ok(Kind::Faces),
+        (None, None) => Ok(Kind::Faces.into()),
     }
 }
 

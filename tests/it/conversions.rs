@@ -26,7 +26,7 @@ fn meta() -> Meta {
 fn loaded(source: Source, kind: Kind) -> Loaded {
     Loaded {
         source,
-        kind,
+        kind: kind.into(),
         hdr: true,
         meta: meta(),
         files: vec![],

@@ -70,7 +70,7 @@ fn worst_change(loaded: &Loaded) -> (f64, String) {
 fn panorama(img: Image) -> Loaded {
     Loaded {
         source: Source::Projection(Projection::Equirect, img),
-        kind: Kind::Equirect,
+        kind: Kind::Equirect.into(),
         hdr: true,
         meta: Meta {
             file_format: FileFormat::Exr,
@@ -207,7 +207,7 @@ fn octahedral_maps_keep_their_flux() {
             Source::Projection(_, img) => Source::Projection(Projection::Octahedral, img),
             s => s,
         };
-        octa.kind = Kind::Octahedral;
+        octa.kind = Kind::Octahedral.into();
         let (e, at) = worst_change(&octa);
         if e > worst.0 {
             worst = (e, format!("{name} {at}"));

@@ -108,7 +108,11 @@ fn square_images_need_from_for_their_face_size() {
     // --from sphere / angular: a 2N x 2N map has face size N; the corners are not in it.
     for (kind, name) in [(Kind::Sphere, "sphere"), (Kind::Angular, "angular")] {
         let r = describe(&p, Some(kind)).unwrap();
-        assert_eq!((r.kind, r.face_size), (Some(kind), Some(32)), "{name}");
+        assert_eq!(
+            (r.kind, r.face_size),
+            (Some(kind.into()), Some(32)),
+            "{name}"
+        );
         assert!(r.kind_note.is_none());
         assert!(r.flux.is_some());
         assert!(
@@ -145,7 +149,10 @@ fn from_applies_to_other_shapes() {
     let p = dir.path().join("pano.exr");
     write_image(&p, &flat(32, 16, 1.0));
     let r = describe(&p, Some(Kind::Equirect)).unwrap();
-    assert_eq!((r.kind, r.face_size), (Some(Kind::Equirect), Some(8)));
+    assert_eq!(
+        (r.kind, r.face_size),
+        (Some(Kind::Equirect.into()), Some(8))
+    );
     let e = describe(&p, Some(Kind::Angular)).unwrap_err().to_string();
     assert!(
         e.contains("32x16 image cannot hold a angular layout"),
@@ -162,7 +169,7 @@ fn cross_statistics_leave_out_empty_cells() {
         let p = dir.path().join(format!("{}.exr", kind.name()));
         write_image(&p, &cross::assemble(cells, &faces));
         let r = describe(&p, None).unwrap();
-        assert_eq!((r.kind, r.face_size), (Some(kind), Some(8)));
+        assert_eq!((r.kind, r.face_size), (Some(kind.into()), Some(8)));
         let s = &r.stats;
         let near = |a: f64, b: f64| (a - b).abs() < 1e-5;
         assert!(near(s.min_luminance, 2.0), "{kind:?}: {s:?}");
@@ -177,7 +184,7 @@ fn a_faces_folder_is_a_cube_map() {
     let faces = dir.path().join("faces");
     write_faces(&faces, 16, &FACE_NAMES, "exr");
     let r = describe(&faces, None).unwrap();
-    assert_eq!(r.kind, Some(Kind::Faces));
+    assert_eq!(r.kind, Some(Kind::Faces.into()));
     assert_eq!((r.width, r.height, r.face_size), (16, 16, Some(16)));
     assert_eq!(r.mip_levels, 1);
     assert!((r.stats.min_luminance - 1.0).abs() < 1e-5, "{:?}", r.stats);
@@ -265,7 +272,7 @@ fn a_prefiltered_chain_folder_lists_its_levels() {
     let r = describe(&chain, None).unwrap();
     assert_eq!(
         (r.kind, r.face_size, r.mip_levels),
-        (Some(Kind::Faces), Some(8), 4)
+        (Some(Kind::Faces.into()), Some(8), 4)
     );
     let levels = r.levels.as_ref().expect("levels.json");
     assert_eq!(levels.filter, cubeforge::filter::FilterKind::Gaussian);
@@ -527,4 +534,33 @@ fn a_bad_mip_in_a_chain_folder_is_counted_and_named() {
         serde_json::json!([{"level": 2, "nan": 1, "inf": 0, "negative": 0}]),
         "{v}"
     );
+}
+
+/// A container is reported as itself (a map kind whose layout is faces). `--from` names
+/// layouts only: a container's name there is refused on one line before any file is read,
+/// and a layout given for a container file is refused by the file.
+#[test]
+fn a_container_is_its_own_kind_and_from_takes_layouts() {
+    use cubeforge::io::{dds, Container, GpuFormat, MapKind};
+    let dir = tempfile::tempdir().unwrap();
+    let cube = cubeforge::cube::CubeMap::from_fn(8, |_| Vec4::ONE);
+    let p = dir.path().join("c.dds");
+    std::fs::write(&p, dds::encode(&cube, GpuFormat::Rgba16f).unwrap()).unwrap();
+    let r = describe(&p, None).unwrap();
+    assert_eq!(r.kind, Some(MapKind::Container(Container::Dds)));
+    assert_eq!(r.kind.map(MapKind::layout), Some(Kind::Faces));
+    assert_eq!(json(&[p.as_os_str()])["kind"], "dds");
+    let e = describe(&p, Some(Kind::Sphere)).unwrap_err().to_string();
+    assert!(e.contains("the file is a DDS cube map"), "{e}");
+
+    let out = run([
+        "info".as_ref(),
+        "--from".as_ref(),
+        "dds".as_ref(),
+        p.as_os_str(),
+    ]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("invalid value 'dds' for '--from"), "{err}");
 }

@@ -133,7 +133,7 @@ fn a_job_never_writes_over_its_input() {
     let before = std::fs::read(&input).unwrap();
     let job = ConvertJob {
         size: Some(8),
-        to: Some(cubeforge::Layout::Equirect),
+        to: Some(cubeforge::Layout::Equirect.into()),
         ..ConvertJob::new(vec![input.clone()], Destination::Path(input.clone()))
     };
     let e = job.run(&()).unwrap_err();

@@ -16,7 +16,7 @@ use glam::{Vec3, Vec4};
 fn loaded(source: Source, kind: Kind) -> Loaded {
     Loaded {
         source,
-        kind,
+        kind: kind.into(),
         hdr: true,
         meta: Meta {
             file_format: FileFormat::Exr,
