@@ -12,6 +12,7 @@ mod cli_options;
 mod containers;
 mod control;
 mod conversions;
+mod doc_pictures;
 mod engine_containers;
 mod fault_campaign;
 mod fault_outputs;
