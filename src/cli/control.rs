@@ -7,7 +7,7 @@ use cubeforge::{ControlJob, Job, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
-#[command(after_long_help = RECIPE_HELP)]
+#[command(after_help = EXAMPLES, after_long_help = format!("{RECIPE_HELP}\n\n{EXAMPLES}"))]
 pub struct Args {
     /// Recipe naming each parameter's source (.toml or .json; image paths relative to it).
     pub recipe: PathBuf,
@@ -39,23 +39,22 @@ Fresnel term applies). The recipe's [pack] table reassigns them (r, g, b, a = re
 transmittance, blur, fresnel, zero or one). OUTPUT.json, written beside the map, records \
 max_lod_bias and the packing.
 
-Each parameter is a number or a table with one source: constant; image = { path, channel = \
-r|g|b|a|luminance, srgb }; linear_gradient = { from, to }; radial_gradient = { center, radius }; \
-checker = { cells }; stripes = { count, width, angle, offset }; noise = { cells, seed, octaves, \
-persistence }. Optional operations, applied in this order: remap = { in, out, gamma }, \
-invert = true, multiply = SOURCE, mix = { with = SOURCE, amount = SOURCE }. A missing image, an \
-unknown key, channel or parameter, or a value outside [0, 1] is an error naming the recipe line.
+A recipe (TOML, or JSON) gives each parameter a number or a table with one source \
+(constant, image, linear_gradient, radial_gradient, checker, stripes, noise) and optional \
+operations (remap, invert, multiply, mix). A missing image, an unknown key, channel or \
+parameter, or a value outside [0, 1] is an error naming the recipe line. The recipe \
+reference: docs/control-maps.md in the repository.";
 
-Example recipe:
-  size = \"512x512\"
-  max_lod_bias = 6
-  reflectivity = 0.9
-  [blur]
-  linear_gradient = { from = [0, 0], to = [0, 1] }
-  remap = { in = [0.2, 0.8], gamma = 1.5 }
-  [fresnel]
-  checker = { cells = [8, 8] }
-  invert = true";
+/// Printed after the options (`-h`, `--help`, the man page); tests/it/help_examples.rs
+/// runs every `cubeforge` line of it.
+const EXAMPLES: &str = "\
+Examples:
+  # recipes to start from: fixtures/control/ in the repository
+  cubeforge control recipe.toml -o control.png
+  # a 2D KTX2 texture with its mip chain, BC7 blocks, Zstandard
+  cubeforge control recipe.toml -o control.ktx2 --gpu-format bc7 --zstd
+  # another size than the recipe's
+  cubeforge control recipe.toml -o control_wide.exr --size 1024x512";
 
 /// KTX2 texel formats for data: RGBA, linear (the RGB-only HDR formats would drop the
 /// Fresnel mask in alpha).

@@ -8,6 +8,7 @@ use cubeforge::{ConvertJob, Destination, Job, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
+#[command(after_help = EXAMPLES)]
 pub struct Args {
     /// One image; six face images in px nx py ny pz nz order; or a folder of px/nx/... faces.
     #[arg(required = true)]
@@ -67,6 +68,19 @@ pub struct Args {
     #[command(flatten)]
     pub input: super::InputArgs,
 }
+
+/// Printed after the options (`-h`, `--help`, the man page); tests/it/help_examples.rs
+/// runs every `cubeforge` line of it.
+const EXAMPLES: &str = "\
+Examples:
+  # a panorama (e.g. a .hdr from polyhaven.com) to six faces px.exr ...
+  cubeforge convert panorama.hdr -o faces/ --to faces
+  # the faces to a KTX2 cube map with its mips, BC6H, Zstandard
+  cubeforge convert faces/ -o sky.ktx2 --gpu-format bc6h --zstd
+  # a horizontal cross, 8-bit sRGB, the HDR range tone-mapped
+  cubeforge convert panorama.hdr -o cross.png --size 256 --tonemap aces
+  # a photographed mirror ball (square images need --from) to a panorama
+  cubeforge convert ball.exr --from sphere -o from_ball.exr --to equirect";
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
     let output = super::destination(&a.output, a.format.as_deref(), |_| true)?;

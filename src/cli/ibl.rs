@@ -6,6 +6,7 @@ use cubeforge::{IblJob, Job, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
+#[command(after_help = EXAMPLES)]
 pub struct Args {
     /// Anything `convert` reads: a panorama, six faces, a folder of faces, a cube map.
     #[arg(required = true)]
@@ -49,6 +50,26 @@ pub struct Args {
     #[command(flatten)]
     pub input: super::InputArgs,
 }
+
+/// Printed after the options (`-h`, `--help`, the man page); tests/it/help_examples.rs
+/// runs every `cubeforge` line of it.
+const EXAMPLES: &str = "\
+Examples:
+  # Bevy (EnvironmentMapLight): env_specular.ktx2, env_diffuse.ktx2
+  cubeforge ibl panorama.hdr -o bevy/ --target bevy
+  # glTF Sample Viewer: env_ggx.ktx2, env_lambertian.ktx2, lut_ggx.png;
+  # --sheen adds env_charlie.ktx2 and lut_charlie.png
+  cubeforge ibl panorama.hdr -o gltf/ --target gltf --sheen
+  # Babylon.js: env.env
+  cubeforge ibl panorama.hdr -o babylon/ --target babylon
+  # Filament: env_ibl.ktx, env_irradiance.ktx, env_skybox.ktx, sh.txt
+  cubeforge ibl panorama.hdr -o filament/ --target filament
+  # Godot 4, Unity, Unreal: a panorama the engine filters itself
+  cubeforge ibl panorama.hdr -o godot/ --target godot
+  cubeforge ibl panorama.hdr -o unity/ --target unity
+  cubeforge ibl panorama.hdr -o unreal/ --target unreal
+  # no engine in particular: KTX2 chains, SH as JSON, a DFG table
+  cubeforge ibl panorama.hdr -o generic/ --target generic";
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
     let job = IblJob {

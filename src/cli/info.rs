@@ -5,6 +5,7 @@ use cubeforge::{info, Error, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
+#[command(after_help = EXAMPLES)]
 pub struct Args {
     /// Files to describe, or folders: six faces (px.EXT ... or posx.EXT ...), or a prefiltered
     /// chain (m0/ m1/ ... and levels.json, as `cubeforge prefilter` writes one).
@@ -23,6 +24,17 @@ pub struct Args {
     #[command(flatten)]
     pub limits: super::LimitArgs,
 }
+
+/// Printed after the options (`-h`, `--help`, the man page); tests/it/help_examples.rs
+/// runs every `cubeforge` line of it.
+const EXAMPLES: &str = "\
+Examples:
+  # layout, size, format, luminance, NaN/Inf/negative counts, flux
+  cubeforge info panorama.hdr
+  # a square image: say which layout it is
+  cubeforge info ball.exr --from sphere
+  # the same as JSON (an array for several files)
+  cubeforge info panorama.hdr --json";
 
 pub fn run(args: Args) -> Result<()> {
     let opts = ReadOptions {

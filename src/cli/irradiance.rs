@@ -7,6 +7,7 @@ use cubeforge::{Destination, IrradianceJob, Job, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
+#[command(after_help = EXAMPLES)]
 pub struct Args {
     /// Anything `convert` reads: one image, six faces, or a folder of faces.
     #[arg(required = true)]
@@ -42,6 +43,15 @@ pub struct Args {
     #[command(flatten)]
     pub input: super::InputArgs,
 }
+
+/// Printed after the options (`-h`, `--help`, the man page); tests/it/help_examples.rs
+/// runs every `cubeforge` line of it.
+const EXAMPLES: &str = "\
+Examples:
+  # a 32 px irradiance cube map (KTX2) and the 9 SH coefficients as JSON
+  cubeforge irradiance panorama.hdr -o irradiance.ktx2 --sh sh.json
+  # six 16 px EXR faces
+  cubeforge irradiance panorama.hdr -o irradiance/ --size 16";
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
     let output = super::destination(&a.output, Some(&a.format), |_| true)?;

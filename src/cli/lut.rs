@@ -7,7 +7,7 @@ use cubeforge::{Job, LutJob, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
-#[command(after_long_help = LAYOUT_HELP)]
+#[command(after_help = EXAMPLES, after_long_help = format!("{LAYOUT_HELP}\n\n{EXAMPLES}"))]
 pub struct Args {
     /// Output: .png (8-bit, or 16-bit with --png16), .exr (half float) or .ktx2 (RGBA16F).
     #[arg(short, long)]
@@ -40,6 +40,17 @@ G = bias, specular = F0 * R + F90 * G. --multiscatter: R = DFG1, G = DFG2, \
 specular = mix(R, G, F0), energy compensation 1 + F0 * (1 / G - 1). --charlie: the sheen \
 albedo E in R, G and B (the Sample Viewer reads B); above 1 at grazing n.v and low roughness, \
 which PNG clamps (use .exr or .ktx2 to keep it).";
+
+/// Printed after the options (`-h`, `--help`, the man page); tests/it/help_examples.rs
+/// runs every `cubeforge` line of it.
+const EXAMPLES: &str = "\
+Examples:
+  # GGX DFG (R scale, G bias), 16-bit, laid out as lut_ggx.png
+  cubeforge lut -o dfg.png --png16
+  # Filament's multiscatter DFG, half float
+  cubeforge lut -o dfg_multiscatter.exr --multiscatter
+  # the Charlie sheen table, half float (PNG clamps it at 1)
+  cubeforge lut -o charlie.exr --charlie";
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
     let job = LutJob {

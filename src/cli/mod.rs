@@ -26,9 +26,13 @@ use std::time::Instant;
     name = "cubeforge",
     version,
     about = "Turn photographs into cube maps and check them",
-    long_about = "Turn photographs into cube maps and check them: convert between equirect panoramas, \
-                  face images, crosses, strips, mirror balls, angular and octahedral maps, KTX2 \
-                  and DDS; describe what a file holds."
+    long_about = "Turn photographs into cube maps and check them: from a panorama to the files an \
+                  engine loads for image-based lighting (ibl: Bevy, glTF, Babylon.js, Filament, \
+                  Godot, Unity, Unreal); convert between equirect panoramas, face images, \
+                  crosses, strips, mirror balls, angular and octahedral maps, KTX2 and DDS; \
+                  prefiltered mip chains, irradiance, BRDF tables, control maps; a sphere \
+                  preview; describe what a file holds.",
+    after_help = EXAMPLES
 )]
 pub struct Cli {
     /// Print the time each stage takes (decode, resample, encode, write).
@@ -40,6 +44,21 @@ pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
 }
+
+/// Printed after the commands (`-h`, `--help`, the man page); tests/it/help_examples.rs runs
+/// every `cubeforge` line of it.
+const EXAMPLES: &str = "\
+Examples (panorama.hdr: an equirect HDR photograph, e.g. one of polyhaven.com's, CC0):
+  # the files Bevy loads for image-based lighting (others: ibl --help)
+  cubeforge ibl panorama.hdr -o bevy/ --target bevy
+  # six EXR faces, then a KTX2 cube map with its mip chain
+  cubeforge convert panorama.hdr -o faces/ --to faces
+  cubeforge convert faces/ -o sky.ktx2
+  # a blurry chain, seen on a chrome ball at LOD biases 0 to 3
+  cubeforge prefilter panorama.hdr -o blur.ktx2 --filter gaussian --size 256
+  cubeforge preview blur.ktx2 -o bias.png --size 256 --grid-bias 0,1,2,3
+  # what a file holds: layout, levels, format, statistics, flux
+  cubeforge info blur.ktx2";
 
 #[derive(Subcommand, Debug)]
 pub enum Command {

@@ -6,6 +6,7 @@ use cubeforge::{Destination, Error, Job, PrefilterJob, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
+#[command(after_help = EXAMPLES)]
 pub struct Args {
     /// Anything `convert` reads: one image, six faces, or a folder of faces.
     #[arg(required = true)]
@@ -59,6 +60,17 @@ pub struct Args {
     #[command(flatten)]
     pub input: super::InputArgs,
 }
+
+/// Printed after the options (`-h`, `--help`, the man page); tests/it/help_examples.rs
+/// runs every `cubeforge` line of it.
+const EXAMPLES: &str = "\
+Examples:
+  # split-sum GGX radiance: level m of L holds roughness m / (L - 1)
+  cubeforge prefilter panorama.hdr -o ggx.ktx2 --filter ggx --size 256
+  # a blurry chain for LOD-bias lookups
+  cubeforge prefilter panorama.hdr -o blur.ktx2 --filter gaussian --size 256
+  # cmft's cosine-power lobes into a folder: m0/px.exr ... levels.json
+  cubeforge prefilter panorama.hdr -o cosine/ --filter cosine";
 
 pub fn run(a: Args, verbose: bool) -> Result<()> {
     let output = super::destination(&a.output, Some(&a.format), FileFormat::is_container)?;

@@ -13,13 +13,7 @@ use glam::{Vec3, Vec4};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
-#[command(
-    after_help = "Geometry: the unit sphere at the origin in cube-map space, the camera at \
-    (0, 0, D) looking at the origin with +Y up (image right is -X, so the environment reads as \
-    its face images do). Materials: reflect, refract and dispersion models of The Cg Tutorial \
-    chapter 7, and pbr (glTF metallic-roughness, split-sum GGX + Lambert, a GGX chain \
-    prefiltered in memory when ENV is not one); `--material list` prints the presets."
-)]
+#[command(after_help = format!("{GEOMETRY}\n\n{EXAMPLES}"))]
 pub struct Args {
     /// Environment: anything `convert` reads (panorama, cross, folder of faces, KTX2 or DDS
     /// with all its levels), or a folder m0/ m1/ ... written by `cubeforge prefilter`.
@@ -119,6 +113,23 @@ pub struct Args {
     #[command(flatten)]
     pub limits: super::LimitArgs,
 }
+
+const GEOMETRY: &str = "Geometry: the unit sphere at the origin in cube-map space, the camera at \
+(0, 0, D) looking at the origin with +Y up (image right is -X, so the environment reads as \
+its face images do). Materials: reflect, refract and dispersion models of The Cg Tutorial \
+chapter 7, and pbr (glTF metallic-roughness, split-sum GGX + Lambert, a GGX chain \
+prefiltered in memory when ENV is not one); `--material list` prints the presets.";
+
+/// Printed after the options (`-h`, `--help`, the man page); tests/it/help_examples.rs
+/// runs every `cubeforge` line of it.
+const EXAMPLES: &str = "\
+Examples:
+  # a chrome ball lit by the panorama
+  cubeforge preview panorama.hdr -o chrome.png
+  # three of the Cg Tutorial's materials side by side
+  cubeforge preview panorama.hdr -o sheet.png --grid chrome,glass,crystal
+  # glTF metallic-roughness (split-sum GGX) at three roughness values
+  cubeforge preview panorama.hdr -o pbr.png -m pbr --grid-roughness 0,0.5,1";
 
 fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();

@@ -21,6 +21,7 @@ mod first_hour;
 mod flux;
 mod formats;
 mod gpu_formats;
+mod help_examples;
 mod hostile_exr;
 mod ibl;
 mod info;
