@@ -1,4 +1,4 @@
-//! Writes the project's own fixtures: the demo sky the README's first command converts.
+//! Writes the project's own fixtures: the demo sky the README's set-up and examples read.
 
 use cubeforge::io::{self, WriteOptions};
 use cubeforge::layout::Projection;

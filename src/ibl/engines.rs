@@ -69,7 +69,7 @@ fn ktx2_pair(l: &Lighting, ctx: &Context, spec: &str, diff: &str) -> Result<Ktx2
 }
 
 /// Sizes, roughness mapping and orientation of each engine (the sources of each choice are
-/// in the README's `ibl` table).
+/// in docs/engines.md's `ibl` table).
 pub fn defaults(engine: Engine) -> Defaults {
     let linear = |specular_size, min_size, diffuse_size| Defaults {
         specular_size,

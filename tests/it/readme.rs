@@ -1,12 +1,14 @@
-//! The README's examples run, in order, on a fresh copy of the repository.
+//! The examples of the README and of `docs/*.md` run, in order, on a fresh copy of the
+//! repository, and their links lead somewhere.
 //!
-//! The convention: in the README's ```sh blocks, every line that starts with `cubeforge ` is an
+//! The convention: in the ```sh blocks of README.md and docs/*.md, every line that starts with `cubeforge ` is an
 //! example (a trailing `\` continues it on the next line, `&&` chains commands, `#` starts a
 //! comment); lines that start with `cargo ` are set-up and are not run here. Any other line in an
 //! sh block is an error, so nothing there goes untested. The examples run with the built binary
 //! in a temporary folder that holds a copy of `fixtures/` and, when it exists, a link to
-//! `../shared`; lines that read `../shared/fixtures/real` are skipped without it. Each must exit
-//! 0, and no example may write an output (`-o`, `--sh`) that an earlier one wrote.
+//! `../shared`; lines that read `../shared/fixtures/real` are skipped without it. Each file runs
+//! in a fresh folder of its own. Each example must exit 0, and no example may write an output
+//! (`-o`, `--sh`) that an earlier one of its file wrote.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -20,7 +22,7 @@ struct Example {
 }
 
 /// The examples of a README text, by the convention above, or what breaks the convention.
-fn examples(readme: &str) -> Result<Vec<Example>, String> {
+fn examples(file: &str, readme: &str) -> Result<Vec<Example>, String> {
     let mut out = Vec::new();
     let mut fence: Option<String> = None;
     let mut pending: Option<(usize, String)> = None;
@@ -54,13 +56,13 @@ fn examples(readme: &str) -> Result<Vec<Example>, String> {
         }
         if !text.starts_with("cubeforge ") {
             return Err(format!(
-                "README.md:{start}: a line of an sh block that is neither a cubeforge example nor \
+                "{file}:{start}: a line of an sh block that is neither a cubeforge example nor \
                  a cargo set-up line: {text}"
             ));
         }
         if let Some(c) = text.chars().find(|c| "'\"$|<>;*?`~(){}".contains(*c)) {
             return Err(format!(
-                "README.md:{start}: examples are plain words (found {c:?}): {text}"
+                "{file}:{start}: examples are plain words (found {c:?}): {text}"
             ));
         }
         let mut commands = Vec::new();
@@ -68,7 +70,7 @@ fn examples(readme: &str) -> Result<Vec<Example>, String> {
             let words: Vec<String> = part.split_whitespace().map(str::to_owned).collect();
             if words.first().map(String::as_str) != Some("cubeforge") {
                 return Err(format!(
-                    "README.md:{start}: every command of a chain is a cubeforge command: {text}"
+                    "{file}:{start}: every command of a chain is a cubeforge command: {text}"
                 ));
             }
             commands.push(words[1..].to_vec());
@@ -80,10 +82,10 @@ fn examples(readme: &str) -> Result<Vec<Example>, String> {
         });
     }
     if pending.is_some() {
-        return Err("README.md: an example ends with '\\'".into());
+        return Err(format!("{file}: an example ends with '\\'"));
     }
     if fence.is_some() {
-        return Err("README.md: a code block is not closed".into());
+        return Err(format!("{file}: a code block is not closed"));
     }
     Ok(out)
 }
@@ -112,12 +114,29 @@ fn copy_dir(from: &Path, to: &Path) {
     }
 }
 
+/// README.md, then docs/*.md in name order, each with its text.
+fn documents(repo: &Path) -> Vec<(String, String)> {
+    let mut docs: Vec<String> = std::fs::read_dir(repo.join("docs"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".md"))
+        .map(|n| format!("docs/{n}"))
+        .collect();
+    docs.sort();
+    std::iter::once("README.md".to_string())
+        .chain(docs)
+        .map(|name| {
+            let text = std::fs::read_to_string(repo.join(&name)).unwrap();
+            (name, text)
+        })
+        .collect()
+}
+
+/// The set-up: install once, the main job with the installed binary, the tests on that build.
 #[test]
-fn readme_examples_run_in_order_on_a_fresh_copy() {
+fn readme_setup_is_install_main_job_tests() {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
     let readme = std::fs::read_to_string(repo.join("README.md")).unwrap();
-
-    // The set-up: install, the main job on a bundled input, the tests.
     let setup = readme
         .split("## Set-up")
         .nth(1)
@@ -130,83 +149,190 @@ fn readme_examples_run_in_order_on_a_fresh_copy() {
         .filter(|l| !l.is_empty())
         .collect();
     assert_eq!(setup.len(), 3, "install, main job, tests: {setup:?}");
-    assert_eq!(setup[0], "cargo install --path .");
+    assert_eq!(setup[0], "cargo install --locked --path .");
     assert!(
-        setup[1].starts_with("cargo run --release -- convert fixtures/"),
-        "{setup:?}"
+        setup[1].starts_with("cubeforge ") && setup[1].contains(" fixtures/"),
+        "the main job runs the installed binary on a bundled input: {setup:?}"
     );
     assert_eq!(setup[2], "cargo test --release");
+    // `ibl` is named in the opening lines, before the set-up.
+    let opening = readme.split("## Set-up").next().unwrap();
+    assert!(opening
+        .lines()
+        .take(8)
+        .any(|l| l.contains("`cubeforge ibl`")));
+    let lines = readme.lines().count();
+    assert!(
+        lines < 450,
+        "README.md has {lines} lines: move reference material into docs/"
+    );
+}
 
-    let examples = examples(&readme).unwrap_or_else(|e| panic!("{e}"));
-    assert!(examples.len() >= 20, "{} examples", examples.len());
-
-    // A fresh copy: the bundled fixtures, and ../shared beside it when this checkout has one.
-    let tmp = tempfile::tempdir().unwrap();
-    let root = tmp.path().join("cubeforge");
-    copy_dir(&repo.join("fixtures"), &root.join("fixtures"));
+#[test]
+fn readme_and_docs_examples_run_in_order_on_a_fresh_copy() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
     let shared = repo.join("../shared");
     let have_shared = cfg!(unix) && shared.join("fixtures/real").is_dir();
-    #[cfg(unix)]
-    if have_shared {
-        std::os::unix::fs::symlink(shared.canonicalize().unwrap(), tmp.path().join("shared"))
-            .unwrap();
-    }
-
     let start = Instant::now();
     let (mut ran, mut skipped) = (0, 0);
-    for ex in &examples {
-        if ex.text.contains("../shared/") && !have_shared {
-            use std::io::Write;
-            let _ = writeln!(
-                std::io::stderr(),
-                "SKIPPED README.md:{}: ../shared/fixtures/real not found",
-                ex.line
-            );
-            skipped += 1;
+    for (file, text) in documents(repo) {
+        let examples = examples(&file, &text).unwrap_or_else(|e| panic!("{e}"));
+        if file == "README.md" {
+            assert!(examples.len() >= 15, "{} examples", examples.len());
+        }
+        if examples.is_empty() {
             continue;
         }
-        for args in &ex.commands {
-            for (flag, value) in args.iter().zip(args.iter().skip(1)) {
-                if ["-o", "--output", "--sh"].contains(&flag.as_str()) {
-                    assert!(
-                        !root.join(value).exists(),
-                        "README.md:{}: {value} was written by an earlier example: {}",
-                        ex.line,
-                        ex.text
-                    );
-                }
-            }
-            let t = Instant::now();
-            let out = Command::new(env!("CARGO_BIN_EXE_cubeforge"))
-                .args(args)
-                .current_dir(&root)
-                .output()
-                .expect("cubeforge runs");
-            println!(
-                "{:6.2} s  README.md:{}: cubeforge {}",
-                t.elapsed().as_secs_f64(),
-                ex.line,
-                args.join(" ")
-            );
-            assert!(
-                out.status.success(),
-                "README.md:{}: {} failed:\n{}",
-                ex.line,
-                ex.text,
-                String::from_utf8_lossy(&out.stderr)
-            );
-            ran += 1;
+        // A fresh copy: the bundled fixtures, and ../shared beside it when this checkout has one.
+        let tmp = tempfile::tempdir().unwrap();
+        let root = tmp.path().join("cubeforge");
+        copy_dir(&repo.join("fixtures"), &root.join("fixtures"));
+        #[cfg(unix)]
+        if have_shared {
+            std::os::unix::fs::symlink(shared.canonicalize().unwrap(), tmp.path().join("shared"))
+                .unwrap();
         }
+        for ex in &examples {
+            if ex.text.contains("../shared/") && !have_shared {
+                use std::io::Write;
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "SKIPPED {file}:{}: ../shared/fixtures/real not found",
+                    ex.line
+                );
+                skipped += 1;
+                continue;
+            }
+            for args in &ex.commands {
+                for (flag, value) in args.iter().zip(args.iter().skip(1)) {
+                    if ["-o", "--output", "--sh"].contains(&flag.as_str()) {
+                        assert!(
+                            !root.join(value).exists(),
+                            "{file}:{}: {value} was written by an earlier example: {}",
+                            ex.line,
+                            ex.text
+                        );
+                    }
+                }
+                let t = Instant::now();
+                let out = Command::new(env!("CARGO_BIN_EXE_cubeforge"))
+                    .args(args)
+                    .current_dir(&root)
+                    .output()
+                    .expect("cubeforge runs");
+                println!(
+                    "{:6.2} s  {file}:{}: cubeforge {}",
+                    t.elapsed().as_secs_f64(),
+                    ex.line,
+                    args.join(" ")
+                );
+                assert!(
+                    out.status.success(),
+                    "{file}:{}: {} failed:\n{}",
+                    ex.line,
+                    ex.text,
+                    String::from_utf8_lossy(&out.stderr)
+                );
+                ran += 1;
+            }
+        }
+        let outputs: Vec<PathBuf> = std::fs::read_dir(root.join("out"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        assert!(!outputs.is_empty(), "{file}");
     }
     println!(
         "{ran} commands in {:.2} s, {skipped} examples skipped",
         start.elapsed().as_secs_f64()
     );
-    let outputs: Vec<PathBuf> = std::fs::read_dir(root.join("out"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
-    assert!(!outputs.is_empty());
+}
+
+/// The anchor GitHub gives a heading: lower case, punctuation other than `-` and `_` dropped,
+/// spaces as `-`.
+fn slug(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter(|c| c.is_alphanumeric() || matches!(c, ' ' | '-' | '_'))
+        .map(|c| if c == ' ' { '-' } else { c })
+        .collect()
+}
+
+/// The anchors of a Markdown text's headings (outside code blocks).
+fn anchors(text: &str) -> Vec<String> {
+    let mut fenced = false;
+    let mut out = Vec::new();
+    for line in text.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+        } else if !fenced && line.starts_with('#') {
+            out.push(slug(line.trim_start_matches('#')));
+        }
+    }
+    out
+}
+
+/// The targets of a Markdown text's inline links and images, `](target)`.
+fn links(text: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut rest = text;
+    while let Some(i) = rest.find("](") {
+        rest = &rest[i + 2..];
+        if let Some(end) = rest.find(')') {
+            out.push(rest[..end].to_string());
+        }
+    }
+    out
+}
+
+/// Every relative link of README.md and docs/*.md leads to a file that exists (and to one of
+/// its headings, for `#anchor`), and every page of docs/ is reachable from the README.
+#[test]
+fn readme_and_docs_links_lead_somewhere() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let documents = documents(repo);
+    let mut checked = 0;
+    for (file, text) in &documents {
+        let dir = repo.join(file).parent().unwrap().to_path_buf();
+        for link in links(text) {
+            if link.starts_with("http://") || link.starts_with("https://") {
+                continue;
+            }
+            let (path, anchor) = match link.split_once('#') {
+                Some((p, a)) => (p, Some(a)),
+                None => (link.as_str(), None),
+            };
+            let target = if path.is_empty() {
+                repo.join(file)
+            } else {
+                dir.join(path)
+            };
+            assert!(target.exists(), "{file}: the link {link} leads nowhere");
+            if let Some(anchor) = anchor {
+                let text = std::fs::read_to_string(&target).unwrap();
+                assert!(
+                    anchors(&text).iter().any(|a| a == anchor),
+                    "{file}: the link {link} names no heading of {}",
+                    target.display()
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked >= 20, "{checked} links");
+    let readme = &documents[0].1;
+    for (file, _) in &documents[1..] {
+        assert!(
+            links(readme).iter().any(|l| l == file),
+            "README.md does not link {file}"
+        );
+    }
+    assert_eq!(
+        slug("Physically based preview (`--material pbr`)"),
+        "physically-based-preview---material-pbr"
+    );
 }
 
 /// The convention itself, on a made-up README.
@@ -215,7 +341,7 @@ fn examples_follow_the_convention() {
     let text = "intro\n```sh\ncargo test   # set-up\n# a comment\ncubeforge info a.exr  # why\n\
                 cubeforge convert a.exr \\\n    -o b.exr && cubeforge info b.exr\n```\n\
                 ```text\nnot run\n```\n";
-    let ex = examples(text).unwrap();
+    let ex = examples("README.md", text).unwrap();
     assert_eq!(ex.len(), 2);
     assert_eq!(
         (ex[0].line, ex[0].commands.clone()),
@@ -238,6 +364,6 @@ fn examples_follow_the_convention() {
         "```sh\ncubeforge info a.exr && ls\n```\n",
         "```sh\ncubeforge info a.exr\n",
     ] {
-        assert!(examples(bad).is_err(), "{bad}");
+        assert!(examples("README.md", bad).is_err(), "{bad}");
     }
 }

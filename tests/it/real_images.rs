@@ -123,7 +123,8 @@ fn exr_names(dir: &Path) -> Vec<String> {
 }
 
 /// The strongest check of the face table and the equirect formula: faces/city/*.exr were
-/// sampled bilinearly from zip/city.exr by another tool with the README's conventions.
+/// sampled bilinearly from zip/city.exr by another tool with the conventions of
+/// docs/conventions.md.
 #[test]
 fn city_faces_match_reference() {
     let Some(real) = common::real_dir() else {

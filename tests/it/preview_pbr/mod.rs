@@ -165,7 +165,7 @@ fn measure(sky: Env, roughs: &[f32]) -> Vec<Worst> {
 }
 
 /// Bounds on the largest relative errors at roughness 0, 0.25, 0.4, 0.5, 0.75, 1 (measured,
-/// README "Physically based preview"), each (split-sum, pipeline, preview metal, preview
+/// docs/preview.md "Physically based preview"), each (split-sum, pipeline, preview metal, preview
 /// dielectric). The split-sum's own error dominates from roughness 0.25 on and grows with
 /// roughness and towards grazing n.v; between the chain's levels (0.4) the blend of two
 /// levels misses a sun's highlight; order-2 SH ring next to the sun (dielectric).
