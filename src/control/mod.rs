@@ -23,9 +23,9 @@
 //! number or a table naming one *source* (constant, image, linear_gradient, radial_gradient,
 //! checker, stripes, noise) and, optionally, operations on it (remap, invert, multiply, mix).
 //! The format is described in one place, the repository's `docs/control-maps.md`, with worked
-//! recipes in `fixtures/control/`; [`Recipe`] and [`Source`] are its types, [`load`] and
-//! [`parse`] read it. Every value is checked as it is read: a missing image, an unknown key,
-//! channel or parameter, a fraction outside [0, 1] are errors naming the recipe's line.
+//! recipes in `fixtures/control/`; [`Recipe`] and [`Source`] are its types, [`load`] reads a
+//! file. Every value is checked as it is read: a missing image, an unknown key, channel or
+//! parameter, a fraction outside [0, 1] are errors naming the recipe's line.
 
 #![warn(missing_docs)]
 
