@@ -74,7 +74,8 @@ pub struct Args {
     /// Control map from `cubeforge control`: R reflectivity, G transmittance, B blur, A Fresnel mask.
     #[arg(long)]
     pub control: Option<PathBuf>,
-    /// Exposure in stops before tone mapping (tone-mapped outputs only).
+    /// Exposure in stops: radiance scaled by 2^EV, before the tone curve of PNG, JPEG and TGA
+    /// output (EXR and HDR keep it linear, scaled).
     #[arg(value_parser = super::finite_f32, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub exposure: f32,
     /// Tone curve for PNG, JPEG and TGA output (EXR and HDR stay linear).

@@ -90,7 +90,7 @@ fn exposure_and_tonemap_change_8bit_outputs_only() {
         ],
         t.path(),
     );
-    assert!(err(&o).contains("apply to 8-bit outputs"), "{}", err(&o));
+    assert!(err(&o).contains("applies to 8-bit outputs"), "{}", err(&o));
     run_ok(
         &[
             "irradiance",
@@ -168,6 +168,8 @@ fn convert_reads_one_level_of_a_chain() {
             "8",
             "--filter",
             "box",
+            "--min-size",
+            "1",
         ],
         t.path(),
     );

@@ -178,6 +178,8 @@ fn dash_is_standard_output_or_refused() {
             "box",
             "--size",
             "16",
+            "--min-size",
+            "1",
         ];
         args.extend(extra);
         run_in(d, args)

@@ -297,6 +297,7 @@ fn exposure_scales_float_outputs_and_every_lighting_command() {
             "",
         ),
         (vec!["irradiance", SKY_EXR, "--size", "8"], "i.ktx2", ""),
+        (vec!["preview", SKY_EXR, "--size", "16"], "v.exr", ""),
         (
             vec![
                 "ibl",

@@ -186,6 +186,9 @@ pub(super) fn render(
         progress.finish();
         if tone_mapped {
             crate::tonemap::apply(&mut img, job.tone.1, job.tone.0);
+        } else if job.tone.0 != 0.0 {
+            // Linear pictures keep radiance, scaled by the exposure alone.
+            crate::tonemap::scale(&mut img, job.tone.0);
         }
         rendered.push((img, label));
     }

@@ -58,7 +58,8 @@ pub struct PreviewJob {
     pub control: Option<PathBuf>,
     /// The LOD bias a control map's blur of 1 means when its sidecar does not say.
     pub max_lod_bias: f32,
-    /// Exposure (stops) and tone curve for tone-mapped outputs.
+    /// Exposure (stops) and tone curve for tone-mapped outputs; linear ones (EXR, HDR) are
+    /// scaled by the exposure alone.
     pub tone: (f32, Tonemap),
     /// pbr materials: read the chain with this engine's roughness mapping.
     pub target: Option<Engine>,
@@ -195,8 +196,8 @@ impl PreviewJob {
                 ))
             }
             Some(_) => {
-                let (exposure, curve) = self.tone;
-                if !tone_mapped(&self.output) && (exposure != 0.0 || curve != Tonemap::None) {
+                // A linear picture takes the exposure (radiance scaled), not the curve.
+                if !tone_mapped(&self.output) && self.tone.1 != Tonemap::None {
                     warnings.push(Warning::new(output::tone_ignored(&name)));
                 }
             }

@@ -1,6 +1,7 @@
 //! The snippets `ibl --target filament` prints run: the C++ compiles against declarations of
 //! the Filament calls it makes (no undeclared name), and the JavaScript runs in Filament's own
-//! web build, handing `irradianceSh` the 27 coefficients of the file's `sh` key.
+//! web build, handing `irradianceSh` the 27 coefficients of the file's `sh` key. Babylon's
+//! JavaScript parses.
 
 use crate::common::{self, run, stderr};
 use std::path::Path;
@@ -142,4 +143,44 @@ fn filament_javascript_snippet_passes_the_sh_key() {
         );
     }
     assert!(got[0] > 0.0);
+}
+
+#[test]
+fn babylon_snippet_is_javascript() {
+    if common::filament_js().is_none() {
+        return; // node is the checker, installed with the npm readers
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("babylon");
+    let o = run([
+        "ibl",
+        SKY,
+        "-o",
+        out.to_str().unwrap(),
+        "--target",
+        "babylon",
+        "--size",
+        "16",
+        "--samples",
+        "4",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    let js = part(&text, "// Babylon.js");
+    assert!(
+        js.contains("CreateFromPrefilteredData(\"env.env\""),
+        "{text}"
+    );
+    let file = dir.path().join("snippet.js");
+    std::fs::write(&file, &js).unwrap();
+    let o = Command::new("node")
+        .arg("--check")
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{js}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
