@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 const SKY_EXR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.exr");
 const SKY_PNG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.png");
 
-fn run(args: &[&str], dir: &Path) -> Output {
+pub(crate) fn run(args: &[&str], dir: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_cubeforge"))
         .args(args)
         .current_dir(dir)
@@ -17,7 +17,7 @@ fn run(args: &[&str], dir: &Path) -> Output {
         .expect("cubeforge runs")
 }
 
-fn run_ok(args: &[&str], dir: &Path) -> Output {
+pub(crate) fn run_ok(args: &[&str], dir: &Path) -> Output {
     let o = run(args, dir);
     assert!(
         o.status.success(),
@@ -27,7 +27,7 @@ fn run_ok(args: &[&str], dir: &Path) -> Output {
     o
 }
 
-fn err(o: &Output) -> String {
+pub(crate) fn err(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 

@@ -1,33 +1,11 @@
 //! A new user's first hour: the surprises a first try ran into, each one now said or avoided.
 
+use crate::cli_options::{err, run, run_ok};
 use cubeforge::image::Image;
 use glam::{Vec3, Vec4};
 use std::path::Path;
-use std::process::{Command, Output};
 
 const SKY_EXR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.exr");
-
-fn run(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cubeforge"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("cubeforge runs")
-}
-
-fn run_ok(args: &[&str], dir: &Path) -> Output {
-    let o = run(args, dir);
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
-
-fn err(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 #[test]
 fn bare_cubeforge_prints_the_usage_and_fails() {
