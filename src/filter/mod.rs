@@ -283,6 +283,22 @@ pub fn prefilter(
     prefilter_planned(base, opts, plan, progress)
 }
 
+/// [`prefilter_planned`] that reports to `progress`: one bar named after the filter and the
+/// base size, advanced by each finished level's [`level_cost`].
+pub fn prefilter_reported(
+    base: &CubeMap,
+    opts: &ChainOptions,
+    plan: Vec<(LevelInfo, Option<Lobe>)>,
+    progress: &dyn crate::progress::Progress,
+) -> (CubeMap, Vec<LevelInfo>) {
+    let costs: Vec<u64> = plan.iter().map(|(i, _)| level_cost(i)).collect();
+    let label = format!("{} {}", opts.filter.name(), base.size());
+    progress.start(costs.iter().sum(), &label);
+    let out = prefilter_planned(base, opts, plan, &|level| progress.advance(costs[level]));
+    progress.finish();
+    out
+}
+
 /// [`prefilter`] with a plan the caller adjusted (e.g. another roughness per level).
 pub fn prefilter_planned(
     base: &CubeMap,

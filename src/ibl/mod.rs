@@ -151,6 +151,20 @@ pub struct Defaults {
     pub orientation: Orientation,
 }
 
+/// The specular chain's face edge, where it stops, and the diffuse map's edge: `opts`, else
+/// `engine`'s defaults. A target's default floor never exceeds a small size; a given one is
+/// checked by [`deliver`].
+pub(crate) fn sizes(engine: Engine, opts: &IblOptions) -> (usize, usize, usize) {
+    let d = engines::defaults(engine);
+    let specular_size = opts.specular_size.unwrap_or(d.specular_size);
+    let min_size = opts.min_size.unwrap_or(d.min_size.min(specular_size));
+    (
+        specular_size,
+        min_size,
+        opts.diffuse_size.unwrap_or(d.diffuse_size),
+    )
+}
+
 /// Builds the specular chain, irradiance and SH for `engine` from `loaded`, then packs them as
 /// the engine loads them into files under `out`. `progress` hears each finished stage and
 /// follows the chains and the irradiance integral texel by texel.
@@ -162,10 +176,7 @@ pub fn deliver(
     progress: &dyn Progress,
 ) -> Result<Delivery> {
     let d = engines::defaults(engine);
-    let specular_size = opts.specular_size.unwrap_or(d.specular_size);
-    // A target's default floor never exceeds a small --size; a given one is checked.
-    let min_size = opts.min_size.unwrap_or(d.min_size.min(specular_size));
-    let diffuse_size = opts.diffuse_size.unwrap_or(d.diffuse_size);
+    let (specular_size, min_size, diffuse_size) = sizes(engine, opts);
     for (what, v) in [
         ("specular size", specular_size),
         ("diffuse size", diffuse_size),
@@ -237,13 +248,7 @@ fn compute(
     let samples = opts.samples.unwrap_or(filter::DEFAULT_SAMPLES);
     let chain = |filter: FilterKind| {
         let (opts, plan) = mapped_plan(filter, d.mapping, specular_size, min_size, samples);
-        let costs: Vec<u64> = plan.iter().map(|(i, _)| filter::level_cost(i)).collect();
-        let label = format!("{} {specular_size}", filter.name());
-        progress.start(costs.iter().sum(), &label);
-        let out =
-            filter::prefilter_planned(&base, &opts, plan, &|level| progress.advance(costs[level]));
-        progress.finish();
-        out
+        filter::prefilter_reported(&base, &opts, plan, progress)
     };
     let (specular, levels) = chain(FilterKind::Ggx);
     let sheen = opts.sheen.then(|| chain(FilterKind::Charlie));

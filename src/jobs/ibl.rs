@@ -70,7 +70,6 @@ impl IblJob {
 
     /// What the run will make, in one line.
     fn plan_line(&self, loaded: &convert::Loaded, options: &IblOptions) -> String {
-        let d = ibl::engines::defaults(self.engine);
         let input = match loaded.files.as_slice() {
             [one] => one.display().to_string(),
             files => format!("{} files", files.len()),
@@ -78,9 +77,7 @@ impl IblJob {
         let made = if ibl::engines::filters_itself(self.engine) {
             "a panorama the engine prefilters itself".to_owned()
         } else {
-            let size = options.specular_size.unwrap_or(d.specular_size);
-            let min = options.min_size.unwrap_or(d.min_size.min(size));
-            let diffuse = options.diffuse_size.unwrap_or(d.diffuse_size);
+            let (size, min, diffuse) = ibl::sizes(self.engine, options);
             format!(
                 "a GGX chain of {size} px faces down to {min} px, a {diffuse} px irradiance map \
                  and its SH"
@@ -91,10 +88,8 @@ impl IblJob {
 
     /// The specular and diffuse face edges.
     fn sizes(&self, input_face: Option<usize>) -> (u64, u64) {
-        let d = ibl::engines::defaults(self.engine);
         let size = self.specular_size(input_face) as u64;
-        let diffuse = self.options.diffuse_size.unwrap_or(d.diffuse_size) as u64;
-        (size, diffuse)
+        (size, ibl::sizes(self.engine, &self.options).2 as u64)
     }
 
     /// Each chain: the base faces, the chain (4/3 of them), a bordered sampler copy and the
@@ -137,7 +132,7 @@ impl Job for IblJob {
                 param("size"),
                 param("diffuse_size")
             ),
-            self.memory_estimate()?,
+            self.plan_bytes(plan.face_size, plan.working_bytes()),
         )?;
         let mut loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
         loaded.expose(self.options.exposure);

@@ -212,15 +212,7 @@ impl Job for PrefilterJob {
 
         let chain_options = self.chain_for(size);
         let levels = filter::plan(&chain_options, size);
-        let costs: Vec<u64> = levels.iter().map(|(i, _)| filter::level_cost(i)).collect();
-        progress.start(
-            costs.iter().sum(),
-            &format!("{} {size}", self.chain.filter.name()),
-        );
-        let (chain, infos) = filter::prefilter(&base, &chain_options, &|level| {
-            progress.advance(costs[level])
-        });
-        progress.finish();
+        let (chain, infos) = filter::prefilter_reported(&base, &chain_options, levels, progress);
         progress.stage("filter");
 
         let description = LevelsFile::new(&chain_options, size, infos);

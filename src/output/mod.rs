@@ -115,13 +115,14 @@ impl Target {
             Output::Image(img) => vec![img],
         };
         let (exposure, curve) = self.tone.unwrap_or((0.0, Tonemap::None));
-        let clipped = if self.is_8bit() {
+        let eight_bit = self.is_8bit();
+        let clipped = if eight_bit {
             let (n, top) = crate::tonemap::clipped(images.iter().map(|i| &**i), curve, exposure);
             (n > 0).then(|| clip_warning(&self.path, n, top, exposure, true))
         } else {
             None
         };
-        match (self.tone, self.is_8bit()) {
+        match (self.tone, eight_bit) {
             (Some(_), true) => images
                 .into_iter()
                 .for_each(|img| crate::tonemap::apply(img, curve, exposure)),

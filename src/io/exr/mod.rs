@@ -394,11 +394,25 @@ fn zip_block(img: &Image, y0: usize, order: &[usize], room: &mut ZipRoom) -> Vec
     {
         *o = delta(hi(a), hi(b));
     }
+    compressed_or(deflate, split, packed, || {
+        samples.iter().flat_map(|h| h.to_le_bytes()).collect()
+    })
+}
+
+/// The zlib-compressed `split` bytes, or the block as stored (`stored`) when compressing does
+/// not shrink it: readers tell the two apart by the size.
+fn compressed_or(
+    deflate: &mut libdeflater::Compressor,
+    split: &[u8],
+    packed: &mut Vec<u8>,
+    stored: impl FnOnce() -> Vec<u8>,
+) -> Vec<u8> {
+    let n = split.len();
     packed.resize(deflate.zlib_compress_bound(n), 0);
     match deflate.zlib_compress(split, packed) {
         // The block keeps only its bytes.
         Ok(len) if len < n => packed[..len].to_vec(),
-        _ => samples.iter().flat_map(|h| h.to_le_bytes()).collect(),
+        _ => stored(),
     }
 }
 
@@ -435,11 +449,7 @@ fn zip_block_f32(img: &Image, y0: usize, order: &[usize], room: &mut ZipRoom) ->
         *b = here.wrapping_sub(prev).wrapping_add(128);
         prev = here;
     }
-    packed.resize(deflate.zlib_compress_bound(n), 0);
-    match deflate.zlib_compress(split, packed) {
-        Ok(len) if len < n => packed[..len].to_vec(),
-        _ => raw.clone(),
-    }
+    compressed_or(deflate, split, packed, || raw.clone())
 }
 
 #[cfg(test)]

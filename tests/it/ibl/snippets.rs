@@ -44,15 +44,16 @@ fn part(out: &str, heading: &str) -> String {
         .join("\n")
 }
 
-fn filament_files(dir: &Path) -> String {
-    let out = dir.join("filament");
+/// What `ibl --target TARGET` prints, its files written to `dir/TARGET`.
+fn printed(dir: &Path, target: &str) -> String {
+    let out = dir.join(target);
     let o = run([
         "ibl",
         SKY,
         "-o",
         out.to_str().unwrap(),
         "--target",
-        "filament",
+        target,
         "--size",
         "32",
         "--samples",
@@ -68,7 +69,7 @@ fn filament_cpp_snippet_compiles() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let cpp = part(&filament_files(dir.path()), "// C++");
+    let cpp = part(&printed(dir.path(), "filament"), "// C++");
     assert!(cpp.contains("getSphericalHarmonics"), "{cpp}");
     let source = format!(
         "{FILAMENT_DECLS}\nvoid load(filament::Engine* engine, filament::Scene* scene, \
@@ -95,7 +96,7 @@ fn filament_javascript_snippet_passes_the_sh_key() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    let js = part(&filament_files(dir.path()), "// JavaScript");
+    let js = part(&printed(dir.path(), "filament"), "// JavaScript");
     let file = dir.path().join("snippet.js");
     std::fs::write(&file, &js).unwrap();
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/tools/filament_snippet.cjs");
@@ -151,21 +152,7 @@ fn babylon_snippet_is_javascript() {
         return; // node is the checker, installed with the npm readers
     }
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("babylon");
-    let o = run([
-        "ibl",
-        SKY,
-        "-o",
-        out.to_str().unwrap(),
-        "--target",
-        "babylon",
-        "--size",
-        "16",
-        "--samples",
-        "4",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let text = String::from_utf8(o.stdout).unwrap();
+    let text = printed(dir.path(), "babylon");
     let js = part(&text, "// Babylon.js");
     assert!(
         js.contains("CreateFromPrefilteredData(\"env.env\""),
