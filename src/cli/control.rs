@@ -81,7 +81,8 @@ impl KtxFormat {
     }
 }
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
+/// The library job these flags describe (what `run` runs, and what a batch manifest builds).
+pub fn job(a: Args) -> Result<ControlJob> {
     let job = ControlJob {
         size: a.size,
         png16: a.png16,
@@ -91,6 +92,11 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         limits: a.limits.limits(),
         ..ControlJob::new(a.recipe, a.output)
     };
+    Ok(job)
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let job = job(a)?;
     let observer = super::Observer::new(verbose);
     let report = job.run(&observer)?;
     observer.report(&report)

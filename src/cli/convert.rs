@@ -82,7 +82,8 @@ Examples:
   # a photographed mirror ball (square images need --from) to a panorama
   cubeforge convert ball.exr --from sphere -o from_ball.exr --to equirect";
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
+/// The library job these flags describe (what `run` runs, and what a batch manifest builds).
+pub fn job(a: Args) -> Result<ConvertJob> {
     let output = super::destination(&a.output, a.format.as_deref(), |_| true)?;
     let face_format = match (&output, &a.format) {
         (Destination::Path(_), Some(f)) => {
@@ -115,6 +116,11 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         read: a.input.read_options(),
         ..ConvertJob::new(a.inputs, output)
     };
+    Ok(job)
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let job = job(a)?;
     let observer = super::Observer::new(verbose);
     let report = job.run(&observer)?;
     observer.report(&report)

@@ -71,7 +71,8 @@ Examples:
   # no engine in particular: KTX2 chains, SH as JSON, a DFG table
   cubeforge ibl panorama.hdr -o generic/ --target generic";
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
+/// The library job these flags describe (what `run` runs, and what a batch manifest builds).
+pub fn job(a: Args) -> Result<IblJob> {
     let job = IblJob {
         from: a.input.from,
         options: IblOptions {
@@ -90,6 +91,11 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         read: a.input.read_options(),
         ..IblJob::new(a.inputs, a.output, a.target)
     };
+    Ok(job)
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let job = job(a)?;
     let observer = super::Observer::new(verbose);
     let report = job.run(&observer)?;
     observer.report(&report)

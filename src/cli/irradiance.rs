@@ -53,7 +53,8 @@ Examples:
   # six 16 px EXR faces
   cubeforge irradiance panorama.hdr -o irradiance/ --size 16";
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
+/// The library job these flags describe (what `run` runs, and what a batch manifest builds).
+pub fn job(a: Args) -> Result<IrradianceJob> {
     let output = super::destination(&a.output, Some(&a.format), |_| true)?;
     let face_format = match output {
         Destination::Stdout(_) => FileFormat::Exr,
@@ -73,6 +74,11 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         read: a.input.read_options(),
         ..IrradianceJob::new(a.inputs, output)
     };
+    Ok(job)
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let job = job(a)?;
     let observer = super::Observer::new(verbose);
     let report = job.run(&observer)?;
     observer.report(&report)

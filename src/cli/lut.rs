@@ -52,7 +52,8 @@ Examples:
   # the Charlie sheen table, half float (PNG clamps it at 1)
   cubeforge lut -o charlie.exr --charlie";
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
+/// The library job these flags describe (what `run` runs, and what a batch manifest builds).
+pub fn job(a: Args) -> Result<LutJob> {
     let job = LutJob {
         kind: if a.charlie {
             LutKind::Charlie
@@ -67,6 +68,11 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         limits: super::limits(u64::MAX, a.memory.max_memory),
         ..LutJob::new(a.output)
     };
+    Ok(job)
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let job = job(a)?;
     let observer = super::Observer::new(verbose);
     let report = job.run(&observer)?;
     observer.report(&report)

@@ -1,5 +1,6 @@
 //! Command-line front end: one file per command. Parses and reports; the library does the work.
 
+mod batch;
 mod completions;
 mod control;
 mod convert;
@@ -78,6 +79,8 @@ pub enum Command {
     Control(control::Args),
     /// Preview a map on a sphere: reflection, refraction, Fresnel and dispersion (Cg Tutorial ch. 7), split-sum pbr.
     Preview(preview::Args),
+    /// Run a manifest of jobs over many inputs: each job as its command line would run it.
+    Batch(batch::Args),
     /// Print a shell completion script: `source <(cubeforge completions bash)`.
     Completions(completions::Args),
     /// Write the man pages (man/*.1) from these definitions.
@@ -473,6 +476,7 @@ pub fn run() -> i32 {
         Command::Lut(a) => lut::run(a, cli.verbose),
         Command::Control(a) => control::run(a, cli.verbose),
         Command::Preview(a) => preview::run(a, cli.verbose),
+        Command::Batch(a) => batch::run(a, cli.verbose),
         Command::Completions(a) => completions::run(a),
         Command::Man(a) => man::run(a),
         Command::Fixtures(a) => fixtures::run(a),

@@ -72,7 +72,8 @@ Examples:
   # cmft's cosine-power lobes into a folder: m0/px.exr ... levels.json
   cubeforge prefilter panorama.hdr -o cosine/ --filter cosine";
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
+/// The library job these flags describe (what `run` runs, and what a batch manifest builds).
+pub fn job(a: Args) -> Result<PrefilterJob> {
     let output = super::destination(&a.output, Some(&a.format), FileFormat::is_container)?;
     let face_format = match output {
         Destination::Stdout(_) => FileFormat::Exr,
@@ -104,6 +105,11 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         read: a.input.read_options(),
         ..PrefilterJob::new(a.inputs, output)
     };
+    Ok(job)
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let job = job(a)?;
     let observer = super::Observer::new(verbose);
     let report = job.run(&observer)?;
     observer.report(&report)

@@ -178,10 +178,8 @@ fn parse_background(s: &str) -> Result<Background> {
     })
 }
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
-    if a.material == "list" {
-        return super::say(material::list().trim_end());
-    }
+/// The library job these flags describe (what `run` runs, and what a batch manifest builds).
+pub fn job(a: Args) -> Result<PreviewJob> {
     let (Some(env), Some(output)) = (a.env, a.output) else {
         return Err(Error::usage(
             "preview needs an environment and an output: cubeforge preview ENV -o OUTPUT",
@@ -228,6 +226,14 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         limits: a.limits.limits(),
         ..PreviewJob::new(env, output)
     };
+    Ok(job)
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    if a.material == "list" {
+        return super::say(material::list().trim_end());
+    }
+    let job = job(a)?;
     let observer = super::Observer::new(verbose);
     let report = job.run(&observer)?;
     observer.report(&report)

@@ -5,6 +5,7 @@
 mod common;
 
 mod atomic_writes;
+mod batch;
 mod batched;
 mod careless;
 mod cli_errors;
