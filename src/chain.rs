@@ -88,13 +88,22 @@ pub(crate) fn dds_sidecar(dds: &Path) -> PathBuf {
 }
 
 /// The description stored with a KTX2 or DDS chain, if it has one that parses.
-pub(crate) fn container_levels(path: &Path, format: FileFormat) -> Option<LevelsFile> {
+pub(crate) fn container_levels(
+    path: &Path,
+    format: FileFormat,
+    session: io::Session,
+) -> Option<LevelsFile> {
     let bytes = match format {
         FileFormat::Ktx2 => io::ktx2::metadata_from_file(path)
             .into_iter()
             .find(|(k, _)| k == io::ktx2::LEVELS_KEY)
             .map(|(_, v)| v)?,
-        FileFormat::Dds => io::read_file(&dds_sidecar(path)).ok()?,
+        FileFormat::Dds => {
+            let side = dds_sidecar(path);
+            let bytes = io::read_file(&side).ok()?;
+            session.note(&side);
+            bytes
+        }
         _ => return None,
     };
     LevelsFile::from_json(&bytes, path).ok()
@@ -236,6 +245,7 @@ pub(crate) fn read_dir(dir: &Path, opts: &ReadOptions) -> Result<ChainDir> {
     let description = if json.exists() {
         // A hand-made description may hold less than cubeforge writes: any JSON is taken,
         // and a `levels` list must match the folders.
+        opts.limits.session.note(&json);
         let bytes = io::read_file(&json)?;
         let value: serde_json::Value = serde_json::from_slice(&bytes)
             .map_err(|e| Error::file(&json, format!("not valid JSON: {e}")))?;

@@ -283,7 +283,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 stats,
                 bad_levels,
                 flux: Some(cube_flux(&cube.levels[0])),
-                levels: chain::container_levels(path, meta.file_format),
+                levels: chain::container_levels(path, meta.file_format, opts.limits.session),
             }
         }
         Decoded::Image(img) => {

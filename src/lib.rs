@@ -79,6 +79,7 @@
 #![warn(missing_docs)]
 
 mod alloc;
+pub mod batch;
 #[doc(hidden)]
 pub mod chain;
 #[doc(hidden)]
@@ -120,7 +121,9 @@ pub use error::{Error, LimitKind, Result};
 pub use filter::{ChainOptions, FilterKind, IrradianceMethod, LightingModel};
 pub use ibl::{Engine, IblOptions};
 pub use image::Image;
-pub use io::{Container, ExrFloat, FileFormat, GpuFormat, Limits, MapKind, ReadOptions};
+pub use io::{
+    Container, ExrFloat, FileFormat, GpuFormat, Limits, MapKind, ReadOptions, Session, SessionGuard,
+};
 pub use jobs::{
     ControlJob, ConvertJob, IblJob, IrradianceJob, Job, LutJob, LutKind, PrefilterJob, PreviewJob,
     Progress, Quality, Report, Warning,

@@ -3,7 +3,7 @@
 
 use cubeforge::control::Size;
 use cubeforge::io::GpuFormat;
-use cubeforge::{ControlJob, Job, Result};
+use cubeforge::{ControlJob, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -95,9 +95,7 @@ pub fn job(a: Args) -> Result<ControlJob> {
     Ok(job)
 }
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
-    let job = job(a)?;
-    let observer = super::Observer::new(verbose);
-    let report = job.run(&observer)?;
-    observer.report(&report)
+pub fn run(a: Args, verbose: bool, depfile: Option<&std::path::Path>) -> Result<()> {
+    let output = a.output.clone();
+    super::execute(job(a)?, &output, verbose, depfile)
 }

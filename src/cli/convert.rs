@@ -4,7 +4,7 @@ use cubeforge::cube::Interp;
 use cubeforge::io::{FileFormat, GpuFormat, MapKind};
 use cubeforge::output;
 use cubeforge::resample::{Orientation, Resampler};
-use cubeforge::{ConvertJob, Destination, Job, Result};
+use cubeforge::{ConvertJob, Destination, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -119,9 +119,7 @@ pub fn job(a: Args) -> Result<ConvertJob> {
     Ok(job)
 }
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
-    let job = job(a)?;
-    let observer = super::Observer::new(verbose);
-    let report = job.run(&observer)?;
-    observer.report(&report)
+pub fn run(a: Args, verbose: bool, depfile: Option<&std::path::Path>) -> Result<()> {
+    let output = a.output.clone();
+    super::execute(job(a)?, &output, verbose, depfile)
 }

@@ -2,7 +2,7 @@
 
 use cubeforge::ibl::{Engine, IblOptions};
 use cubeforge::io::GpuFormat;
-use cubeforge::{IblJob, Job, Result};
+use cubeforge::{IblJob, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -94,9 +94,7 @@ pub fn job(a: Args) -> Result<IblJob> {
     Ok(job)
 }
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
-    let job = job(a)?;
-    let observer = super::Observer::new(verbose);
-    let report = job.run(&observer)?;
-    observer.report(&report)
+pub fn run(a: Args, verbose: bool, depfile: Option<&std::path::Path>) -> Result<()> {
+    let output = a.output.clone();
+    super::execute(job(a)?, &output, verbose, depfile)
 }

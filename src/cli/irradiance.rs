@@ -3,7 +3,7 @@
 use cubeforge::filter::IrradianceMethod;
 use cubeforge::io::{FileFormat, GpuFormat, MapKind};
 use cubeforge::output;
-use cubeforge::{Destination, IrradianceJob, Job, Result};
+use cubeforge::{Destination, IrradianceJob, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -77,9 +77,7 @@ pub fn job(a: Args) -> Result<IrradianceJob> {
     Ok(job)
 }
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
-    let job = job(a)?;
-    let observer = super::Observer::new(verbose);
-    let report = job.run(&observer)?;
-    observer.report(&report)
+pub fn run(a: Args, verbose: bool, depfile: Option<&std::path::Path>) -> Result<()> {
+    let output = a.output.clone();
+    super::execute(job(a)?, &output, verbose, depfile)
 }

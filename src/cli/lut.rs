@@ -3,7 +3,7 @@
 
 use cubeforge::jobs::LutKind;
 use cubeforge::lut;
-use cubeforge::{Job, LutJob, Result};
+use cubeforge::{LutJob, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -71,9 +71,7 @@ pub fn job(a: Args) -> Result<LutJob> {
     Ok(job)
 }
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
-    let job = job(a)?;
-    let observer = super::Observer::new(verbose);
-    let report = job.run(&observer)?;
-    observer.report(&report)
+pub fn run(a: Args, verbose: bool, depfile: Option<&std::path::Path>) -> Result<()> {
+    let output = a.output.clone();
+    super::execute(job(a)?, &output, verbose, depfile)
 }

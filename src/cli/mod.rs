@@ -42,6 +42,11 @@ pub struct Cli {
     /// Print errors only: no warnings, summaries or progress bars (for build scripts).
     #[arg(short, long, global = true, conflicts_with = "verbose")]
     pub quiet: bool,
+    /// Write a Make-style depfile at PATH: the output (as -o names it) and every file the
+    /// command read (inputs, faces, decals, recipes, materials, sidecars), for make, Ninja
+    /// and asset cookers.
+    #[arg(long, global = true, value_name = "PATH")]
+    pub depfile: Option<std::path::PathBuf>,
     #[command(subcommand)]
     pub command: Command,
 }
@@ -184,6 +189,31 @@ pub struct ToneArgs {
     /// float containers stay linear.
     #[arg(long, value_enum, default_value_t = Tonemap::None)]
     pub tonemap: Tonemap,
+}
+
+/// Runs a command's job and prints its report; with `--depfile`, then writes the depfile:
+/// `output` depends on every file the job read.
+pub fn execute(
+    mut job: impl cubeforge::Job,
+    output: &std::path::Path,
+    verbose: bool,
+    depfile: Option<&std::path::Path>,
+) -> cubeforge::Result<()> {
+    if depfile.is_some() && output == std::path::Path::new("-") {
+        return Err(cubeforge::Error::usage(
+            "--depfile needs -o FILE: standard output has no name for a depfile's target",
+        ));
+    }
+    let guard = depfile.map(|_| cubeforge::Session::open());
+    if let Some(g) = &guard {
+        job.limits_mut().session = g.session();
+    }
+    let observer = Observer::new(verbose);
+    let report = job.run(&observer)?;
+    if let (Some(path), Some(g)) = (depfile, &guard) {
+        cubeforge::batch::depfile::write(path, output, &g.session().take_reads())?;
+    }
+    observer.report(&report)
 }
 
 /// Times stages and prints them with -v.
@@ -467,16 +497,20 @@ pub fn run() -> i32 {
     };
     remove_temporaries_on_signals();
     QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
+    let (v, dep) = (cli.verbose, cli.depfile.as_deref());
     let result = match cli.command {
-        Command::Convert(a) => convert::run(a, cli.verbose),
+        Command::Convert(a) => convert::run(a, v, dep),
+        Command::Prefilter(a) => prefilter::run(a, v, dep),
+        Command::Irradiance(a) => irradiance::run(a, v, dep),
+        Command::Ibl(a) => ibl::run(a, v, dep),
+        Command::Lut(a) => lut::run(a, v, dep),
+        Command::Control(a) => control::run(a, v, dep),
+        Command::Preview(a) => preview::run(a, v, dep),
+        _ if dep.is_some() => Err(cubeforge::Error::usage(
+            "--depfile applies to commands that write a file (batch: --depfiles)",
+        )),
         Command::Info(a) => info::run(a),
-        Command::Prefilter(a) => prefilter::run(a, cli.verbose),
-        Command::Irradiance(a) => irradiance::run(a, cli.verbose),
-        Command::Ibl(a) => ibl::run(a, cli.verbose),
-        Command::Lut(a) => lut::run(a, cli.verbose),
-        Command::Control(a) => control::run(a, cli.verbose),
-        Command::Preview(a) => preview::run(a, cli.verbose),
-        Command::Batch(a) => batch::run(a, cli.verbose),
+        Command::Batch(a) => batch::run(a, v),
         Command::Completions(a) => completions::run(a),
         Command::Man(a) => man::run(a),
         Command::Fixtures(a) => fixtures::run(a),

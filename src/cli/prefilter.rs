@@ -2,7 +2,7 @@
 
 use cubeforge::filter::{self, ChainOptions, FilterKind, LightingModel};
 use cubeforge::io::{FileFormat, GpuFormat};
-use cubeforge::{Destination, Error, Job, PrefilterJob, Result};
+use cubeforge::{Destination, Error, PrefilterJob, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -108,9 +108,7 @@ pub fn job(a: Args) -> Result<PrefilterJob> {
     Ok(job)
 }
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
-    let job = job(a)?;
-    let observer = super::Observer::new(verbose);
-    let report = job.run(&observer)?;
-    observer.report(&report)
+pub fn run(a: Args, verbose: bool, depfile: Option<&std::path::Path>) -> Result<()> {
+    let output = a.output.clone();
+    super::execute(job(a)?, &output, verbose, depfile)
 }

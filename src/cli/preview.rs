@@ -8,7 +8,7 @@ use cubeforge::layout::Kind;
 use cubeforge::preview::material;
 use cubeforge::preview::{Background, Options, Parallax, ParallaxMode, Shading};
 use cubeforge::tonemap::Tonemap;
-use cubeforge::{Error, Job, PreviewJob, Result};
+use cubeforge::{Error, PreviewJob, Result};
 use glam::{Vec3, Vec4};
 use std::path::PathBuf;
 
@@ -229,12 +229,10 @@ pub fn job(a: Args) -> Result<PreviewJob> {
     Ok(job)
 }
 
-pub fn run(a: Args, verbose: bool) -> Result<()> {
+pub fn run(a: Args, verbose: bool, depfile: Option<&std::path::Path>) -> Result<()> {
     if a.material == "list" {
         return super::say(material::list().trim_end());
     }
-    let job = job(a)?;
-    let observer = super::Observer::new(verbose);
-    let report = job.run(&observer)?;
-    observer.report(&report)
+    let output = a.output.clone().unwrap_or_default();
+    super::execute(job(a)?, &output, verbose, depfile)
 }

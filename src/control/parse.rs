@@ -44,6 +44,7 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Recipe> {
             format!("{len} bytes is too long for a recipe (at most {MAX_RECIPE_BYTES})"),
         ));
     }
+    limits.session.note(path);
     let text =
         String::from_utf8(io::read_file(path)?).map_err(|_| Error::file(path, "not UTF-8 text"))?;
     let base = path

@@ -260,7 +260,20 @@ commands.spawn((
 }
 
 /// A 16-bit linear PNG of a lookup table (`charlie`: the sheen table, else the GGX DFG).
+/// Each table depends on nothing and takes a quarter of a second: made once per process, so a
+/// batch's glTF and Three.js jobs share it.
 fn lut_png(path: &Path, charlie: bool) -> Result<Vec<u8>> {
+    static MADE: [std::sync::OnceLock<Vec<u8>>; 2] =
+        [std::sync::OnceLock::new(), std::sync::OnceLock::new()];
+    let made = &MADE[usize::from(charlie)];
+    if let Some(bytes) = made.get() {
+        return Ok(bytes.clone());
+    }
+    let bytes = make_lut_png(path, charlie)?;
+    Ok(made.get_or_init(|| bytes).clone())
+}
+
+fn make_lut_png(path: &Path, charlie: bool) -> Result<Vec<u8>> {
     let opts = crate::lut::LutOptions::default();
     let img = if charlie {
         crate::lut::charlie(crate::lut::DEFAULT_SIZE, &opts)

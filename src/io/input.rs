@@ -77,6 +77,7 @@ pub(crate) fn regular_file(path: &Path) -> Result<std::fs::Metadata> {
 /// with the name errors should give.
 pub(super) fn read_input<'a>(path: &'a Path, limits: &Limits) -> Result<(Vec<u8>, &'a Path)> {
     if path != Path::new("-") {
+        limits.session.note(path);
         return Ok((read_file(path)?, path));
     }
     use std::io::Read;
@@ -120,6 +121,7 @@ pub fn claim(path: &Path, opts: &ReadOptions) -> Result<Option<Claim>> {
         return Ok(None);
     }
     let len = regular_file(path)?.len();
+    opts.limits.session.note(path);
     // Every header cubeforge reads fits in its first MiB; one that does not (a JPEG's size
     // after large metadata) is read whole.
     const HEAD: u64 = 1 << 20;

@@ -68,6 +68,9 @@ pub struct Limits {
     /// Bytes a command may plan to use (default: half of what this process may use: the
     /// machine's memory, a container's limit or an address-space cap, whichever is least).
     pub max_memory: u64,
+    /// Where reads are recorded and decoded inputs shared ([`super::Session`]; the default
+    /// records nothing).
+    pub session: super::Session,
 }
 
 /// Half the memory this process may have: the default memory budget. That is the machine's
@@ -116,6 +119,7 @@ impl Default for Limits {
             max_pixels: 32768 * 16384,
             max_dimension: 65536,
             max_memory: default_memory_budget(),
+            session: Default::default(),
         }
     }
 }

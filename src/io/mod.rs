@@ -17,6 +17,7 @@ mod limits;
 mod map_kind;
 pub mod raster;
 pub mod rgbe;
+mod session;
 
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
@@ -36,6 +37,7 @@ pub(crate) use input::{read_file, regular_file};
 pub use limits::{Claim, Limits};
 pub use map_kind::{Container, MapKind};
 pub use range::{clamp_warning, clamp_warning_with, count_out_of_range, largest_value};
+pub use session::{Session, SessionGuard};
 
 /// File formats, told apart by their content (TGA, which has no signature, by its name).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -277,6 +279,21 @@ pub struct ReadOptions {
 /// Reads any supported file and replaces NaN, infinite and negative values by 0, counting
 /// them in `Meta::replaced_values`.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
+    let session = opts.limits.session;
+    if let Some(kept) = session.cached(path, opts.linear, opts.as_stored) {
+        session.note(path);
+        return Ok((*kept).clone());
+    }
+    let read = read_sanitized(path, opts)?;
+    if path != Path::new("-") && session.shares() {
+        let kept = std::sync::Arc::new(read);
+        session.keep(path, opts.linear, opts.as_stored, kept.clone());
+        return Ok((*kept).clone());
+    }
+    Ok(read)
+}
+
+fn read_sanitized(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     let (decoded, mut meta) = read_with(path, opts, !opts.as_stored)?;
     if opts.as_stored {
         return Ok((decoded, meta));
@@ -433,6 +450,7 @@ pub fn container_psnr(bytes: &[u8], format: GpuFormat, original: &[&Image]) -> O
         max_pixels: u64::MAX,
         max_dimension: u32::MAX,
         max_memory: u64::MAX,
+        session: Default::default(),
     };
     let (decoded, _) = match FileFormat::from_magic(bytes)? {
         FileFormat::Ktx2 => ktx2::decode(bytes, name, &limits).ok()?,

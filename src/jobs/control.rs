@@ -223,6 +223,10 @@ impl Job for ControlJob {
             quality,
         })
     }
+
+    fn limits_mut(&mut self) -> &mut crate::io::Limits {
+        &mut self.limits
+    }
 }
 
 /// `mask.png` -> `mask.png.json`.

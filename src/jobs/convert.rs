@@ -284,4 +284,8 @@ impl Job for ConvertJob {
             quality,
         })
     }
+
+    fn limits_mut(&mut self) -> &mut crate::io::Limits {
+        &mut self.read.limits
+    }
 }

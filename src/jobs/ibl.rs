@@ -196,6 +196,10 @@ impl Job for IblJob {
             quality,
         })
     }
+
+    fn limits_mut(&mut self) -> &mut crate::io::Limits {
+        &mut self.read.limits
+    }
 }
 
 /// The power of two nearest `n` (in ratio: 724 -> 512, 725 -> 1024), at least 1.

@@ -222,4 +222,8 @@ impl Job for IrradianceJob {
             quality,
         })
     }
+
+    fn limits_mut(&mut self) -> &mut crate::io::Limits {
+        &mut self.read.limits
+    }
 }

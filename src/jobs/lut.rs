@@ -174,4 +174,8 @@ impl Job for LutJob {
             quality: None,
         })
     }
+
+    fn limits_mut(&mut self) -> &mut crate::io::Limits {
+        &mut self.limits
+    }
 }

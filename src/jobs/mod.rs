@@ -64,6 +64,9 @@ pub trait Job {
     fn memory_estimate(&self) -> Result<u64>;
     /// Does the work and writes the result.
     fn run(&self, progress: &dyn Progress) -> Result<Report>;
+    /// The limits every read of the job obeys: a front end sets their budget, or their
+    /// [`crate::io::Session`] to learn what the job read and share decoded inputs.
+    fn limits_mut(&mut self) -> &mut crate::io::Limits;
 }
 
 /// Collects warnings for the report and tells them to the observer at once.

@@ -282,6 +282,10 @@ impl Job for PrefilterJob {
             quality,
         })
     }
+
+    fn limits_mut(&mut self) -> &mut crate::io::Limits {
+        &mut self.read.limits
+    }
 }
 
 /// One level as the report lists it: its size, its lobe and how it was summed.

@@ -47,7 +47,7 @@ pub fn load_environment(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> 
     let (cube, levels) = match &loaded.source {
         Source::Cube(c) => {
             let levels = io::FileFormat::from_extension(path)
-                .and_then(|f| crate::chain::container_levels(path, f));
+                .and_then(|f| crate::chain::container_levels(path, f, opts.limits.session));
             (CubeSampler::new(c), levels)
         }
         Source::Projection(..) => {
@@ -116,6 +116,7 @@ pub fn read_control(
     let Some(side) = control_sidecar(path) else {
         return Ok((img, default_max, None));
     };
+    limits.session.note(&side);
     let text = String::from_utf8(io::read_file(&side)?)
         .map_err(|_| Error::file(&side, "not UTF-8 text"))?;
     let json: serde_json::Value = serde_json::from_str(&text)

@@ -13,6 +13,7 @@ fn generous() -> Limits {
         max_pixels: 1 << 30,
         max_dimension: 1 << 16,
         max_memory: u64::MAX,
+        ..Limits::default()
     }
 }
 

@@ -18,6 +18,7 @@ pub fn limits() -> Limits {
         max_pixels: 1 << 20,
         max_dimension: 1 << 14,
         max_memory: 64 << 20,
+        ..Limits::default()
     }
 }
 

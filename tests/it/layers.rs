@@ -7,7 +7,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// Each top-level module's rank, lowest first: image -> cube and layout -> filter and flux ->
-/// io (codecs) -> convert -> output -> chain -> ibl, info -> preview -> jobs (the commands).
+/// io (codecs) -> convert -> output -> chain -> ibl, info -> preview -> jobs (the commands) -> batch.
 const RANKS: &[(&str, u32)] = &[
     ("alloc", 0),
     ("simd", 0),
@@ -31,6 +31,7 @@ const RANKS: &[(&str, u32)] = &[
     ("info", 8),
     ("preview", 9),
     ("jobs", 10),
+    ("batch", 11),
 ];
 
 /// Imports upward, still to be moved (issue 27): none left. An entry names the importing

@@ -110,7 +110,10 @@ impl PreviewJob {
         } else {
             self.grid.iter().collect()
         };
-        specs.iter().map(|s| material::resolve(s.trim())).collect()
+        specs
+            .iter()
+            .map(|s| material::resolve(s.trim(), self.limits.session))
+            .collect()
     }
 
     /// Pictures in the sheet.
@@ -321,6 +324,10 @@ impl Job for PreviewJob {
             summary: Vec::new(),
             quality: None,
         })
+    }
+
+    fn limits_mut(&mut self) -> &mut crate::io::Limits {
+        &mut self.limits
     }
 }
 

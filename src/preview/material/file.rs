@@ -223,7 +223,7 @@ pub fn parse_toml(text: &str, path: &Path) -> Result<Material> {
 }
 
 /// A material named on the command line: a preset, or a `.toml` file.
-pub fn resolve(spec: &str) -> Result<Material> {
+pub fn resolve(spec: &str, session: crate::io::Session) -> Result<Material> {
     if let Some(m) = preset(spec) {
         return Ok(m);
     }
@@ -242,6 +242,7 @@ pub fn resolve(spec: &str) -> Result<Material> {
         )));
     }
     let text = crate::io::read_file(path)?;
+    session.note(path);
     let text = String::from_utf8(text)
         .map_err(|_| Error::file(path, "a material file must be UTF-8 text (TOML)"))?;
     parse_toml(&text, path)

@@ -1,0 +1,217 @@
+//! Many jobs as one build step: the jobs of one input run one after another and share its
+//! decode; inputs run side by side within the memory budget; a job whose record in the state
+//! file says it read the same bytes with the same build, and whose outputs are all there, is
+//! skipped; a failing job does not stop the others; a shard runs a fixed part of the jobs.
+//! `cubeforge batch` builds the jobs from a manifest; a tool that embeds cubeforge builds
+//! them itself:
+//!
+//! ```
+//! use cubeforge::batch::{Batch, BatchJob};
+//! use cubeforge::{Destination, Job, PrefilterJob};
+//!
+//! # fn main() -> cubeforge::Result<()> {
+//! let dir = std::env::temp_dir().join(format!("cubeforge-doc-batch-{}", std::process::id()));
+//! std::fs::create_dir_all(&dir).ok();
+//! let out = dir.join("sky.ktx2");
+//! let job = PrefilterJob {
+//!     size: Some(32),
+//!     ..PrefilterJob::new(vec!["fixtures/sky.exr".into()], Destination::Path(out.clone()))
+//! };
+//! let batch = Batch {
+//!     state: Some(dir.join("state.json")),
+//!     ..Batch::new(vec![BatchJob::new("sky 32", Some("fixtures/sky.exr".into()), out, job)])
+//! };
+//! let first = batch.run(&|done| println!("{}", done.id))?;
+//! assert_eq!(first.ran(), 1);
+//! let batch = Batch {
+//!     state: Some(dir.join("state.json")),
+//!     ..Batch::new(vec![BatchJob::new("sky 32", Some("fixtures/sky.exr".into()), dir.join("sky.ktx2"), PrefilterJob {
+//!         size: Some(32),
+//!         ..PrefilterJob::new(vec!["fixtures/sky.exr".into()], Destination::Path(dir.join("sky.ktx2")))
+//!     })])
+//! };
+//! assert_eq!(batch.run(&|_| {})?.up_to_date(), 1); // nothing changed: nothing runs
+//! # std::fs::remove_dir_all(&dir).ok();
+//! # Ok(())
+//! # }
+//! ```
+
+pub mod depfile;
+mod state;
+
+pub use state::Why;
+
+use crate::error::{Error, Result};
+use crate::io::{Limits, Session};
+use crate::jobs::{Job, Report};
+use crate::output::{self, Destination, Files};
+use state::State;
+use std::path::PathBuf;
+
+/// One job of a batch.
+pub struct BatchJob {
+    /// Names the job in the state file and in reports: its command line, say. It must tell
+    /// the job's options apart: a job whose id changed has no record and runs.
+    pub id: String,
+    /// The input the job belongs to: the jobs of one input run together and decode it once
+    /// (None: a group of its own).
+    pub input: Option<PathBuf>,
+    /// The output as the job names it (a file or a folder): a depfile's target.
+    pub output: PathBuf,
+    /// The work.
+    pub job: Box<dyn Job + Send + Sync>,
+}
+
+impl BatchJob {
+    /// A job named `id` of `input`'s group, writing `output`.
+    pub fn new(
+        id: impl Into<String>,
+        input: Option<PathBuf>,
+        output: PathBuf,
+        job: impl Job + Send + Sync + 'static,
+    ) -> BatchJob {
+        BatchJob {
+            id: id.into(),
+            input,
+            output,
+            job: Box::new(job),
+        }
+    }
+}
+
+/// The `I`-th of `N` parts of a batch (from 0): the inputs, in order, dealt out in turn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This part, from 0.
+    pub index: usize,
+    /// How many parts.
+    pub count: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Shard, String> {
+        let bad = || format!("{s:?}: give I/N, the I-th of N shards counted from 0 (0/4 .. 3/4)");
+        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let (index, count) = (
+            i.trim().parse::<usize>().map_err(|_| bad())?,
+            n.trim().parse::<usize>().map_err(|_| bad())?,
+        );
+        if count == 0 || index >= count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+/// A batch of jobs and how to run them.
+pub struct Batch {
+    /// The jobs, in order.
+    pub jobs: Vec<BatchJob>,
+    /// The state file that makes reruns incremental (None: every job runs; nothing is kept).
+    pub state: Option<PathBuf>,
+    /// Runs every job, up to date or not.
+    pub force: bool,
+    /// Says what would run, and why, and runs nothing.
+    pub dry_run: bool,
+    /// Runs only this part of the jobs.
+    pub shard: Option<Shard>,
+    /// Writes `OUTPUT.d`, a Make-style depfile, beside each job's output.
+    pub depfiles: bool,
+    /// The budget of the jobs that run at once (each job still checks its own plan).
+    pub max_memory: u64,
+}
+
+impl Batch {
+    /// Runs `jobs`, every one, with this machine's memory budget.
+    pub fn new(jobs: Vec<BatchJob>) -> Batch {
+        Batch {
+            jobs,
+            state: None,
+            force: false,
+            dry_run: false,
+            shard: None,
+            depfiles: false,
+            max_memory: Limits::default().max_memory,
+        }
+    }
+}
+
+/// What became of one job.
+#[derive(Debug)]
+pub enum Outcome {
+    /// It ran, for this reason.
+    Ran(Why, Report),
+    /// Its outputs are up to date: it did not run.
+    UpToDate,
+    /// A dry run: it would run, for this reason.
+    WouldRun(Why),
+    /// It failed; its outputs are as they were.
+    Failed(Error),
+}
+
+/// One job's end.
+#[derive(Debug)]
+pub struct Done {
+    /// The job's id.
+    pub id: String,
+    /// What became of it.
+    pub outcome: Outcome,
+    /// Seconds it took.
+    pub seconds: f64,
+}
+
+/// What a batch did.
+#[derive(Debug, Default)]
+pub struct BatchReport {
+    /// Each job of this shard, in the batch's order.
+    pub jobs: Vec<Done>,
+    /// Jobs left to the other shards.
+    pub other_shards: usize,
+    /// Things to know: a state file that could not be read, say.
+    pub warnings: Vec<crate::jobs::Warning>,
+}
+
+impl BatchReport {
+    fn count(&self, f: impl Fn(&Outcome) -> bool) -> usize {
+        self.jobs.iter().filter(|d| f(&d.outcome)).count()
+    }
+    /// Jobs that ran.
+    pub fn ran(&self) -> usize {
+        self.count(|o| matches!(o, Outcome::Ran(..)))
+    }
+    /// Jobs skipped as up to date.
+    pub fn up_to_date(&self) -> usize {
+        self.count(|o| matches!(o, Outcome::UpToDate))
+    }
+    /// Jobs that a dry run would run.
+    pub fn would_run(&self) -> usize {
+        self.count(|o| matches!(o, Outcome::WouldRun(_)))
+    }
+    /// Jobs that failed.
+    pub fn failed(&self) -> usize {
+        self.count(|o| matches!(o, Outcome::Failed(_)))
+    }
+}
+
+mod run;
+
+impl Batch {
+    /// Runs the batch, telling `on_done` of each job as it ends (from any thread), and
+    /// returns what became of every job. An error is the batch's own (its state file could
+    /// not be written); the jobs' errors are in the report.
+    pub fn run(self, on_done: &(dyn Fn(&Done) + Sync)) -> Result<BatchReport> {
+        run::run(self, on_done)
+    }
+}
+
+/// Writes the state file (through the output module: atomically).
+fn save(path: &std::path::Path, state: &State) -> Result<()> {
+    let files = Files::new(vec![(path.to_path_buf(), state.to_bytes()?)]);
+    output::deliver(&files, &Destination::Path(path.to_path_buf()), &[])
+}
+
+/// The session that records a job's reads and shares its group's decodes.
+fn share(job: &mut dyn Job, session: Session) {
+    job.limits_mut().session = session;
+}

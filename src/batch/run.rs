@@ -1,0 +1,235 @@
+//! Running a batch: which jobs run and why, inputs side by side within the budget, the jobs
+//! of one input in turn over its one decode, and the state file brought up to date.
+
+use super::state::{self, Hashes, Record, State, Why};
+use super::{depfile, save, share, Batch, BatchJob, BatchReport, Done, Outcome};
+use crate::error::{Error, Result};
+use crate::io::Session;
+use std::collections::{BTreeMap, HashSet};
+use std::path::PathBuf;
+use std::sync::{Condvar, Mutex};
+use std::time::Instant;
+
+/// The jobs of one input, by index.
+type Group = Vec<usize>;
+
+/// The jobs' groups in order of first appearance: one per input, one per job without one.
+fn groups(jobs: &[BatchJob]) -> Vec<Group> {
+    let mut out: Vec<(Option<&PathBuf>, Group)> = Vec::new();
+    for (i, j) in jobs.iter().enumerate() {
+        let same = j
+            .input
+            .as_ref()
+            .and_then(|inp| out.iter().position(|(k, _)| *k == Some(inp)));
+        match same {
+            Some(g) => out[g].1.push(i),
+            None => out.push((j.input.as_ref(), vec![i])),
+        }
+    }
+    out.into_iter().map(|(_, g)| g).collect()
+}
+
+/// Two jobs with one id, or writing one output, are a mistake in the batch.
+fn check_unique(jobs: &[BatchJob]) -> Result<()> {
+    let mut ids = HashSet::new();
+    let mut outputs = BTreeMap::new();
+    for j in jobs {
+        if !ids.insert(j.id.as_str()) {
+            return Err(Error::usage(format!("two jobs are one: {}", j.id)));
+        }
+        if let Some(other) = outputs.insert(j.output.clone(), j.id.as_str()) {
+            return Err(Error::usage(format!(
+                "two jobs write {}: {other} and {}",
+                j.output.display(),
+                j.id
+            )));
+        }
+    }
+    Ok(())
+}
+
+pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<BatchReport> {
+    check_unique(&batch.jobs)?;
+    let mut report = BatchReport::default();
+    let (mut state, warning) = match &batch.state {
+        Some(p) => State::load(p),
+        None => (State::default(), None),
+    };
+    report
+        .warnings
+        .extend(warning.map(crate::jobs::Warning::new));
+    let mine: Vec<Group> = groups(&batch.jobs)
+        .into_iter()
+        .enumerate()
+        .filter(|(g, jobs)| {
+            let keep = batch.shard.is_none_or(|s| g % s.count == s.index);
+            if !keep {
+                report.other_shards += jobs.len();
+            }
+            keep
+        })
+        .map(|(_, jobs)| jobs)
+        .collect();
+    let hashes = Hashes::default();
+    // For each job of this shard: why it runs (None: up to date).
+    let mut whys: Vec<Option<Option<Why>>> = vec![None; batch.jobs.len()];
+    for &i in mine.iter().flatten() {
+        whys[i] = Some(if batch.force {
+            Some(Why::Forced)
+        } else if batch.state.is_none() {
+            Some(Why::NeverRan)
+        } else {
+            state::why(
+                &batch.jobs[i].id,
+                state.jobs.get(&batch.jobs[i].id),
+                &hashes,
+            )
+        });
+    }
+    let ids: Vec<String> = batch.jobs.iter().map(|j| j.id.clone()).collect();
+    let outputs: Vec<PathBuf> = batch.jobs.iter().map(|j| j.output.clone()).collect();
+    let slots: Vec<Mutex<Option<Done>>> = ids.iter().map(|_| Mutex::new(None)).collect();
+    let finish = |i: usize, outcome: Outcome, seconds: f64| {
+        let done = Done {
+            id: ids[i].clone(),
+            outcome,
+            seconds,
+        };
+        on_done(&done);
+        *slots[i].lock().unwrap_or_else(|e| e.into_inner()) = Some(done);
+    };
+    // Up-to-date jobs (and a dry run's every job) end at once.
+    let mut todo: Vec<Group> = Vec::new();
+    for g in &mine {
+        let run: Group = g
+            .iter()
+            .copied()
+            .filter(|&i| match whys[i].clone().flatten() {
+                None => {
+                    finish(i, Outcome::UpToDate, 0.0);
+                    false
+                }
+                Some(w) if batch.dry_run => {
+                    finish(i, Outcome::WouldRun(w), 0.0);
+                    false
+                }
+                Some(_) => true,
+            })
+            .collect();
+        if !run.is_empty() {
+            todo.push(run);
+        }
+    }
+    let records: Mutex<Vec<(String, Option<Record>)>> = Mutex::new(Vec::new());
+    let depfiles = batch.depfiles;
+    let jobs: Vec<Mutex<Option<BatchJob>>> = batch
+        .jobs
+        .into_iter()
+        .map(|j| Mutex::new(Some(j)))
+        .collect();
+    // Each group's peak: its largest job, and the decode the group keeps beside it.
+    let bytes: Vec<u64> = todo
+        .iter()
+        .map(|g| {
+            let most = g
+                .iter()
+                .filter_map(|&i| {
+                    let j = jobs[i].lock().unwrap_or_else(|e| e.into_inner());
+                    j.as_ref()?.job.memory_estimate().ok()
+                })
+                .max()
+                .unwrap_or(0);
+            if g.len() > 1 {
+                most.saturating_mul(2)
+            } else {
+                most
+            }
+        })
+        .collect();
+    let queue = Mutex::new((0usize, 0u64));
+    let freed = Condvar::new();
+    let workers = rayon::current_num_threads().clamp(1, todo.len().max(1));
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| loop {
+                let (g, held) = {
+                    let mut q = queue.lock().unwrap_or_else(|e| e.into_inner());
+                    loop {
+                        if q.0 >= todo.len() {
+                            return;
+                        }
+                        let b = bytes[q.0];
+                        if q.1 == 0 || q.1.saturating_add(b) <= batch.max_memory {
+                            q.0 += 1;
+                            q.1 = q.1.saturating_add(b);
+                            break (q.0 - 1, b);
+                        }
+                        q = freed.wait(q).unwrap_or_else(|e| e.into_inner());
+                    }
+                };
+                let guard = if todo[g].len() > 1 {
+                    Session::open_shared()
+                } else {
+                    Session::open()
+                };
+                for &i in &todo[g] {
+                    let Some(mut bj) = jobs[i].lock().unwrap_or_else(|e| e.into_inner()).take()
+                    else {
+                        continue;
+                    };
+                    share(bj.job.as_mut(), guard.session());
+                    let start = Instant::now();
+                    let ran =
+                        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bj.job.run(&())))
+                            .unwrap_or_else(|_| {
+                                Err(Error::usage("the job stopped on an internal error"))
+                            });
+                    let reads = guard.session().take_reads();
+                    let ran = ran.and_then(|report| {
+                        for p in &report.written {
+                            hashes.forget(p);
+                        }
+                        if depfiles {
+                            let d = depfile::beside(&outputs[i]);
+                            depfile::write(&d, &outputs[i], &reads)?;
+                        }
+                        Ok(report)
+                    });
+                    let (outcome, record) = match ran {
+                        Ok(report) => {
+                            let r = state::record(&ids[i], reads, report.written.clone(), &hashes);
+                            let why = whys[i].clone().flatten().unwrap_or(Why::NeverRan);
+                            (Outcome::Ran(why, report), r)
+                        }
+                        Err(e) => (Outcome::Failed(e), None),
+                    };
+                    records
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .push((ids[i].clone(), record));
+                    finish(i, outcome, start.elapsed().as_secs_f64());
+                }
+                drop(guard);
+                let mut q = queue.lock().unwrap_or_else(|e| e.into_inner());
+                q.1 = q.1.saturating_sub(held);
+                freed.notify_all();
+            });
+        }
+    });
+    report.jobs = slots
+        .into_iter()
+        .filter_map(|s| s.into_inner().unwrap_or_else(|e| e.into_inner()))
+        .collect();
+    if let (Some(path), false) = (&batch.state, batch.dry_run) {
+        for (id, record) in records.into_inner().unwrap_or_else(|e| e.into_inner()) {
+            match record {
+                Some(r) => state.jobs.insert(id, r),
+                None => state.jobs.remove(&id),
+            };
+        }
+        let known: HashSet<&String> = ids.iter().collect();
+        state.jobs.retain(|id, _| known.contains(id));
+        save(path, &state)?;
+    }
+    Ok(report)
+}

@@ -1,0 +1,217 @@
+//! The state file: for each job that ran, the cubeforge build that ran it, every file it read
+//! with a hash of its bytes, and the files it wrote. A job is up to date when its record says
+//! the same build read the same bytes and its outputs are all still there. The file is JSON,
+//! written whole (atomically) at the end of a batch; deleting it only makes the next batch
+//! run everything.
+
+use crate::error::{Error, Result};
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+use xxhash_rust::xxh3::Xxh3;
+
+/// The state file's format version: a record of another version is not trusted.
+const FORMAT: u32 = 1;
+
+/// What one job's last successful run read and wrote.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, PartialEq)]
+pub(crate) struct Record {
+    /// The hash of the build, the job's id and every (file, bytes' hash) it read.
+    pub key: String,
+    /// The cubeforge build that ran it.
+    pub cubeforge: String,
+    /// Each file read, in the order first read, with its bytes' hash.
+    pub reads: Vec<(PathBuf, String)>,
+    /// The files written.
+    pub outputs: Vec<PathBuf>,
+}
+
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
+pub(crate) struct State {
+    format: u32,
+    pub jobs: BTreeMap<String, Record>,
+}
+
+/// Why a job runs.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Why {
+    /// `--force`.
+    Forced,
+    /// No record of a run with these options (a new job, or its last run failed).
+    NeverRan,
+    /// A file it wrote is gone.
+    OutputMissing(PathBuf),
+    /// A file it read changed (or is gone).
+    Changed(PathBuf),
+    /// Another cubeforge build ran it.
+    NewBuild,
+}
+
+impl std::fmt::Display for Why {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Why::Forced => write!(f, "--force"),
+            Why::NeverRan => write!(f, "no record of a run with these options"),
+            Why::OutputMissing(p) => write!(f, "{} is missing", p.display()),
+            Why::Changed(p) => write!(f, "{} changed", p.display()),
+            Why::NewBuild => write!(f, "another cubeforge build ran it"),
+        }
+    }
+}
+
+impl State {
+    /// The state in `path`; an absent, unreadable or foreign file is an empty state (and
+    /// the warning that says so, unless it is simply absent).
+    pub fn load(path: &Path) -> (State, Option<String>) {
+        let bytes = match std::fs::read(path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return (State::default(), None),
+            Err(e) => {
+                let w = format!("{}: {e}; every job runs", path.display());
+                return (State::default(), Some(w));
+            }
+        };
+        match serde_json::from_slice::<State>(&bytes) {
+            Ok(s) if s.format == FORMAT => (s, None),
+            _ => (
+                State::default(),
+                Some(format!(
+                    "{}: not a cubeforge state file of this version; every job runs",
+                    path.display()
+                )),
+            ),
+        }
+    }
+
+    /// The state's bytes: pretty JSON, jobs in id order.
+    pub fn to_bytes(&self) -> Result<Vec<u8>> {
+        let mut s = serde_json::to_vec_pretty(&State {
+            format: FORMAT,
+            jobs: self.jobs.clone(),
+        })
+        .map_err(|e| Error::usage(format!("cannot write the state file: {e}")))?;
+        s.push(b'\n');
+        Ok(s)
+    }
+}
+
+/// Hashes of files' bytes, each file read once per batch.
+#[derive(Default)]
+pub(crate) struct Hashes(std::sync::Mutex<HashMap<PathBuf, Option<String>>>);
+
+impl Hashes {
+    /// The hash of `path`'s bytes (None when it cannot be read).
+    pub fn of(&self, path: &Path) -> Option<String> {
+        if let Some(h) = self.0.lock().unwrap_or_else(|e| e.into_inner()).get(path) {
+            return h.clone();
+        }
+        let h = hash_file(path);
+        self.0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .insert(path.to_path_buf(), h.clone());
+        h
+    }
+
+    /// Forgets `path`'s hash (a job may have rewritten it).
+    pub fn forget(&self, path: &Path) {
+        self.0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .remove(path);
+    }
+}
+
+fn hash_file(path: &Path) -> Option<String> {
+    use std::io::Read;
+    let mut f = std::fs::File::open(path).ok()?;
+    if !f.metadata().ok()?.is_file() {
+        return None;
+    }
+    let mut h = Xxh3::new();
+    let mut buf = vec![0u8; 1 << 20];
+    loop {
+        let n = f.read(&mut buf).ok()?;
+        if n == 0 {
+            break;
+        }
+        h.update(&buf[..n]);
+    }
+    Some(format!("{:032x}", h.digest128()))
+}
+
+/// The cubeforge build: its version, and the size and time of the program that runs it (a
+/// rebuilt cubeforge may write other bytes under the same version).
+pub(crate) fn build() -> &'static str {
+    static BUILD: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    BUILD.get_or_init(|| {
+        let stamp = std::env::current_exe()
+            .and_then(std::fs::metadata)
+            .ok()
+            .map(|m| {
+                let t = m
+                    .modified()
+                    .ok()
+                    .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+                    .map_or(0, |d| d.as_nanos());
+                format!(" {}-{t}", m.len())
+            })
+            .unwrap_or_default();
+        format!("{}{stamp}", env!("CARGO_PKG_VERSION"))
+    })
+}
+
+/// The key of a job `id` run by `build` that read `reads`.
+pub(crate) fn key(build: &str, id: &str, reads: &[(PathBuf, String)]) -> String {
+    let mut h = Xxh3::new();
+    for part in [build, id] {
+        h.update(&(part.len() as u64).to_le_bytes());
+        h.update(part.as_bytes());
+    }
+    for (path, hash) in reads {
+        let p = path.to_string_lossy();
+        h.update(&(p.len() as u64).to_le_bytes());
+        h.update(p.as_bytes());
+        h.update(hash.as_bytes());
+    }
+    format!("{:032x}", h.digest128())
+}
+
+/// Why the job `id` must run, given its last record (None: it is up to date).
+pub(crate) fn why(id: &str, record: Option<&Record>, hashes: &Hashes) -> Option<Why> {
+    let Some(r) = record else {
+        return Some(Why::NeverRan);
+    };
+    if r.cubeforge != build() {
+        return Some(Why::NewBuild);
+    }
+    if let Some(p) = r.outputs.iter().find(|p| !p.exists()) {
+        return Some(Why::OutputMissing(p.clone()));
+    }
+    for (path, hash) in &r.reads {
+        if hashes.of(path).as_deref() != Some(hash.as_str()) {
+            return Some(Why::Changed(path.clone()));
+        }
+    }
+    // A record edited by hand (or of another job) is not trusted.
+    (key(build(), id, &r.reads) != r.key).then_some(Why::NeverRan)
+}
+
+/// The record of a run of `id` that read `reads` and wrote `outputs`; None when a file it read
+/// cannot be hashed now (gone already: the next batch runs the job again).
+pub(crate) fn record(
+    id: &str,
+    reads: Vec<PathBuf>,
+    outputs: Vec<PathBuf>,
+    hashes: &Hashes,
+) -> Option<Record> {
+    let reads: Vec<(PathBuf, String)> = reads
+        .into_iter()
+        .map(|p| hashes.of(&p).map(|h| (p, h)))
+        .collect::<Option<_>>()?;
+    Some(Record {
+        key: key(build(), id, &reads),
+        cubeforge: build().to_owned(),
+        reads,
+        outputs,
+    })
+}

@@ -1,0 +1,240 @@
+//! `cubeforge batch`: a manifest of jobs over many inputs, each built from its command's own
+//! flags exactly as that command line would be, run by the library's [`cubeforge::batch`]
+//! (inputs side by side, each decoded once, incremental through a state file, sharded), or
+//! written out as a `build.ninja` for Ninja to run.
+
+mod manifest;
+mod ninja;
+
+use super::{Cli, Command};
+use cubeforge::batch::{Batch, BatchJob, Done, Outcome, Shard};
+use cubeforge::{Error, Job, Result};
+use manifest::Planned;
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args, Debug)]
+#[command(after_help = EXAMPLES)]
+pub struct Args {
+    /// The manifest (TOML): `[[job]]` tables of `inputs` (paths or globs), `command`, `args`
+    /// and `output` (with {stem}, {name} and {dir} of each input); paths relative to it.
+    pub manifest: PathBuf,
+    /// Print what would run and why (and what is up to date); run nothing.
+    #[arg(long)]
+    pub dry_run: bool,
+    /// Run every job, up to date or not.
+    #[arg(long)]
+    pub force: bool,
+    /// Run the I-th of N parts (from 0), the inputs dealt out in turn: each machine of a CI
+    /// matrix or array job passes its index.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<Shard>,
+    /// Write a Make-style depfile beside each job's output (OUTPUT.d): the files it read.
+    #[arg(long)]
+    pub depfiles: bool,
+    /// Write a build file for another runner instead of running: `ninja` writes build.ninja
+    /// beside the manifest (an edge per job, with depfiles).
+    #[arg(long, value_enum, value_name = "RUNNER")]
+    pub emit: Option<Emit>,
+    #[command(flatten)]
+    pub memory: super::MemoryArg,
+}
+
+/// Build files `--emit` writes.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum Emit {
+    /// build.ninja: `ninja -j N` runs the jobs, rebuilding what changed.
+    Ninja,
+}
+
+const EXAMPLES: &str = "\
+Examples (assets.toml: [[job]] inputs = [\"hdri/*.exr\"], command = \"ibl\",
+args = [\"--target\", \"bevy\"], output = \"build/{stem}/bevy\"):
+  # run what changed since the last run (assets.state.json keeps what each job read)
+  cubeforge batch assets.toml
+  # what would run, and why
+  cubeforge batch assets.toml --dry-run
+  # this machine's third of the jobs (CI matrix, Slurm array, Kubernetes Indexed Job)
+  cubeforge batch assets.toml --shard 2/3
+  # a build.ninja beside the manifest, for ninja -j 8
+  cubeforge batch assets.toml --emit ninja";
+
+/// The state file of `manifest` (and of a shard, which keeps its own).
+fn state_path(manifest: &Path, shard: Option<Shard>) -> PathBuf {
+    let stem = manifest
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "batch".into());
+    let name = match shard {
+        Some(s) => format!("{stem}.shard-{}-of-{}.state.json", s.index, s.count),
+        None => format!("{stem}.state.json"),
+    };
+    PathBuf::from(name)
+}
+
+/// The job a command line describes, built by that command's own flags.
+fn job_of(argv: &[String]) -> Result<Box<dyn Job + Send + Sync>> {
+    let cli = <Cli as clap::Parser>::try_parse_from(
+        std::iter::once("cubeforge".to_owned()).chain(argv.iter().cloned()),
+    )
+    .map_err(|e| Error::usage(super::one_line(&e)))?;
+    if cli.depfile.is_some() {
+        return Err(Error::usage(
+            "--depfile in a manifest's args: give batch --depfiles (one beside each output)",
+        ));
+    }
+    Ok(match cli.command {
+        Command::Convert(a) => Box::new(super::convert::job(a)?),
+        Command::Prefilter(a) => Box::new(super::prefilter::job(a)?),
+        Command::Irradiance(a) => Box::new(super::irradiance::job(a)?),
+        Command::Ibl(a) => Box::new(super::ibl::job(a)?),
+        Command::Lut(a) => Box::new(super::lut::job(a)?),
+        Command::Control(a) => Box::new(super::control::job(a)?),
+        Command::Preview(a) => Box::new(super::preview::job(a)?),
+        _ => return Err(Error::usage("not a job")),
+    })
+}
+
+/// A job that cannot even be built (a bad flag) fails alone, as a job that runs and fails.
+struct Unbuilt(String, cubeforge::Limits);
+
+impl Job for Unbuilt {
+    fn validate(&self) -> Result<Vec<cubeforge::Warning>> {
+        Err(Error::usage(self.0.clone()))
+    }
+    fn memory_estimate(&self) -> Result<u64> {
+        Ok(0)
+    }
+    fn run(&self, _: &dyn cubeforge::Progress) -> Result<cubeforge::Report> {
+        Err(Error::usage(self.0.clone()))
+    }
+    fn limits_mut(&mut self) -> &mut cubeforge::Limits {
+        &mut self.1
+    }
+}
+
+pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let text = std::fs::read_to_string(&a.manifest).map_err(|e| Error::io(&a.manifest, e))?;
+    let name = PathBuf::from(a.manifest.file_name().unwrap_or(a.manifest.as_os_str()));
+    // Paths in the manifest (its globs included) are relative to it.
+    if let Some(dir) = a.manifest.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::env::set_current_dir(dir).map_err(|e| Error::io(dir, e))?;
+    }
+    let planned = manifest::plan(&a.manifest, &text)?;
+    if let Some(Emit::Ninja) = a.emit {
+        let out = ninja::write(&name, &planned)?;
+        return super::report(format!(
+            "batch: wrote {} ({} jobs): run ninja -C {}",
+            out.display(),
+            planned.len(),
+            a.manifest
+                .parent()
+                .filter(|d| !d.as_os_str().is_empty())
+                .map_or(".".into(), |d| d.display().to_string())
+        ));
+    }
+    let mut jobs = Vec::new();
+    for p in &planned {
+        let job: Box<dyn Job + Send + Sync> = match job_of(&p.argv) {
+            Ok(j) => j,
+            Err(e) => Box::new(Unbuilt(e.with_flags(), cubeforge::Limits::default())),
+        };
+        jobs.push(BatchJob {
+            id: p.line_text(),
+            input: p.input.clone(),
+            output: PathBuf::from(&p.output),
+            job,
+        });
+    }
+    let lines: std::collections::HashMap<String, usize> =
+        planned.iter().map(|p| (p.line_text(), p.line)).collect();
+    let batch = Batch {
+        state: Some(state_path(&name, a.shard)),
+        force: a.force,
+        dry_run: a.dry_run,
+        shard: a.shard,
+        depfiles: a.depfiles,
+        max_memory: a
+            .memory
+            .max_memory
+            .unwrap_or(cubeforge::Limits::default().max_memory),
+        ..Batch::new(jobs)
+    };
+    let start = std::time::Instant::now();
+    let tell = |d: &Done| {
+        show(
+            d,
+            verbose || a.dry_run,
+            lines.get(&d.id).copied().unwrap_or(0),
+        )
+    };
+    let report = batch.run(&tell)?;
+    for w in &report.warnings {
+        super::warn(w);
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let shards = if report.other_shards > 0 {
+        format!(", {} left to other shards", report.other_shards)
+    } else {
+        String::new()
+    };
+    let line = if a.dry_run {
+        format!(
+            "batch: {} jobs: {} would run, {} up to date{shards}",
+            report.jobs.len(),
+            report.would_run(),
+            report.up_to_date()
+        )
+    } else {
+        format!(
+            "batch: {} jobs: {} ran, {} up to date, {} failed{shards} ({seconds:.2} s)",
+            report.jobs.len(),
+            report.ran(),
+            report.up_to_date(),
+            report.failed()
+        )
+    };
+    super::report(line)?;
+    match report.failed() {
+        0 => Ok(()),
+        n => Err(Error::usage(format!(
+            "{n} of {} jobs failed",
+            report.jobs.len()
+        ))),
+    }
+}
+
+/// One job's end, in one line (and its warnings): a failure on standard error, the rest on
+/// standard output; up-to-date jobs only with -v.
+fn show(d: &Done, verbose: bool, line: usize) {
+    let id = &d.id;
+    match &d.outcome {
+        Outcome::Ran(_, report) => {
+            for w in &report.warnings {
+                super::warn(format_args!("{id}: {w}"));
+            }
+            let _ = super::report(format!("ran         cubeforge {id} ({:.2} s)", d.seconds));
+        }
+        Outcome::UpToDate if verbose => {
+            let _ = super::report(format!("up to date  cubeforge {id}"));
+        }
+        Outcome::UpToDate => {}
+        Outcome::WouldRun(why) => {
+            let _ = super::report(format!("would run   cubeforge {id} ({why})"));
+        }
+        Outcome::Failed(e) => super::tell(format_args!(
+            "cubeforge: batch: failed: line {line}: cubeforge {id}: {}",
+            cubeforge::error::escape_text(&e.with_flags())
+        )),
+    }
+}
+
+impl Planned {
+    /// The job's command line after `cubeforge`, quoted for a shell: its id.
+    fn line_text(&self) -> String {
+        self.argv
+            .iter()
+            .map(|a| manifest::shell_quote(a))
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+}
