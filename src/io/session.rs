@@ -140,4 +140,29 @@ mod tests {
         Session::default().note(Path::new("d.exr"));
         assert!(Session::default().take_reads().is_empty());
     }
+
+    #[test]
+    fn a_shared_session_decodes_a_file_once() {
+        let t = tempfile::tempdir().unwrap();
+        let path = t.path().join("sky.exr");
+        std::fs::copy(
+            concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.exr"),
+            &path,
+        )
+        .unwrap();
+        let guard = Session::open_shared();
+        let mut opts = crate::io::ReadOptions::default();
+        opts.limits.session = guard.session();
+        let (first, _) = crate::io::read(&path, &opts).unwrap();
+        // Gone from the disk: the second job's read is the kept decode.
+        std::fs::remove_file(&path).unwrap();
+        let (again, _) = crate::io::read(&path, &opts).unwrap();
+        let (Decoded::Image(a), Decoded::Image(b)) = (first, again) else {
+            panic!("images")
+        };
+        assert_eq!(a.pixels, b.pixels);
+        assert_eq!(guard.session().take_reads(), [path.clone()]);
+        drop(guard);
+        assert!(crate::io::read(&path, &opts).is_err());
+    }
 }

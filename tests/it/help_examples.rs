@@ -5,8 +5,8 @@
 //! completions bash)`, `cubeforge completions zsh > FILE`: the command ends at `)`, `|` or
 //! `>`). Every command has at least two. They run in order, each command's examples in a
 //! fresh folder holding only the inputs they name: `panorama.hdr` (the bundled demo sky as a
-//! Radiance file), `ball.exr` (a mirror ball of it) and `recipe.toml` (a bundled control
-//! recipe); no example may write an output (`-o`, `--sh`) that is an input or an earlier
+//! Radiance file), `ball.exr` (a mirror ball of it), `recipe.toml` (a bundled control
+//! recipe) and `assets.toml` (a batch manifest over panorama.hdr); no example may write an output (`-o`, `--sh`) that is an input or an earlier
 //! output.
 
 use std::path::Path;
@@ -104,6 +104,12 @@ fn every_help_example_runs() {
     std::fs::copy(
         repo.join("fixtures/control/chrome_and_paint.toml"),
         inputs.join("recipe.toml"),
+    )
+    .unwrap();
+    std::fs::write(
+        inputs.join("assets.toml"),
+        "[[job]]\ninputs = [\"*.hdr\"]\ncommand = \"ibl\"\nargs = [\"--target\", \"bevy\", \
+         \"--size\", \"16\"]\noutput = \"build/{stem}/bevy\"\n",
     )
     .unwrap();
 

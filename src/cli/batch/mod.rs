@@ -47,8 +47,7 @@ pub enum Emit {
 }
 
 const EXAMPLES: &str = "\
-Examples (assets.toml: [[job]] inputs = [\"hdri/*.exr\"], command = \"ibl\",
-args = [\"--target\", \"bevy\"], output = \"build/{stem}/bevy\"):
+Examples (assets.toml: [[job]] tables of inputs, command, args, output; docs/pipelines.md):
   # run what changed since the last run (assets.state.json keeps what each job read)
   cubeforge batch assets.toml
   # what would run, and why

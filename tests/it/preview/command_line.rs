@@ -50,7 +50,9 @@ fn material_files_parse_and_errors_name_the_file_and_line() {
         assert!(e.contains(needle), "{e} should say {needle}");
         assert!(!e.contains('\n'), "one line: {e}");
     }
-    let e = material::resolve("velvet", Default::default()).unwrap_err().to_string();
+    let e = material::resolve("velvet", Default::default())
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("unknown material") && e.contains("chrome"),
         "{e}"
