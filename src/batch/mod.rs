@@ -6,31 +6,34 @@
 //! them itself:
 //!
 //! ```
-//! use cubeforge::batch::{Batch, BatchJob};
-//! use cubeforge::{Destination, Job, PrefilterJob};
+//! use cubeforge::batch::{Batch, BatchJob, Outcome};
+//! use cubeforge::{Destination, PrefilterJob};
+//! use std::path::PathBuf;
 //!
 //! # fn main() -> cubeforge::Result<()> {
 //! let dir = std::env::temp_dir().join(format!("cubeforge-doc-batch-{}", std::process::id()));
 //! std::fs::create_dir_all(&dir).ok();
-//! let out = dir.join("sky.ktx2");
-//! let job = PrefilterJob {
-//!     size: Some(32),
-//!     ..PrefilterJob::new(vec!["fixtures/sky.exr".into()], Destination::Path(out.clone()))
+//! let input = PathBuf::from("fixtures/sky.exr");
+//! // Two chains of one panorama (decoded once), and what was run kept in a state file.
+//! let batch = || {
+//!     let jobs = [16, 32].map(|size| {
+//!         let out = dir.join(format!("sky{size}.ktx2"));
+//!         let job = PrefilterJob {
+//!             size: Some(size),
+//!             ..PrefilterJob::new(vec![input.clone()], Destination::Path(out.clone()))
+//!         };
+//!         BatchJob::new(format!("sky at {size} px"), Some(input.clone()), out, job)
+//!     });
+//!     Batch { state: Some(dir.join("state.json")), ..Batch::new(jobs.into()) }
 //! };
-//! let batch = Batch {
-//!     state: Some(dir.join("state.json")),
-//!     ..Batch::new(vec![BatchJob::new("sky 32", Some("fixtures/sky.exr".into()), out, job)])
-//! };
-//! let first = batch.run(&|done| println!("{}", done.id))?;
-//! assert_eq!(first.ran(), 1);
-//! let batch = Batch {
-//!     state: Some(dir.join("state.json")),
-//!     ..Batch::new(vec![BatchJob::new("sky 32", Some("fixtures/sky.exr".into()), dir.join("sky.ktx2"), PrefilterJob {
-//!         size: Some(32),
-//!         ..PrefilterJob::new(vec!["fixtures/sky.exr".into()], Destination::Path(dir.join("sky.ktx2")))
-//!     })])
-//! };
-//! assert_eq!(batch.run(&|_| {})?.up_to_date(), 1); // nothing changed: nothing runs
+//! let report = batch().run(&|done| {
+//!     if let Outcome::Failed(e) = &done.outcome {
+//!         eprintln!("{}: {e}", done.id);
+//!     }
+//! })?;
+//! assert_eq!(report.ran(), 2);
+//! // Nothing changed: nothing runs.
+//! assert_eq!(batch().run(&|_| {})?.up_to_date(), 2);
 //! # std::fs::remove_dir_all(&dir).ok();
 //! # Ok(())
 //! # }

@@ -106,7 +106,20 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
             .copied()
             .filter(|&i| match whys[i].clone().flatten() {
                 None => {
-                    finish(i, Outcome::UpToDate, 0.0);
+                    // An up-to-date job's depfile, when asked for and missing: from its record.
+                    let d = depfile::beside(&outputs[i]);
+                    let written = match state.jobs.get(&ids[i]) {
+                        Some(r) if batch.depfiles && !batch.dry_run && !d.exists() => {
+                            let reads: Vec<PathBuf> =
+                                r.reads.iter().map(|(p, _)| p.clone()).collect();
+                            depfile::write(&d, &outputs[i], &reads)
+                        }
+                        _ => Ok(()),
+                    };
+                    match written {
+                        Ok(()) => finish(i, Outcome::UpToDate, 0.0),
+                        Err(e) => finish(i, Outcome::Failed(e), 0.0),
+                    }
                     false
                 }
                 Some(w) if batch.dry_run => {

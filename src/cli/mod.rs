@@ -36,7 +36,8 @@ use std::time::Instant;
     after_help = EXAMPLES
 )]
 pub struct Cli {
-    /// Print the time each stage takes (decode, resample, encode, write).
+    /// Print the time each stage takes (decode, resample, encode, write); batch: the jobs
+    /// that are up to date too.
     #[arg(short, long, global = true)]
     pub verbose: bool,
     /// Print errors only: no warnings, summaries or progress bars (for build scripts).

@@ -5,7 +5,8 @@
 //! example (a trailing `\` continues it on the next line, `&&` chains commands, `#` starts a
 //! comment); lines that start with `cargo ` are set-up and are not run here. Any other line in an
 //! sh block is an error, so nothing there goes untested. The examples run with the built binary
-//! in a temporary folder that holds a copy of `fixtures/` and, when it exists, a link to
+//! in a temporary folder that holds a copy of `fixtures/`, a copy of `examples/` when it exists
+//! (`cubeforge batch examples/pipeline/assets.toml`) and, when it exists, a link to
 //! `../shared`; lines that read `../shared/fixtures/real` are skipped without it. Each file runs
 //! in a fresh folder of its own. Each example must exit 0, and no example may write an output
 //! (`-o`, `--sh`) that an earlier one of its file wrote.
@@ -101,10 +102,18 @@ fn strip_comment(line: &str) -> &str {
     line
 }
 
+/// Copies a folder, leaving out what running an example leaves behind (its outputs, state
+/// file and Ninja's files, which examples/pipeline/.gitignore lists): the copy is fresh.
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for e in std::fs::read_dir(from).unwrap() {
         let e = e.unwrap();
+        let name = e.file_name().to_string_lossy().into_owned();
+        if ["build", "build.ninja", ".ninja_log", ".ninja_deps"].contains(&name.as_str())
+            || name.ends_with(".state.json")
+        {
+            continue;
+        }
         let target = to.join(e.file_name());
         if e.file_type().unwrap().is_dir() {
             copy_dir(&e.path(), &target);
@@ -183,10 +192,14 @@ fn readme_and_docs_examples_run_in_order_on_a_fresh_copy() {
         if examples.is_empty() {
             continue;
         }
-        // A fresh copy: the bundled fixtures, and ../shared beside it when this checkout has one.
+        // A fresh copy: the bundled fixtures, the examples (batch manifests) when there are
+        // any, and ../shared beside it when this checkout has one.
         let tmp = tempfile::tempdir().unwrap();
         let root = tmp.path().join("cubeforge");
         copy_dir(&repo.join("fixtures"), &root.join("fixtures"));
+        if repo.join("examples").is_dir() {
+            copy_dir(&repo.join("examples"), &root.join("examples"));
+        }
         #[cfg(unix)]
         if have_shared {
             std::os::unix::fs::symlink(shared.canonicalize().unwrap(), tmp.path().join("shared"))

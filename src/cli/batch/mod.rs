@@ -35,8 +35,11 @@ pub struct Args {
     /// beside the manifest (an edge per job, with depfiles).
     #[arg(long, value_enum, value_name = "RUNNER")]
     pub emit: Option<Emit>,
-    #[command(flatten)]
-    pub memory: super::MemoryArg,
+    /// Memory the inputs running side by side may plan together, in bytes or with K, M, G
+    /// (default: half the machine's memory): fewer run at once under a smaller budget. Each
+    /// job's own budget is its --max-memory in the manifest's args.
+    #[arg(long, value_parser = super::bytes)]
+    pub max_memory: Option<u64>,
 }
 
 /// Build files `--emit` writes.
@@ -153,7 +156,6 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         shard: a.shard,
         depfiles: a.depfiles,
         max_memory: a
-            .memory
             .max_memory
             .unwrap_or(cubeforge::Limits::default().max_memory),
         ..Batch::new(jobs)

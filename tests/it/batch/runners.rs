@@ -114,6 +114,14 @@ fn depfiles_list_every_file_read() {
         read(&p.join("build/c/preview.png.d")),
         "build/c/preview.png: \\\n  hdri/c.exr \\\n  decal.png\n"
     );
+    // An up-to-date job's missing depfile comes from its record.
+    std::fs::remove_file(p.join("build/control.png.d")).unwrap();
+    let o = run_ok(&["batch", "m.toml", "--depfiles"], &p);
+    assert!(ran(&o).is_empty());
+    assert_eq!(
+        read(&p.join("build/control.png.d")),
+        "build/control.png: \\\n  r.toml \\\n  masks/m.png\n"
+    );
 }
 
 /// Ninja, or None where it is missing (a failure under CI, which installs it).
