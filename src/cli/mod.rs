@@ -498,8 +498,23 @@ pub fn run() -> i32 {
     };
     remove_temporaries_on_signals();
     QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
+    match dispatch(cli) {
+        Ok(()) => 0,
+        Err(e) => {
+            // One line, whatever the message holds (a file's text, a JSON error, a name with
+            // a line break or an escape sequence), every control character written out.
+            let text = e.with_flags();
+            let line = cubeforge::error::escape_text(&text);
+            tell(format_args!("cubeforge: error: {line}{}", how_to_raise(&e)));
+            1
+        }
+    }
+}
+
+/// Runs the command the line names.
+fn dispatch(cli: Cli) -> cubeforge::Result<()> {
     let (v, dep) = (cli.verbose, cli.depfile.as_deref());
-    let result = match cli.command {
+    match cli.command {
         Command::Convert(a) => convert::run(a, v, dep),
         Command::Prefilter(a) => prefilter::run(a, v, dep),
         Command::Irradiance(a) => irradiance::run(a, v, dep),
@@ -515,17 +530,6 @@ pub fn run() -> i32 {
         Command::Completions(a) => completions::run(a),
         Command::Man(a) => man::run(a),
         Command::Fixtures(a) => fixtures::run(a),
-    };
-    match result {
-        Ok(()) => 0,
-        Err(e) => {
-            // One line, whatever the message holds (a file's text, a JSON error, a name with
-            // a line break or an escape sequence), every control character written out.
-            let text = e.with_flags();
-            let line = cubeforge::error::escape_text(&text);
-            tell(format_args!("cubeforge: error: {line}{}", how_to_raise(&e)));
-            1
-        }
     }
 }
 

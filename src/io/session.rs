@@ -161,7 +161,7 @@ mod tests {
             panic!("images")
         };
         assert_eq!(a.pixels, b.pixels);
-        assert_eq!(guard.session().take_reads(), [path.clone()]);
+        assert_eq!(guard.session().take_reads(), std::slice::from_ref(&path));
         drop(guard);
         assert!(crate::io::read(&path, &opts).is_err());
     }

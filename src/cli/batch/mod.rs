@@ -161,52 +161,61 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         ..Batch::new(jobs)
     };
     let start = std::time::Instant::now();
-    let tell = |d: &Done| {
-        show(
-            d,
-            verbose || a.dry_run,
-            lines.get(&d.id).copied().unwrap_or(0),
-        )
-    };
+    let tell = |d: &Done| show(d, verbose || a.dry_run);
     let report = batch.run(&tell)?;
+    summarize(&report, a.dry_run, start.elapsed().as_secs_f64(), &lines)
+}
+
+/// The summary line, then each failure in one line with its manifest line; an error when any
+/// job failed.
+fn summarize(
+    report: &cubeforge::batch::BatchReport,
+    dry_run: bool,
+    seconds: f64,
+    lines: &std::collections::HashMap<String, usize>,
+) -> Result<()> {
     for w in &report.warnings {
         super::warn(w);
     }
-    let seconds = start.elapsed().as_secs_f64();
     let shards = if report.other_shards > 0 {
         format!(", {} left to other shards", report.other_shards)
     } else {
         String::new()
     };
-    let line = if a.dry_run {
+    let n = report.jobs.len();
+    super::report(if dry_run {
         format!(
-            "batch: {} jobs: {} would run, {} up to date{shards}",
-            report.jobs.len(),
+            "batch: {n} jobs: {} would run, {} up to date{shards}",
             report.would_run(),
             report.up_to_date()
         )
     } else {
         format!(
-            "batch: {} jobs: {} ran, {} up to date, {} failed{shards} ({seconds:.2} s)",
-            report.jobs.len(),
+            "batch: {n} jobs: {} ran, {} up to date, {} failed{shards} ({seconds:.2} s)",
             report.ran(),
             report.up_to_date(),
             report.failed()
         )
-    };
-    super::report(line)?;
+    })?;
+    for d in &report.jobs {
+        if let Outcome::Failed(e) = &d.outcome {
+            super::tell(format_args!(
+                "cubeforge: batch: failed: line {}: cubeforge {}: {}",
+                lines.get(&d.id).copied().unwrap_or(0),
+                d.id,
+                cubeforge::error::escape_text(&e.with_flags())
+            ));
+        }
+    }
     match report.failed() {
         0 => Ok(()),
-        n => Err(Error::usage(format!(
-            "{n} of {} jobs failed",
-            report.jobs.len()
-        ))),
+        failed => Err(Error::usage(format!("{failed} of {n} jobs failed"))),
     }
 }
 
-/// One job's end, in one line (and its warnings): a failure on standard error, the rest on
-/// standard output; up-to-date jobs only with -v.
-fn show(d: &Done, verbose: bool, line: usize) {
+/// One job's end, in one line (and its warnings) on standard output; up-to-date jobs only with
+/// -v; failures are listed under the summary.
+fn show(d: &Done, verbose: bool) {
     let id = &d.id;
     match &d.outcome {
         Outcome::Ran(_, report) => {
@@ -222,10 +231,7 @@ fn show(d: &Done, verbose: bool, line: usize) {
         Outcome::WouldRun(why) => {
             let _ = super::report(format!("would run   cubeforge {id} ({why})"));
         }
-        Outcome::Failed(e) => super::tell(format_args!(
-            "cubeforge: batch: failed: line {line}: cubeforge {id}: {}",
-            cubeforge::error::escape_text(&e.with_flags())
-        )),
+        Outcome::Failed(_) => {}
     }
 }
 
