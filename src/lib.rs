@@ -114,6 +114,8 @@ mod simd;
 pub mod synthetic;
 #[doc(hidden)]
 pub mod tonemap;
+#[doc(hidden)]
+pub mod view;
 
 pub use control::Size;
 pub use cube::{CubeMap, Interp};
@@ -126,7 +128,7 @@ pub use io::{
 };
 pub use jobs::{
     ControlJob, ConvertJob, IblJob, IrradianceJob, Job, LutJob, LutKind, PrefilterJob, PreviewJob,
-    Progress, Quality, Report, Warning,
+    Progress, Quality, Report, ViewJob, Warning,
 };
 pub use layout::Kind as Layout;
 pub use output::Destination;

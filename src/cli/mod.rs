@@ -14,6 +14,8 @@ mod observer;
 mod out;
 mod prefilter;
 mod preview;
+mod serve;
+mod view;
 
 use clap::{Parser, Subcommand};
 use cubeforge::tonemap::Tonemap;
@@ -85,6 +87,8 @@ pub enum Command {
     Control(control::Args),
     /// Preview a map on a sphere: reflection, refraction, Fresnel and dispersion (Cg Tutorial ch. 7), split-sum pbr.
     Preview(preview::Args),
+    /// Look at a map live on the GPU: a static page with the preview's materials, in any browser.
+    View(view::Args),
     /// Run a manifest of jobs over many inputs: each job as its command line would run it.
     Batch(batch::Args),
     /// Print a shell completion script: `source <(cubeforge completions bash)`.
@@ -522,6 +526,7 @@ fn dispatch(cli: Cli) -> cubeforge::Result<()> {
         Command::Lut(a) => lut::run(a, v, dep),
         Command::Control(a) => control::run(a, v, dep),
         Command::Preview(a) => preview::run(a, v, dep),
+        Command::View(a) => view::run(a, v, dep),
         _ if dep.is_some() => Err(cubeforge::Error::usage(
             "--depfile applies to commands that write a file (batch: --depfiles)",
         )),

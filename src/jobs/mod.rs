@@ -16,6 +16,7 @@ mod irradiance;
 mod lut;
 mod prefilter;
 mod preview;
+mod view;
 
 pub use control::ControlJob;
 pub use convert::ConvertJob;
@@ -24,6 +25,7 @@ pub use irradiance::IrradianceJob;
 pub use lut::{LutJob, LutKind};
 pub use prefilter::PrefilterJob;
 pub use preview::PreviewJob;
+pub use view::ViewJob;
 
 pub use crate::progress::Progress;
 

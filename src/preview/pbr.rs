@@ -154,6 +154,11 @@ impl SplitSum {
         SplitSum::new(mapping, &sh)
     }
 
+    /// Irradiance over pi as SH coefficients per channel ([`crate::filter::sh`] order).
+    pub fn irradiance_sh(&self) -> &[[f64; 3]; 9] {
+        &self.irradiance_over_pi
+    }
+
     /// The chain's mapping of levels to roughness.
     pub fn mapping(&self) -> &LevelMapping {
         &self.mapping

@@ -30,6 +30,7 @@ const RANKS: &[(&str, u32)] = &[
     ("ibl", 8),
     ("info", 8),
     ("preview", 9),
+    ("view", 9),
     ("jobs", 10),
     ("batch", 11),
 ];

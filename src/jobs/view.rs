@@ -1,0 +1,185 @@
+//! `view` as a job: the interactive viewer's page and data for a map.
+
+use super::{Job, Progress, Report, Warning, Warnings};
+use crate::error::{Error, Result};
+use crate::ibl::Engine;
+use crate::io::{Limits, ReadOptions};
+use crate::output::{self, Destination, Files};
+use crate::preview::{self, pbr};
+use crate::view;
+use std::path::PathBuf;
+
+/// A static viewer for a map: the preview's scene drawn live by the GPU in a browser.
+///
+/// ```
+/// use cubeforge::{Job, ViewJob};
+///
+/// # fn main() -> cubeforge::Result<()> {
+/// let dir = std::env::temp_dir().join(format!("cubeforge-doc-view-{}", std::process::id()));
+/// let report = ViewJob::new("fixtures/sky.exr".into(), dir.clone()).run(&())?;
+/// assert!(report.written.iter().any(|p| p.ends_with("index.html")));
+/// # std::fs::remove_dir_all(&dir).ok();
+/// # Ok(())
+/// # }
+/// ```
+#[derive(Clone, Debug)]
+pub struct ViewJob {
+    /// A panorama, faces, a cube map or a prefiltered chain (as `preview` reads them).
+    pub input: PathBuf,
+    /// The folder that receives index.html and its data; with `single_file`, the page itself.
+    pub output: PathBuf,
+    /// The input's layout (None: from the aspect ratio).
+    pub from: Option<crate::layout::Kind>,
+    /// One self-contained .html file instead of a folder.
+    pub single_file: bool,
+    /// The decal on the sphere (sRGB colour).
+    pub decal: Option<PathBuf>,
+    /// A control map (linear data) and its default blur range.
+    pub control: Option<PathBuf>,
+    /// The LOD bias a control map's blur = 1 stands for, when it has no sidecar.
+    pub max_lod_bias: f32,
+    /// pbr reads the chain with this engine's roughness mapping.
+    pub target: Option<Engine>,
+    /// Size limits and the memory budget.
+    pub limits: Limits,
+}
+
+impl ViewJob {
+    /// A viewer of `input` in the folder `output`.
+    pub fn new(input: PathBuf, output: PathBuf) -> ViewJob {
+        ViewJob {
+            input,
+            output,
+            from: None,
+            single_file: false,
+            decal: None,
+            control: None,
+            max_lod_bias: 6.0,
+            target: None,
+            limits: Limits::default(),
+        }
+    }
+
+    fn read(&self) -> ReadOptions {
+        ReadOptions {
+            limits: self.limits,
+            linear: false,
+            as_stored: false,
+        }
+    }
+}
+
+impl Job for ViewJob {
+    fn validate(&self) -> Result<Vec<Warning>> {
+        if self.output == std::path::Path::new("-") {
+            return Err(Error::usage(
+                "-o - (standard output): view writes a page and its data; name a folder (or a .html file with --single-file)",
+            ));
+        }
+        let html = self
+            .output
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("html"));
+        if self.single_file && !html {
+            return Err(Error::usage(format!(
+                "--single-file writes one page: name it NAME.html (got {})",
+                self.output.display()
+            )));
+        }
+        if !self.single_file && html {
+            return Err(Error::usage(format!(
+                "{} is a page: give --single-file, or name a folder for index.html and its data",
+                self.output.display()
+            )));
+        }
+        Ok(Vec::new())
+    }
+
+    fn memory_estimate(&self) -> Result<u64> {
+        let plan = crate::chain::plan(std::slice::from_ref(&self.input), self.from, &self.read())?;
+        let face = plan.face_size.unwrap_or(512) as u64;
+        // The map, a GGX chain beside it, and their page data (half floats in base64, twice
+        // over while the script is assembled).
+        let levels = 64 - face.leading_zeros() as u64;
+        Ok(plan
+            .working_bytes()
+            .saturating_mul(3)
+            .saturating_add(4 * view::data_bytes(face, levels)))
+    }
+
+    fn run(&self, progress: &dyn Progress) -> Result<Report> {
+        let mut warnings = Warnings::new(progress);
+        warnings.extend(self.validate()?);
+        self.limits.check_memory(
+            format_args!("view of {}", self.input.display()),
+            self.memory_estimate()?,
+        )?;
+        let env = preview::load_environment(&self.input, self.from, &self.read())?;
+        let mut inputs = env.files.clone();
+        let decal = match &self.decal {
+            Some(p) => {
+                inputs.push(p.clone());
+                Some(preview::read_texture(p, false, &self.limits)?)
+            }
+            None => None,
+        };
+        let control = match &self.control {
+            Some(p) => {
+                inputs.push(p.clone());
+                let (img, max, side) = preview::read_control(p, self.max_lod_bias, &self.limits)?;
+                inputs.extend(side);
+                Some((img, max))
+            }
+            None => None,
+        };
+        progress.stage("decode");
+        let setup = pbr::prepare(&env, &self.input, self.target)?;
+        if let Some(w) = &setup.warning {
+            warnings.push(w);
+        }
+        progress.stage("split-sum");
+        let info = crate::info::describe(&self.input, self.from, &self.read())
+            .ok()
+            .and_then(|r| serde_json::to_value(r).ok());
+        let name = self
+            .input
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let extras = view::Extras {
+            decal: decal.as_ref(),
+            control: control.as_ref().map(|(img, max)| (img, *max)),
+            info,
+            name: name.clone(),
+        };
+        let scene = view::scene_script(&env, &setup, &extras);
+        let files = Files::new(view::files(
+            &self.output,
+            self.single_file,
+            &format!("{name} - cubeforge view"),
+            scene,
+        ));
+        progress.stage("encode");
+        output::deliver(&files, &Destination::Path(self.output.clone()), &inputs)?;
+        progress.stage("write");
+        let page = if self.single_file {
+            self.output.clone()
+        } else {
+            self.output.join("index.html")
+        };
+        let summary = vec![format!(
+            "open {} in a browser (from disk, or --serve); its query sets the view, as preview's options: ?material=glass&exposure=0&lod_bias=2",
+            page.display()
+        )];
+        Ok(Report {
+            written: files.paths(),
+            warnings: warnings.into_vec(),
+            summary: super::texts(summary),
+            quality: None,
+        })
+    }
+
+    fn limits_mut(&mut self) -> &mut Limits {
+        &mut self.limits
+    }
+}

@@ -1,0 +1,423 @@
+// cubeforge view: the preview's scene on the GPU (WebGL2). A unit sphere in front of the
+// environment, the source texts' programs (reflect, refract, Fresnel with dispersion, decal,
+// control map, LOD bias) and split-sum pbr, ray-cast per pixel with preview's sample pattern,
+// so a frame matches `cubeforge preview` with the same options. No third-party code.
+'use strict';
+
+(function () {
+  const scene = window.cubeforgeScene;
+  const canvas = document.getElementById('view');
+  const status = document.getElementById('status');
+
+  function fail(msg) {
+    status.textContent = 'cubeforge view: ' + msg;
+    status.className = 'error';
+    document.title = 'error';
+    window.cubeforgeError = msg;
+  }
+  if (!scene) {
+    fail('the scene data (data.js) is missing or broken: run cubeforge view again');
+    return;
+  }
+  const gl = canvas.getContext('webgl2', { antialias: false, preserveDrawingBuffer: true });
+  if (!gl) {
+    fail('this browser has no WebGL2');
+    return;
+  }
+
+  // ---- the page's state: its URL query, named as preview's options ----
+  const MATERIALS = scene.materials;
+  const TONEMAPS = ['none', 'reinhard', 'aces'];
+  const q = new URLSearchParams(location.search);
+  const num = (k, d) => (q.has(k) && isFinite(parseFloat(q.get(k))) ? parseFloat(q.get(k)) : d);
+  const state = {
+    material: q.get('material') || 'chrome',
+    size: Math.max(16, Math.min(4096, Math.round(num('size', 512)))),
+    exposure: num('exposure', 0),
+    tonemap: TONEMAPS.includes(q.get('tonemap')) ? q.get('tonemap') : 'none',
+    lod_bias: num('lod_bias', 0),
+    level: num('level', 0),
+    yaw: num('yaw', 0),
+    pitch: num('pitch', 0),
+    fov: num('fov', 30),
+    distance: num('distance', 4),
+    samples: Math.max(1, Math.min(16, Math.round(num('samples', 4)))),
+  };
+  if (!MATERIALS[state.material]) {
+    fail('unknown material "' + state.material + '": use one of ' + Object.keys(MATERIALS).join(', '));
+    return;
+  }
+  const base = MATERIALS[state.material];
+  // Material parameters the query may override (the texts' uniforms, pbr's factors).
+  const mat = Object.assign({}, base);
+  for (const k of ['reflectivity', 'transmittance', 'fresnel_bias', 'fresnel_scale', 'fresnel_power',
+                   'metallic', 'roughness']) {
+    mat[k] = num(k, base[k]);
+  }
+  if (q.has('eta')) {
+    const e = num('eta', 1.5);
+    mat.eta_ratio = [1 / e, 1 / e, 1 / e];
+  }
+  for (const [i, k] of [[0, 'eta_red'], [1, 'eta_green'], [2, 'eta_blue']]) {
+    if (q.has(k)) mat.eta_ratio[i] = 1 / num(k, 1 / base.eta_ratio[i]);
+  }
+
+  // ---- data: base64 RGBA16F, level by level, faces +X -X +Y -Y +Z -Z ----
+  function halves(b64) {
+    const s = atob(b64);
+    const bytes = new Uint8Array(s.length);
+    for (let i = 0; i < s.length; i++) bytes[i] = s.charCodeAt(i);
+    return new Uint16Array(bytes.buffer);
+  }
+  function cubeTexture(chain) {
+    const t = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_CUBE_MAP, t);
+    const data = halves(chain.data);
+    let at = 0;
+    chain.levels.forEach((n, level) => {
+      for (let f = 0; f < 6; f++) {
+        const len = n * n * 4;
+        gl.texImage2D(gl.TEXTURE_CUBE_MAP_POSITIVE_X + f, level, gl.RGBA16F, n, n, 0, gl.RGBA,
+                      gl.HALF_FLOAT, data.subarray(at, at + len));
+        at += len;
+      }
+    });
+    if (at !== data.length) throw new Error('a cube chain holds ' + data.length + ' values, not ' + at);
+    gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_MAX_LEVEL, chain.levels.length - 1);
+    gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_MIN_FILTER,
+                     chain.levels.length > 1 ? gl.LINEAR_MIPMAP_LINEAR : gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
+    gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+    return t;
+  }
+  // A 2D image: u repeats (around the sphere), v clamps, bilinear, no mips (as tex2D here).
+  function texture2d(img, repeatU) {
+    const t = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, t);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA16F, img.width, img.height, 0, gl.RGBA, gl.HALF_FLOAT,
+                  halves(img.data));
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, repeatU ? gl.REPEAT : gl.CLAMP_TO_EDGE);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+    return t;
+  }
+
+  const VS = `#version 300 es
+  in vec2 pos;
+  void main() { gl_Position = vec4(pos, 0.0, 1.0); }`;
+
+  const FS = `#version 300 es
+  precision highp float;
+  precision highp samplerCube;
+  uniform samplerCube env;
+  uniform samplerCube chain;      // pbr's GGX chain
+  uniform sampler2D decal;
+  uniform sampler2D control;
+  uniform sampler2D dfg;
+  uniform int model;              // 0 reflect, 1 refract, 2 dispersion, 3 pbr
+  uniform bool hasDecal, hasControl, lodOn;
+  uniform vec3 decalColor, etaRatio, baseColor;
+  uniform float reflectivity, transmittance, fresnelBias, fresnelScale, fresnelPower;
+  uniform float metallic, roughness, f0, pbrLod, maxLodBias;
+  uniform float lodBias, bgLevel, exposure, halfSize, size;
+  uniform int tonemap, samples;
+  uniform vec2 offsets[16];
+  uniform vec3 eye, fwd, right, up, sh[9];
+  uniform float tanHalf;
+  out vec4 color;
+
+  const float PI = 3.14159265358979;
+
+  vec3 ray(vec2 s) {
+    float x = (2.0 * s.x / size - 1.0) * tanHalf;
+    float y = (1.0 - 2.0 * s.y / size) * tanHalf;
+    return fwd + right * x + up * y;
+  }
+  // The nearest point where the ray meets the unit sphere (preview's sphere::hit).
+  bool hit(vec3 o, vec3 d, out vec3 p) {
+    vec3 dn = normalize(d);
+    float b = dot(o, dn);
+    if (b >= 0.0) return false;
+    vec3 w = o - dn * b;
+    float h2 = dot(w, w);
+    if (h2 > 1.0) return false;
+    p = w - dn * sqrt(1.0 - h2);
+    return true;
+  }
+  vec2 sphereUv(vec3 p) {
+    float u = 0.5 + atan(p.x, p.z) / (2.0 * PI);
+    float v = acos(clamp(p.y / length(p), -1.0, 1.0)) / PI;
+    return vec2(min(u, 1.0 - 0.5 * 1.1920929e-7), v);
+  }
+  vec3 refr(vec3 i, vec3 n, float eta) {
+    float ci = dot(-i, n);
+    float ct2 = 1.0 - eta * eta * (1.0 - ci * ci);
+    vec3 t = eta * i + (eta * ci - sqrt(abs(ct2))) * n;
+    return ct2 > 0.0 ? t : vec3(0.0);
+  }
+  float fres(vec3 i, vec3 n) {
+    return clamp(fresnelBias + fresnelScale * pow(max(1.0 + dot(i, n), 0.0), fresnelPower), 0.0, 1.0);
+  }
+  // The vertex programs: lookup vectors v[0..3] and the Fresnel factor at point p.
+  void vertexStage(vec3 p, out vec3 v[4], out float factor) {
+    vec3 n = normalize(p);
+    vec3 i = p - eye;
+    factor = 0.0;
+    v[1] = vec3(0.0); v[2] = vec3(0.0); v[3] = vec3(0.0);
+    if (model == 1) {
+      v[0] = refr(normalize(i), n, etaRatio.x);
+    } else {
+      v[0] = reflect(i, n);
+      if (model == 2) {
+        vec3 iu = normalize(i);
+        v[1] = refr(iu, n, etaRatio.x);
+        v[2] = refr(iu, n, etaRatio.y);
+        v[3] = refr(iu, n, etaRatio.z);
+        factor = fres(iu, n);
+      } else if (model == 3) {
+        v[1] = n;
+        v[2] = -normalize(i);
+      }
+    }
+  }
+  // The level a GPU picks for v with neighbours vx, vy (preview's cube_lod).
+  float cubeLod(vec3 v, vec3 vx, vec3 vy) {
+    vec3 a = abs(v);
+    int axis = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
+    ivec2 uw = axis == 0 ? ivec2(2, 1) : (axis == 1 ? ivec2(0, 2) : ivec2(0, 1));
+    float ma = v[axis];
+    if (ma == 0.0) return 0.0;
+    vec2 pv = vec2(v[uw.x], v[uw.y]) / a[axis];
+    float rho = 0.0;
+    for (int k = 0; k < 2; k++) {
+      vec3 q = k == 0 ? vx : vy;
+      float m = q[axis] / sign(ma);
+      if (!(m > 0.0)) return 1e30;
+      rho = max(rho, length(vec2(q[uw.x], q[uw.y]) / m - pv));
+    }
+    return log2(rho * halfSize);
+  }
+  vec4 texCube(vec3 v, float lod) {
+    return v == vec3(0.0) ? vec4(0.0) : textureLod(env, v, lod);
+  }
+  vec3 shIrradiance(vec3 n) {
+    float x = n.x, y = n.y, z = n.z;
+    vec3 c = sh[0] * 0.282095
+      + sh[1] * 0.488603 * y + sh[2] * 0.488603 * z + sh[3] * 0.488603 * x
+      + sh[4] * 1.092548 * x * y + sh[5] * 1.092548 * y * z
+      + sh[6] * 0.315392 * (3.0 * z * z - 1.0)
+      + sh[7] * 1.092548 * x * z + sh[8] * 0.546274 * (x * x - y * y);
+    return max(c, vec3(0.0));
+  }
+  vec3 shade(vec2 s) {
+    vec3 d = ray(s);
+    vec3 p;
+    if (!hit(eye, d, p)) return textureLod(env, d, bgLevel).rgb;
+    vec3 n = normalize(p);
+    vec2 uv = sphereUv(n);
+    vec3 v[4]; float factor;
+    vertexStage(p, v, factor);
+    float refl = reflectivity, trans = transmittance, blur = 0.0, mask = 1.0;
+    if (hasControl) {
+      vec4 t = texture(control, uv);
+      refl = t.x; trans = t.y; blur = t.z * maxLodBias; mask = t.w;
+    }
+    vec4 dc = hasDecal ? texture(decal, uv) : vec4(decalColor, 1.0);
+    if (model == 3) {
+      vec3 bc = hasDecal ? baseColor * dc.rgb : baseColor;
+      vec3 nn = normalize(v[1]);
+      float nv = clamp(dot(nn, normalize(v[2])), 0.0, 1.0);
+      vec3 f0c = mix(vec3(f0), bc, metallic);
+      vec2 ab = texture(dfg, vec2(nv, clamp(roughness, 0.0, 1.0))).xy;
+      vec3 pre = textureLod(chain, v[0], pbrLod + lodBias + blur).rgb;
+      vec3 diffuse = bc * (1.0 - metallic) * shIrradiance(nn);
+      return diffuse + pre * (f0c * ab.x + vec3(ab.y));
+    }
+    float lods[4] = float[4](0.0, 0.0, 0.0, 0.0);
+    if (lodOn) {
+      // Neighbours: the rays one pixel right and below, met on the hit's tangent plane.
+      float plane = dot(p - eye, n);
+      vec3 vx[4]; vec3 vy[4]; float f2;
+      bool ok = true;
+      vec3 d2 = ray(s + vec2(1.0, 0.0));
+      vec3 d3 = ray(s + vec2(0.0, 1.0));
+      float den2 = dot(d2, n), den3 = dot(d3, n);
+      if (den2 >= -1e-9 || den3 >= -1e-9) ok = false;
+      if (ok) {
+        vertexStage(eye + d2 * (plane / den2), vx, f2);
+        vertexStage(eye + d3 * (plane / den3), vy, f2);
+      }
+      for (int k = 0; k < 4; k++) {
+        float b = ok ? cubeLod(v[k], vx[k], vy[k]) : 1e30;
+        lods[k] = b + lodBias + blur;
+      }
+    }
+    vec3 c;
+    if (model == 0) c = mix(dc, texCube(v[0], lods[0]), refl).rgb;
+    else if (model == 1) c = mix(dc, texCube(v[0], lods[0]), trans).rgb;
+    else {
+      vec3 reflected = texCube(v[0], lods[0]).rgb;
+      vec3 refracted = vec3(texCube(v[1], lods[1]).x, texCube(v[2], lods[2]).y, texCube(v[3], lods[3]).z);
+      float f = mask * factor + (1.0 - mask) * refl;
+      c = mix(refracted, reflected, f);
+    }
+    return c;
+  }
+  float curve(float x) {
+    x = max(x, 0.0);
+    if (tonemap == 1) return x / (1.0 + x);
+    if (tonemap == 2) { x = min(x, 1e4); return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0); }
+    return min(x, 1.0);
+  }
+  float srgb(float v) {
+    v = clamp(v, 0.0, 1.0);
+    return v <= 0.0031308 ? v * 12.92 : 1.055 * pow(v, 1.0 / 2.4) - 0.055;
+  }
+  void main() {
+    // Pixel (i, j) from the top left, as the CPU renderer counts them.
+    vec2 px = vec2(floor(gl_FragCoord.x), size - 1.0 - floor(gl_FragCoord.y));
+    vec3 acc = vec3(0.0);
+    for (int k = 0; k < 16; k++) {
+      if (k >= samples) break;
+      acc += shade(px + offsets[k]);
+    }
+    vec3 c = acc / float(samples) * exp2(exposure);
+    color = vec4(srgb(curve(c.r)), srgb(curve(c.g)), srgb(curve(c.b)), 1.0);
+  }`;
+
+  function compile(type, src) {
+    const s = gl.createShader(type);
+    gl.shaderSource(s, src);
+    gl.compileShader(s);
+    if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw new Error(gl.getShaderInfoLog(s));
+    return s;
+  }
+
+  // Preview's sample pattern: a rank-1 lattice (camera::sample_offsets).
+  function sampleOffsets(s) {
+    if (s <= 1) return [[0.5, 0.5]];
+    const gcd = (a, b) => { while (b) [a, b] = [b, a % b]; return a; };
+    const target = s * 0.618034;
+    let g = 1, best = Infinity;
+    for (let c = 1; c < s; c++) {
+      if (gcd(c, s) === 1 && Math.abs(c - target) < best) { best = Math.abs(c - target); g = c; }
+    }
+    const out = [];
+    for (let k = 0; k < s; k++) out.push([(k + 0.5) / s, ((k * g) % s) / s + 0.5 / s]);
+    return out;
+  }
+
+  // The roughness -> level table of pbr's chain, read linearly.
+  function pbrLod(r) {
+    const t = scene.pbr.lod_table;
+    const x = Math.max(0, Math.min(1, r)) * (t.length - 1);
+    const i = Math.min(t.length - 2, Math.floor(x));
+    return t[i] + (t[i + 1] - t[i]) * (x - i);
+  }
+
+  let program, uniforms;
+  function setup() {
+    program = gl.createProgram();
+    gl.attachShader(program, compile(gl.VERTEX_SHADER, VS));
+    gl.attachShader(program, compile(gl.FRAGMENT_SHADER, FS));
+    gl.linkProgram(program);
+    if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(program));
+    gl.useProgram(program);
+    const buf = gl.createBuffer();
+    gl.bindBuffer(gl.ARRAY_BUFFER, buf);
+    gl.bufferData(gl.ARRAY_BUFFER, new Float32Array([-1, -1, 3, -1, -1, 3]), gl.STATIC_DRAW);
+    const loc = gl.getAttribLocation(program, 'pos');
+    gl.enableVertexAttribArray(loc);
+    gl.vertexAttribPointer(loc, 2, gl.FLOAT, false, 0, 0);
+    uniforms = new Proxy({}, { get: (c, k) => (k in c ? c[k] : (c[k] = gl.getUniformLocation(program, k))) });
+    const units = [['env', gl.TEXTURE_CUBE_MAP, cubeTexture(scene.env)],
+                   ['chain', gl.TEXTURE_CUBE_MAP, scene.pbr.chain ? cubeTexture(scene.pbr.chain) : null],
+                   ['decal', gl.TEXTURE_2D, scene.decal ? texture2d(scene.decal, true) : null],
+                   ['control', gl.TEXTURE_2D, scene.control ? texture2d(scene.control, true) : null],
+                   ['dfg', gl.TEXTURE_2D, texture2d(scene.dfg, false)]];
+    units.forEach(([name, target, tex], i) => {
+      gl.activeTexture(gl.TEXTURE0 + i);
+      if (name === 'chain' && !tex) tex = units[0][2];
+      if (tex) gl.bindTexture(target, tex);
+      gl.uniform1i(uniforms[name], i);
+    });
+  }
+
+  function camera() {
+    const r = Math.PI / 180;
+    const [sy, cy, sp, cp] = [Math.sin(state.yaw * r), Math.cos(state.yaw * r), Math.sin(state.pitch * r), Math.cos(state.pitch * r)];
+    const dir = [cp * sy, sp, cp * cy];
+    const up = [-sp * sy, cp, -sp * cy];
+    const fwd = dir.map((x) => -x);
+    const right = [up[1] * fwd[2] - up[2] * fwd[1], up[2] * fwd[0] - up[0] * fwd[2], up[0] * fwd[1] - up[1] * fwd[0]];
+    return { eye: dir.map((x) => x * state.distance), fwd, right, up };
+  }
+
+  function draw() {
+    const n = state.size;
+    canvas.width = n;
+    canvas.height = n;
+    canvas.style.width = n / (window.devicePixelRatio || 1) + 'px';
+    gl.viewport(0, 0, n, n);
+    const u = uniforms;
+    const cam = camera();
+    const models = { reflect: 0, refract: 1, dispersion: 2, pbr: 3 };
+    gl.uniform1i(u.model, models[mat.model]);
+    gl.uniform1i(u.hasDecal, scene.decal ? 1 : 0);
+    gl.uniform1i(u.hasControl, scene.control ? 1 : 0);
+    gl.uniform1i(u.lodOn, scene.env.levels.length > 1 && mat.model !== 'pbr' ? 1 : 0);
+    gl.uniform3fv(u.decalColor, mat.decal_color);
+    gl.uniform3fv(u.etaRatio, mat.eta_ratio);
+    gl.uniform3fv(u.baseColor, mat.base_color);
+    gl.uniform1f(u.reflectivity, mat.reflectivity);
+    gl.uniform1f(u.transmittance, mat.transmittance);
+    gl.uniform1f(u.fresnelBias, mat.fresnel_bias);
+    gl.uniform1f(u.fresnelScale, mat.fresnel_scale);
+    gl.uniform1f(u.fresnelPower, mat.fresnel_power);
+    gl.uniform1f(u.metallic, mat.metallic);
+    gl.uniform1f(u.roughness, mat.roughness);
+    gl.uniform1f(u.f0, mat.f0);
+    gl.uniform1f(u.pbrLod, pbrLod(mat.roughness));
+    gl.uniform1f(u.maxLodBias, scene.control ? scene.control.max_lod_bias : 0);
+    gl.uniform1f(u.lodBias, state.lod_bias);
+    gl.uniform1f(u.bgLevel, state.level);
+    gl.uniform1f(u.exposure, state.exposure);
+    gl.uniform1f(u.halfSize, scene.env.levels[0] * 0.5);
+    gl.uniform1f(u.size, n);
+    gl.uniform1i(u.tonemap, TONEMAPS.indexOf(state.tonemap));
+    const offs = sampleOffsets(state.samples);
+    gl.uniform1i(u.samples, offs.length);
+    gl.uniform2fv(u.offsets, new Float32Array([].concat(...offs, ...Array(2 * (16 - offs.length)).fill(0))));
+    gl.uniform3fv(u.eye, cam.eye);
+    gl.uniform3fv(u.fwd, cam.fwd);
+    gl.uniform3fv(u.right, cam.right);
+    gl.uniform3fv(u.up, cam.up);
+    gl.uniform3fv(u.sh, new Float32Array([].concat(...scene.pbr.sh)));
+    gl.uniform1f(u.tanHalf, Math.tan(state.fov * Math.PI / 360));
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+  }
+
+  function ready() {
+    gl.finish();
+    document.title = 'ready';
+    window.cubeforgeReady = true;
+  }
+
+  try {
+    setup();
+    draw();
+    ready();
+  } catch (e) {
+    fail(String(e && e.message ? e.message : e));
+    return;
+  }
+  window.cubeforgeRedraw = function (changes) {
+    Object.assign(state, changes || {});
+    window.cubeforgeReady = false;
+    draw();
+    ready();
+  };
+  if (window.cubeforgeUi) window.cubeforgeUi(state, mat, scene, window.cubeforgeRedraw);
+})();
