@@ -42,7 +42,13 @@
     fov: num('fov', 30),
     distance: num('distance', 4),
     samples: Math.max(1, Math.min(16, Math.round(num('samples', 4)))),
+    shading: q.get('shading') === 'per-vertex' ? 'per-vertex' : 'per-fragment',
+    tessellation: Math.max(2, Math.min(256, Math.round(num('tessellation', 16)))),
+    parallax: ['approx', 'exact'].includes(q.get('parallax')) ? q.get('parallax') : 'approx',
+    env_radius: num('env_radius', 0),
+    env_center: (q.get('env_center') || '0,0,0').split(',').map(parseFloat),
   };
+  if (state.env_center.length !== 3 || state.env_center.some((x) => !isFinite(x))) state.env_center = [0, 0, 0];
   if (!MATERIALS[state.material]) {
     fail('unknown material "' + state.material + '": use one of ' + Object.keys(MATERIALS).join(', '));
     return;
@@ -126,6 +132,11 @@
   uniform vec2 offsets[16];
   uniform vec3 eye, fwd, right, up, sh[9];
   uniform float tanHalf;
+  uniform int parallax;           // 0 none, 1 approx, 2 exact (Brennan)
+  uniform float envRadius;
+  uniform vec3 envCenter;
+  uniform bool perVertex;
+  uniform int bands;              // the per-vertex mesh's latitude bands
   out vec4 color;
 
   const float PI = 3.14159265358979;
@@ -160,21 +171,33 @@
   float fres(vec3 i, vec3 n) {
     return clamp(fresnelBias + fresnelScale * pow(max(1.0 + dot(i, n), 0.0), fresnelPower), 0.0, 1.0);
   }
-  // The vertex programs: lookup vectors v[0..3] and the Fresnel factor at point p.
-  void vertexStage(vec3 p, out vec3 v[4], out float factor) {
-    vec3 n = normalize(p);
+  // Brennan's correction for an environment of radius envRadius around envCenter.
+  vec3 correct(vec3 v, vec3 p) {
+    if (parallax == 0 || v == vec3(0.0)) return v;
+    vec3 d = normalize(v);
+    vec3 cp = p - envCenter;
+    if (parallax == 1) return d + cp / envRadius;
+    float b = dot(cp, d);
+    float c = dot(cp, cp) - envRadius * envRadius;
+    float disc = b * b - c;
+    if (disc < 0.0) return d;
+    float t = -b + sqrt(disc);
+    return t <= 0.0 ? d : cp + d * t;
+  }
+  // The vertex programs: lookup vectors v[0..3] and the Fresnel factor at point p, normal n.
+  void vertexStage(vec3 p, vec3 n, out vec3 v[4], out float factor) {
     vec3 i = p - eye;
     factor = 0.0;
     v[1] = vec3(0.0); v[2] = vec3(0.0); v[3] = vec3(0.0);
     if (model == 1) {
-      v[0] = refr(normalize(i), n, etaRatio.x);
+      v[0] = correct(refr(normalize(i), n, etaRatio.x), p);
     } else {
-      v[0] = reflect(i, n);
+      v[0] = correct(reflect(i, n), p);
       if (model == 2) {
         vec3 iu = normalize(i);
-        v[1] = refr(iu, n, etaRatio.x);
-        v[2] = refr(iu, n, etaRatio.y);
-        v[3] = refr(iu, n, etaRatio.z);
+        v[1] = correct(refr(iu, n, etaRatio.x), p);
+        v[2] = correct(refr(iu, n, etaRatio.y), p);
+        v[3] = correct(refr(iu, n, etaRatio.z), p);
         factor = fres(iu, n);
       } else if (model == 3) {
         v[1] = n;
@@ -211,14 +234,9 @@
       + sh[7] * 1.092548 * x * z + sh[8] * 0.546274 * (x * x - y * y);
     return max(c, vec3(0.0));
   }
-  vec3 shade(vec2 s) {
-    vec3 d = ray(s);
-    vec3 p;
-    if (!hit(eye, d, p)) return textureLod(env, d, bgLevel).rgb;
-    vec3 n = normalize(p);
-    vec2 uv = sphereUv(n);
-    vec3 v[4]; float factor;
-    vertexStage(p, v, factor);
+  // The fragment programs, with the lookup vectors one pixel right (vx) and below (vy) for
+  // the level of detail (ok false: unbounded footprint, the coarsest level).
+  vec3 fragmentStage(vec3 v[4], float factor, vec2 uv, vec3 vx[4], vec3 vy[4], bool ok) {
     float refl = reflectivity, trans = transmittance, blur = 0.0, mask = 1.0;
     if (hasControl) {
       vec4 t = texture(control, uv);
@@ -231,39 +249,136 @@
       float nv = clamp(dot(nn, normalize(v[2])), 0.0, 1.0);
       vec3 f0c = mix(vec3(f0), bc, metallic);
       vec2 ab = texture(dfg, vec2(nv, clamp(roughness, 0.0, 1.0))).xy;
-      vec3 pre = textureLod(chain, v[0], pbrLod + lodBias + blur).rgb;
+      vec3 pre = v[0] == vec3(0.0) ? vec3(0.0) : textureLod(chain, v[0], pbrLod + lodBias + blur).rgb;
       vec3 diffuse = bc * (1.0 - metallic) * shIrradiance(nn);
       return diffuse + pre * (f0c * ab.x + vec3(ab.y));
     }
     float lods[4] = float[4](0.0, 0.0, 0.0, 0.0);
     if (lodOn) {
-      // Neighbours: the rays one pixel right and below, met on the hit's tangent plane.
-      float plane = dot(p - eye, n);
-      vec3 vx[4]; vec3 vy[4]; float f2;
-      bool ok = true;
-      vec3 d2 = ray(s + vec2(1.0, 0.0));
-      vec3 d3 = ray(s + vec2(0.0, 1.0));
-      float den2 = dot(d2, n), den3 = dot(d3, n);
-      if (den2 >= -1e-9 || den3 >= -1e-9) ok = false;
-      if (ok) {
-        vertexStage(eye + d2 * (plane / den2), vx, f2);
-        vertexStage(eye + d3 * (plane / den3), vy, f2);
-      }
       for (int k = 0; k < 4; k++) {
         float b = ok ? cubeLod(v[k], vx[k], vy[k]) : 1e30;
         lods[k] = b + lodBias + blur;
       }
     }
-    vec3 c;
-    if (model == 0) c = mix(dc, texCube(v[0], lods[0]), refl).rgb;
-    else if (model == 1) c = mix(dc, texCube(v[0], lods[0]), trans).rgb;
-    else {
-      vec3 reflected = texCube(v[0], lods[0]).rgb;
-      vec3 refracted = vec3(texCube(v[1], lods[1]).x, texCube(v[2], lods[2]).y, texCube(v[3], lods[3]).z);
-      float f = mask * factor + (1.0 - mask) * refl;
-      c = mix(refracted, reflected, f);
+    if (model == 0) return mix(dc, texCube(v[0], lods[0]), refl).rgb;
+    if (model == 1) return mix(dc, texCube(v[0], lods[0]), trans).rgb;
+    vec3 reflected = texCube(v[0], lods[0]).rgb;
+    vec3 refracted = vec3(texCube(v[1], lods[1]).x, texCube(v[2], lods[2]).y, texCube(v[3], lods[3]).z);
+    float f = mask * factor + (1.0 - mask) * refl;
+    return mix(refracted, reflected, f);
+  }
+  // Per fragment: the vertex stage at the exact hit, and where the rays one pixel right and
+  // below meet the hit's tangent plane.
+  vec3 shadeFragment(vec2 s, vec3 p) {
+    vec3 n = normalize(p);
+    vec2 uv = sphereUv(n);
+    vec3 v[4], vx[4], vy[4]; float factor, f2;
+    vertexStage(p, n, v, factor);
+    bool ok = false;
+    if (lodOn) {
+      float plane = dot(p - eye, n);
+      vec3 d2 = ray(s + vec2(1.0, 0.0));
+      vec3 d3 = ray(s + vec2(0.0, 1.0));
+      float den2 = dot(d2, n), den3 = dot(d3, n);
+      ok = den2 < -1e-9 && den3 < -1e-9;
+      if (ok) {
+        vec3 p2 = eye + d2 * (plane / den2), p3 = eye + d3 * (plane / den3);
+        vertexStage(p2, normalize(p2), vx, f2);
+        vertexStage(p3, normalize(p3), vy, f2);
+      }
     }
-    return c;
+    return fragmentStage(v, factor, uv, vx, vy, ok);
+  }
+  // The per-vertex mesh (preview's sphere::tessellate): vertex (i, j) of bands latitude
+  // bands and 2 bands columns; pole vertices take their cell's middle u.
+  vec3 meshPos(int i, int j) {
+    if (i == 0) return vec3(0.0, 1.0, 0.0);
+    if (i == bands) return vec3(0.0, -1.0, 0.0);
+    float th = PI * float(i) / float(bands);
+    float ph = 2.0 * PI * float(j) / float(2 * bands) - PI;
+    return vec3(sin(th) * sin(ph), cos(th), sin(th) * cos(ph));
+  }
+  vec2 meshUv(int i, int j) {
+    int m = 2 * bands;
+    float u = ((i == 0 || i == bands) && j < m) ? (float(j) + 0.5) / float(m) : float(j) / float(m);
+    return vec2(u, float(i) / float(bands));
+  }
+  // Barycentrics of the ray's meeting with the plane of (a, b, c), and its distance t.
+  vec4 plane3(vec3 o, vec3 d, vec3 a, vec3 b, vec3 c) {
+    vec3 e1 = b - a, e2 = c - a;
+    vec3 h = cross(d, e2);
+    float det = dot(e1, h);
+    if (abs(det) < 1e-12) return vec4(-1.0, -1.0, -1.0, -1.0);
+    vec3 sv = o - a;
+    float u = dot(sv, h) / det;
+    vec3 qv = cross(sv, e1);
+    float w = dot(d, qv) / det;
+    float t = dot(e2, qv) / det;
+    return vec4(1.0 - u - w, u, w, t);
+  }
+  void blend(vec3 va[4], vec3 vb[4], vec3 vc[4], vec3 l, out vec3 o[4]) {
+    for (int k = 0; k < 4; k++) o[k] = va[k] * l.x + vb[k] * l.y + vc[k] * l.z;
+  }
+  // Per vertex: the mesh triangle the ray meets (front faces, the hit's cell and its
+  // neighbours), the vertex stage at its corners, varyings interpolated at the hit and, for
+  // the level of detail, where the rays one pixel right and below meet its plane.
+  vec3 shadeVertex(vec2 s, vec3 p, inout bool covered) {
+    vec3 d = ray(s);
+    int m = 2 * bands;
+    float th = acos(clamp(p.y, -1.0, 1.0));
+    int ci = int(floor(th / PI * float(bands)));
+    int cj = int(floor((atan(p.x, p.z) + PI) / (2.0 * PI) * float(m)));
+    float best = 1e30;
+    ivec2 tri[3]; vec3 bary;
+    bool found = false;
+    for (int di = -1; di <= 1; di++) {
+      int i = ci + di;
+      if (i < 0 || i >= bands) continue;
+      for (int dj = -1; dj <= 1; dj++) {
+        int j = (cj + dj + m) % m;
+        ivec2 A = ivec2(i, j), B = ivec2(i, j + 1), C = ivec2(i + 1, j), D = ivec2(i + 1, j + 1);
+        for (int k = 0; k < 2; k++) {
+          ivec2 t0 = A, t1 = C, t2 = D;
+          if (i == 0) { if (k == 1) continue; }
+          else if (i == bands - 1) { if (k == 1) continue; t2 = B; }
+          else if (k == 1) { t1 = D; t2 = B; }
+          vec3 a = meshPos(t0.x, t0.y), b = meshPos(t1.x, t1.y), c = meshPos(t2.x, t2.y);
+          vec3 nrm = cross(b - a, c - a);
+          if (dot(nrm, a + b + c) < 0.0) nrm = -nrm;
+          if (dot(a - eye, nrm) >= 0.0) continue;
+          vec4 h = plane3(eye, d, a, b, c);
+          if (h.x < 0.0 || h.y < 0.0 || h.z < 0.0 || h.w <= 0.0 || h.w >= best) continue;
+          best = h.w; tri[0] = t0; tri[1] = t1; tri[2] = t2; bary = h.xyz; found = true;
+        }
+      }
+    }
+    if (!found) { covered = false; return vec3(0.0); }
+    vec3 P[3]; vec3 va[4], vb[4], vc[4]; float fa, fb, fc;
+    for (int k = 0; k < 3; k++) P[k] = meshPos(tri[k].x, tri[k].y);
+    vertexStage(P[0], P[0], va, fa);
+    vertexStage(P[1], P[1], vb, fb);
+    vertexStage(P[2], P[2], vc, fc);
+    vec2 uv = meshUv(tri[0].x, tri[0].y) * bary.x + meshUv(tri[1].x, tri[1].y) * bary.y + meshUv(tri[2].x, tri[2].y) * bary.z;
+    vec3 v[4], vx[4], vy[4];
+    blend(va, vb, vc, bary, v);
+    float factor = fa * bary.x + fb * bary.y + fc * bary.z;
+    bool ok = lodOn;
+    if (lodOn) {
+      vec4 hx = plane3(eye, ray(s + vec2(1.0, 0.0)), P[0], P[1], P[2]);
+      vec4 hy = plane3(eye, ray(s + vec2(0.0, 1.0)), P[0], P[1], P[2]);
+      blend(va, vb, vc, hx.xyz, vx);
+      blend(va, vb, vc, hy.xyz, vy);
+    }
+    return fragmentStage(v, factor, uv, vx, vy, ok);
+  }
+  vec3 shade(vec2 s) {
+    vec3 d = ray(s);
+    vec3 p;
+    if (!hit(eye, d, p)) return textureLod(env, d, bgLevel).rgb;
+    if (!perVertex) return shadeFragment(s, p);
+    bool covered = true;
+    vec3 c = shadeVertex(s, p, covered);
+    return covered ? c : textureLod(env, d, bgLevel).rgb;
   }
   float curve(float x) {
     x = max(x, 0.0);
@@ -396,6 +511,11 @@
     gl.uniform3fv(u.up, cam.up);
     gl.uniform3fv(u.sh, new Float32Array([].concat(...scene.pbr.sh)));
     gl.uniform1f(u.tanHalf, Math.tan(state.fov * Math.PI / 360));
+    gl.uniform1i(u.parallax, state.env_radius > 0 ? (state.parallax === 'exact' ? 2 : 1) : 0);
+    gl.uniform1f(u.envRadius, state.env_radius);
+    gl.uniform3fv(u.envCenter, state.env_center);
+    gl.uniform1i(u.perVertex, state.shading === 'per-vertex' ? 1 : 0);
+    gl.uniform1i(u.bands, state.tessellation);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
   }
 
