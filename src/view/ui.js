@@ -31,11 +31,15 @@ window.cubeforgeUi = function (state, mat, scene, redraw) {
     }
     s.value = value;
     s.onchange = () => {
-      if (k === 'material') {
+      if (k === 'layout' || k === 'shading') {
+        remember(k, s.value);
+        redraw({ [k]: s.value });
+      } else if (k === 'material') {
         // Another material: its own parameters, from the page's query.
         const q = new URLSearchParams();
         q.set('material', s.value);
-        for (const key of ['size', 'exposure', 'tonemap', 'lod_bias', 'level', 'yaw', 'pitch', 'samples']) {
+        for (const key of ['size', 'exposure', 'tonemap', 'lod_bias', 'level', 'yaw', 'pitch', 'samples',
+                           'layout', 'seams', 'sweep', 'shading', 'tessellation']) {
           if (query.has(key)) q.set(key, query.get(key));
         }
         location.search = '?' + q.toString();
@@ -62,6 +66,23 @@ window.cubeforgeUi = function (state, mat, scene, redraw) {
   }
   select('material', Object.keys(scene.materials), state.material);
   select('tonemap', ['none', 'reinhard', 'aces'], state.tonemap);
+  select('layout', ['sphere', 'cross'], state.layout);
+  select('shading', ['per-fragment', 'per-vertex'], state.shading);
+  function check(k, value) {
+    const l = document.createElement('label');
+    l.textContent = k;
+    const c = document.createElement('input');
+    c.type = 'checkbox';
+    c.checked = value;
+    c.onchange = () => {
+      remember(k, c.checked ? '1' : '0');
+      redraw({ [k]: c.checked });
+    };
+    l.appendChild(c);
+    panel.appendChild(l);
+  }
+  check('seams', state.seams);
+  check('sweep', state.sweep);
   slider('exposure', -8, 8, 0.1, state.exposure);
   const top = scene.env.levels.length - 1;
   slider('level', 0, top, 0.1, state.level);
@@ -78,6 +99,7 @@ window.cubeforgeUi = function (state, mat, scene, redraw) {
   } else {
     slider('transmittance', 0, 1, 0.01, mat.transmittance);
   }
+  slider('tessellation', 2, 64, 1, state.tessellation);
   const yaw = slider('yaw', -180, 180, 1, state.yaw);
   const pitch = slider('pitch', -89, 89, 1, state.pitch);
   if (scene.info) {

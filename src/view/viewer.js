@@ -47,6 +47,9 @@
     parallax: ['approx', 'exact'].includes(q.get('parallax')) ? q.get('parallax') : 'approx',
     env_radius: num('env_radius', 0),
     env_center: (q.get('env_center') || '0,0,0').split(',').map(parseFloat),
+    layout: q.get('layout') === 'cross' ? 'cross' : 'sphere',
+    seams: q.get('seams') === '1',
+    sweep: q.get('sweep') === '1',
   };
   if (state.env_center.length !== 3 || state.env_center.some((x) => !isFinite(x))) state.env_center = [0, 0, 0];
   if (!MATERIALS[state.material]) {
@@ -136,6 +139,10 @@
   uniform float envRadius;
   uniform vec3 envCenter;
   uniform bool perVertex;
+  uniform int mapLayout;             // 0 the sphere, 1 the map as a horizontal cross
+  uniform bool seams;             // tint lookups near a face's edge
+  uniform vec2 origin;            // this cell's corner in the canvas (a sweep's row)
+  uniform float crossCell;
   uniform int bands;              // the per-vertex mesh's latitude bands
   out vec4 color;
 
@@ -222,8 +229,20 @@
     }
     return log2(rho * halfSize);
   }
+  // With seams on: magenta where a lookup lands within a texel and a half of a face's edge.
+  vec4 seamTint(vec3 d, vec4 c) {
+    if (!seams) return c;
+    vec3 a = abs(d);
+    float ma = max(a.x, max(a.y, a.z));
+    vec2 st = a.x == ma ? d.yz : (a.y == ma ? d.xz : d.xy);
+    float edge = max(abs(st.x), abs(st.y)) / ma;
+    return edge > 1.0 - 3.0 / (2.0 * halfSize) ? mix(c, vec4(4.0, 0.0, 4.0, 1.0), 0.7) : c;
+  }
   vec4 texCube(vec3 v, float lod) {
-    return v == vec3(0.0) ? vec4(0.0) : textureLod(env, v, lod);
+    return v == vec3(0.0) ? vec4(0.0) : seamTint(v, textureLod(env, v, lod));
+  }
+  vec4 background(vec3 d) {
+    return seamTint(d, textureLod(env, d, bgLevel));
   }
   vec3 shIrradiance(vec3 n) {
     float x = n.x, y = n.y, z = n.z;
@@ -374,11 +393,11 @@
   vec3 shade(vec2 s) {
     vec3 d = ray(s);
     vec3 p;
-    if (!hit(eye, d, p)) return textureLod(env, d, bgLevel).rgb;
+    if (!hit(eye, d, p)) return background(d).rgb;
     if (!perVertex) return shadeFragment(s, p);
     bool covered = true;
     vec3 c = shadeVertex(s, p, covered);
-    return covered ? c : textureLod(env, d, bgLevel).rgb;
+    return covered ? c : background(d).rgb;
   }
   float curve(float x) {
     x = max(x, 0.0);
@@ -390,13 +409,28 @@
     v = clamp(v, 0.0, 1.0);
     return v <= 0.0031308 ? v * 12.92 : 1.055 * pow(v, 1.0 / 2.4) - 0.055;
   }
+  // The map as a horizontal cross (cubeforge's hcross: +Y above +Z, -X +Z +X -Z, -Y below),
+  // each face as its image; black where no face is (as convert writes it).
+  vec3 crossTexel(vec2 s) {
+    ivec2 cell = ivec2(floor(s / crossCell));
+    int face = -1;
+    if (cell.y == 1) face = cell.x == 0 ? 1 : (cell.x == 1 ? 4 : (cell.x == 2 ? 0 : 5));
+    else if (cell.x == 1) face = cell.y == 0 ? 2 : 3;
+    if (face < 0) return vec3(0.0);
+    vec2 st = (s - vec2(cell) * crossCell) / crossCell;
+    float sc = 2.0 * st.x - 1.0, tc = 2.0 * st.y - 1.0;
+    vec3 d = face == 0 ? vec3(1.0, -tc, -sc) : face == 1 ? vec3(-1.0, -tc, sc)
+           : face == 2 ? vec3(sc, 1.0, tc) : face == 3 ? vec3(sc, -1.0, -tc)
+           : face == 4 ? vec3(sc, -tc, 1.0) : vec3(-sc, -tc, -1.0);
+    return background(d).rgb;
+  }
   void main() {
-    // Pixel (i, j) from the top left, as the CPU renderer counts them.
-    vec2 px = vec2(floor(gl_FragCoord.x), size - 1.0 - floor(gl_FragCoord.y));
+    // Pixel (i, j) from the top left of this cell, as the CPU renderer counts them.
+    vec2 px = vec2(floor(gl_FragCoord.x) - origin.x, size - 1.0 - floor(gl_FragCoord.y) + origin.y);
     vec3 acc = vec3(0.0);
     for (int k = 0; k < 16; k++) {
       if (k >= samples) break;
-      acc += shade(px + offsets[k]);
+      acc += mapLayout == 1 ? crossTexel(px + offsets[k]) : shade(px + offsets[k]);
     }
     vec3 c = acc / float(samples) * exp2(exposure);
     color = vec4(srgb(curve(c.r)), srgb(curve(c.g)), srgb(curve(c.b)), 1.0);
@@ -470,12 +504,59 @@
     return { eye: dir.map((x) => x * state.distance), fwd, right, up };
   }
 
+  // The cells of a sweep row: pbr materials at roughness 0 to 1, the others at LOD biases
+  // 0 to the chain's last level.
+  function sweepCells() {
+    if (!state.sweep || state.layout === 'cross') return [null];
+    const top = Math.max(1, scene.env.levels.length - 1);
+    return [0, 0.25, 0.5, 0.75, 1].map((f) =>
+      mat.model === 'pbr' ? { roughness: f, label: 'roughness ' + f } : { lod_bias: f * top, label: 'LOD bias ' + (f * top).toFixed(2) });
+  }
+
   function draw() {
     const n = state.size;
-    canvas.width = n;
-    canvas.height = n;
-    canvas.style.width = n / (window.devicePixelRatio || 1) + 'px';
-    gl.viewport(0, 0, n, n);
+    const cells = sweepCells();
+    const cross = state.layout === 'cross';
+    canvas.width = cross ? n : n * cells.length;
+    canvas.height = cross ? Math.round(n * 3 / 4) : n;
+    canvas.style.width = canvas.width / (window.devicePixelRatio || 1) + 'px';
+    labels(cross, cells, n);
+    for (const [k, cell] of cells.entries()) {
+      gl.viewport(k * n, 0, cross ? canvas.width : n, canvas.height);
+      drawCell(cell, k * n, cross ? canvas.height : n, cross);
+    }
+  }
+
+  // Face names over the cross, each cell's parameter under a sweep.
+  function labels(cross, cells, n) {
+    let box = document.getElementById('labels');
+    if (!box) {
+      box = document.createElement('div');
+      box.id = 'labels';
+      canvas.parentNode.style.position = 'relative';
+      canvas.parentNode.appendChild(box);
+    }
+    box.textContent = '';
+    const put = (text, x, y) => {
+      const l = document.createElement('span');
+      l.className = 'label';
+      l.textContent = text;
+      Object.assign(l.style, { left: x + 'px', top: y + 'px' });
+      box.appendChild(l);
+    };
+    const dpr = window.devicePixelRatio || 1;
+    const at = canvas.offsetLeft, top = canvas.offsetTop;
+    if (cross) {
+      const c = n / 4 / dpr;
+      for (const [name, x, y] of [['+X', 2, 1], ['-X', 0, 1], ['+Y', 1, 0], ['-Y', 1, 2], ['+Z', 1, 1], ['-Z', 3, 1]]) {
+        put(name, at + x * c + 4, top + y * c + 2);
+      }
+    } else if (cells.length > 1) {
+      cells.forEach((cell, k) => put(cell.label, at + k * n / dpr + 4, top + 2));
+    }
+  }
+
+  function drawCell(cell, x0, n, cross) {
     const u = uniforms;
     const cam = camera();
     const models = { reflect: 0, refract: 1, dispersion: 2, pbr: 3 };
@@ -492,11 +573,12 @@
     gl.uniform1f(u.fresnelScale, mat.fresnel_scale);
     gl.uniform1f(u.fresnelPower, mat.fresnel_power);
     gl.uniform1f(u.metallic, mat.metallic);
-    gl.uniform1f(u.roughness, mat.roughness);
+    const rough = cell && cell.roughness !== undefined ? cell.roughness : mat.roughness;
+    gl.uniform1f(u.roughness, rough);
     gl.uniform1f(u.f0, mat.f0);
-    gl.uniform1f(u.pbrLod, pbrLod(mat.roughness));
+    gl.uniform1f(u.pbrLod, pbrLod(rough));
     gl.uniform1f(u.maxLodBias, scene.control ? scene.control.max_lod_bias : 0);
-    gl.uniform1f(u.lodBias, state.lod_bias);
+    gl.uniform1f(u.lodBias, cell && cell.lod_bias !== undefined ? cell.lod_bias : state.lod_bias);
     gl.uniform1f(u.bgLevel, state.level);
     gl.uniform1f(u.exposure, state.exposure);
     gl.uniform1f(u.halfSize, scene.env.levels[0] * 0.5);
@@ -516,6 +598,10 @@
     gl.uniform3fv(u.envCenter, state.env_center);
     gl.uniform1i(u.perVertex, state.shading === 'per-vertex' ? 1 : 0);
     gl.uniform1i(u.bands, state.tessellation);
+    gl.uniform1i(u.mapLayout, cross ? 1 : 0);
+    gl.uniform1i(u.seams, state.seams ? 1 : 0);
+    gl.uniform2f(u.origin, x0, 0);
+    gl.uniform1f(u.crossCell, state.size / 4);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
   }
 
