@@ -60,6 +60,16 @@ impl ViewJob {
         }
     }
 
+    /// The map the page shows and the engine whose mapping reads it: an `ibl` output folder's
+    /// specular file (Bevy's, glTF's, Filament's, Babylon's, the generic one) with that
+    /// engine, anything else as it is with `target`.
+    fn shown(&self) -> (PathBuf, Option<Engine>) {
+        if let Some((file, engine)) = ibl_folder(&self.input) {
+            return (file, self.target.or(engine));
+        }
+        (self.input.clone(), self.target)
+    }
+
     fn read(&self) -> ReadOptions {
         ReadOptions {
             limits: self.limits,
@@ -96,7 +106,11 @@ impl Job for ViewJob {
     }
 
     fn memory_estimate(&self) -> Result<u64> {
-        let plan = crate::chain::plan(std::slice::from_ref(&self.input), self.from, &self.read())?;
+        let plan = crate::chain::plan(
+            std::slice::from_ref(&self.shown().0),
+            self.from,
+            &self.read(),
+        )?;
         let face = plan.face_size.unwrap_or(512) as u64;
         // The map, a GGX chain beside it, and their page data (half floats in base64, twice
         // over while the script is assembled).
@@ -114,7 +128,27 @@ impl Job for ViewJob {
             format_args!("view of {}", self.input.display()),
             self.memory_estimate()?,
         )?;
-        let env = preview::load_environment(&self.input, self.from, &self.read())?;
+        let (input, target) = self.shown();
+        // A control map alone: on the sphere, under the demo sky with a box chain (so its
+        // blur shows); anything else is the environment.
+        let lone_control =
+            self.control.is_none() && input.is_file() && preview::control_sidecar(&input).is_some();
+        let (env, control_path) = if lone_control {
+            let sky = crate::cube::CubeMap::from_fn(128, crate::synthetic::demo_sky);
+            let env = preview::LoadedEnv {
+                sampler: crate::cube::CubeSampler::with_box_mips(&sky.levels[0], None),
+                files: Vec::new(),
+                hdr: true,
+                replaced_values: 0,
+                levels: None,
+            };
+            (env, Some(input.clone()))
+        } else {
+            (
+                preview::load_environment(&input, self.from, &self.read())?,
+                self.control.clone(),
+            )
+        };
         let mut inputs = env.files.clone();
         let decal = match &self.decal {
             Some(p) => {
@@ -123,7 +157,7 @@ impl Job for ViewJob {
             }
             None => None,
         };
-        let control = match &self.control {
+        let control = match &control_path {
             Some(p) => {
                 inputs.push(p.clone());
                 let (img, max, side) = preview::read_control(p, self.max_lod_bias, &self.limits)?;
@@ -133,19 +167,36 @@ impl Job for ViewJob {
             None => None,
         };
         progress.stage("decode");
-        let setup = pbr::prepare(&env, &self.input, self.target)?;
-        if let Some(w) = &setup.warning {
+        let mut summary_notes = Vec::new();
+        let setup = pbr::prepare(&env, &input, target)?;
+        if lone_control {
+            summary_notes.push(format!(
+                "{}: a control map: shown on the sphere under the demo sky (a box chain, so its blur shows)",
+                input.display()
+            ));
+        }
+        // (A lone control map's sky is the demo's: its pbr chain is no news.)
+        if let Some(w) = setup.warning.as_ref().filter(|_| !lone_control) {
             warnings.push(w);
         }
         progress.stage("split-sum");
-        let info = crate::info::describe(&self.input, self.from, &self.read())
-            .ok()
+        let info = (!lone_control)
+            .then(|| crate::info::describe(&input, self.from, &self.read()).ok())
+            .flatten()
             .and_then(|r| serde_json::to_value(r).ok());
-        let name = self
-            .input
+        let name = input
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
+        let mut summary = std::mem::take(&mut summary_notes);
+        if input != self.input {
+            summary.push(format!(
+                "{}: an ibl folder: showing {} with {}'s roughness mapping (material=pbr shows what the engine shades)",
+                self.input.display(),
+                input.display(),
+                target.map_or("no engine", |e| e.name())
+            ));
+        }
         let extras = view::Extras {
             decal: decal.as_ref(),
             control: control.as_ref().map(|(img, max)| (img, *max)),
@@ -167,10 +218,10 @@ impl Job for ViewJob {
         } else {
             self.output.join("index.html")
         };
-        let summary = vec![format!(
+        summary.push(format!(
             "open {} in a browser (from disk, or --serve); its query sets the view, as preview's options: ?material=glass&exposure=0&lod_bias=2",
             page.display()
-        )];
+        ));
         Ok(Report {
             written: files.paths(),
             warnings: warnings.into_vec(),
@@ -181,5 +232,44 @@ impl Job for ViewJob {
 
     fn limits_mut(&mut self) -> &mut Limits {
         &mut self.limits
+    }
+}
+
+/// The specular file of an `ibl` output folder and its engine (None: not such a folder).
+fn ibl_folder(dir: &std::path::Path) -> Option<(PathBuf, Option<Engine>)> {
+    if !dir.is_dir() || crate::chain::is_chain_dir(dir) {
+        return None;
+    }
+    let mut names: Vec<PathBuf> = std::fs::read_dir(dir)
+        .ok()?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .collect();
+    names.sort();
+    let ends = |p: &PathBuf, suffix: &str| p.to_string_lossy().ends_with(suffix);
+    for (suffix, engine) in [
+        ("_ggx.ktx2", Engine::Gltf),
+        ("_ibl.ktx", Engine::Filament),
+        (".env", Engine::Babylon),
+        ("_specular.ktx2", Engine::Bevy),
+    ] {
+        if let Some(p) = names.iter().find(|p| ends(p, suffix)) {
+            let stem = p.to_string_lossy();
+            let stem = &stem[..stem.len() - suffix.len()];
+            let generic =
+                engine == Engine::Bevy && PathBuf::from(format!("{stem}_sh.json")).is_file();
+            return Some((
+                p.clone(),
+                Some(if generic { Engine::Generic } else { engine }),
+            ));
+        }
+    }
+    // Godot's, Unity's and Unreal's folders hold the panorama the engine filters itself.
+    let images: Vec<&PathBuf> = names
+        .iter()
+        .filter(|p| crate::io::FileFormat::from_extension(p).is_some())
+        .collect();
+    match images.as_slice() {
+        [one] => Some(((*one).clone(), None)),
+        _ => None,
     }
 }

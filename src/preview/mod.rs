@@ -37,6 +37,7 @@ mod raster;
 mod render;
 mod shader;
 
+pub(crate) use load::control_sidecar;
 pub use load::{load_environment, read_control, read_texture, LoadedEnv};
 pub use options::{Background, Options, Parallax, ParallaxMode, Shading};
 pub use render::{render, render_lit, render_with_progress};

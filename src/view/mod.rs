@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 
 const INDEX: &str = include_str!("index.html");
 const VIEWER: &str = include_str!("viewer.js");
+const SHADERS: &str = include_str!("shaders.js");
 const UI: &str = include_str!("ui.js");
 
 /// Rows of the pbr roughness -> level table (read linearly between rows).
@@ -131,7 +132,7 @@ pub fn scene_script(env: &LoadedEnv, setup: &PbrSetup, extras: &Extras) -> Strin
     format!("window.cubeforgeScene = {scene};\n")
 }
 
-/// The page's files in `dir` (index.html, viewer.js, ui.js, data.js), or with `single_file`
+/// The page's files in `dir` (index.html, viewer.js, shaders.js, ui.js, data.js), or with `single_file`
 /// the one page `dir` names, everything inline.
 pub fn files(dir: &Path, single_file: bool, title: &str, scene: String) -> Vec<(PathBuf, Vec<u8>)> {
     let title = html_escape(title);
@@ -145,6 +146,7 @@ pub fn files(dir: &Path, single_file: bool, title: &str, scene: String) -> Vec<(
         let page = INDEX
             .replace("{{title}}", &title)
             .replace("<script src=\"data.js\"></script>", &inline(&scene))
+            .replace("<script src=\"shaders.js\"></script>", &inline(SHADERS))
             .replace("<script src=\"ui.js\"></script>", &inline(UI))
             .replace("<script src=\"viewer.js\"></script>", &inline(VIEWER));
         return vec![(dir.to_path_buf(), page.into_bytes())];
@@ -155,6 +157,7 @@ pub fn files(dir: &Path, single_file: bool, title: &str, scene: String) -> Vec<(
             INDEX.replace("{{title}}", &title).into_bytes(),
         ),
         (dir.join("viewer.js"), VIEWER.as_bytes().to_vec()),
+        (dir.join("shaders.js"), SHADERS.as_bytes().to_vec()),
         (dir.join("ui.js"), UI.as_bytes().to_vec()),
         (dir.join("data.js"), scene.into_bytes()),
     ]
