@@ -35,6 +35,20 @@ cf preview "$work/sky_gaussian.ktx2" -o "$out/preview_bias.png" --yaw 180 --size
 cf preview fixtures/sky.exr -o "$out/preview_per_vertex.png" --yaw 180 --size 384 \
     --shading per-vertex --tessellation 8
 
+# The viewer (cubeforge view) in headless Chromium: the page with its panel. Needs node,
+# chromium and puppeteer-core (target/tools, as .ci/run installs them).
+shot=tests/tools/view_shot.cjs
+if command -v node >/dev/null 2>&1 && command -v chromium >/dev/null 2>&1 \
+    && [ -d target/tools/node_modules/puppeteer-core ]; then
+    cf view fixtures/sky.exr -o "$work/view"
+    mkdir -p "$work/shots"
+    SHOT_PAGE=1 node "$shot" "$work/view/index.html" "$work/shots" \
+        "material=crystal&size=480&yaw=150&pitch=12" >/dev/null
+    cp "$work/shots/0.png" "$out/view_page.png"
+else
+    echo "skipped: view_page.png needs node, chromium and target/tools' puppeteer-core" >&2
+fi
+
 # A real photograph: Poly Haven's studio, as ../shared/fixtures/real/SOURCES.md describes.
 real=../shared/fixtures/real
 if [ -d "$real" ]; then

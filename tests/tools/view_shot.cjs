@@ -3,7 +3,8 @@
 //   node view_shot.cjs PAGE OUTDIR QUERY...      (OUTDIR/0.png, 1.png, ... in query order)
 // Prints one JSON line per query: {"ready": true, "ms": ...} (ms from navigation to the
 // frame) or {"error": "...", "shown": "..."} (the page's own message, for broken data). Needs
-// puppeteer-core (target/tools) and chromium (CHROMIUM names another).
+// puppeteer-core (target/tools) and chromium (CHROMIUM names another). SHOT_PAGE=1 takes the
+// whole page (picture and panel) at 900 x 560 instead of the canvas.
 'use strict';
 const path = require('path');
 const fs = require('fs');
@@ -35,8 +36,15 @@ const puppeteer = require(path.join(tools, 'puppeteer-core'));
         console.log(JSON.stringify({ error, shown }));
         continue;
       }
-      const png = await tab.evaluate(() => document.getElementById('view').toDataURL('image/png'));
-      fs.writeFileSync(path.join(outdir, i + '.png'), Buffer.from(png.split(',')[1], 'base64'));
+      if (process.env.SHOT_PAGE) {
+        // The whole page (picture and panel), for the documentation.
+        await tab.setViewport({ width: 900, height: 560, deviceScaleFactor: 1 });
+        await tab.waitForFunction('window.cubeforgeReady === true');
+        await tab.screenshot({ path: path.join(outdir, i + '.png') });
+      } else {
+        const png = await tab.evaluate(() => document.getElementById('view').toDataURL('image/png'));
+        fs.writeFileSync(path.join(outdir, i + '.png'), Buffer.from(png.split(',')[1], 'base64'));
+      }
       console.log(JSON.stringify({ ready: true, ms, title: await tab.title() }));
     }
   } finally {

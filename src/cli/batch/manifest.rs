@@ -29,6 +29,7 @@ const COMMANDS: &[&str] = &[
     "lut",
     "control",
     "preview",
+    "view",
 ];
 
 /// Commands whose first argument is not an input file: `lut` takes none, `control` a recipe.

@@ -92,6 +92,7 @@ fn job_of(argv: &[String]) -> Result<Box<dyn Job + Send + Sync>> {
         Command::Lut(a) => Box::new(super::lut::job(a)?),
         Command::Control(a) => Box::new(super::control::job(a)?),
         Command::Preview(a) => Box::new(super::preview::job(a)?),
+        Command::View(a) => Box::new(super::view::job(a)?),
         _ => return Err(Error::usage("not a job")),
     })
 }
