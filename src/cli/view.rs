@@ -34,7 +34,7 @@ pub struct Args {
     #[arg(long)]
     pub control: Option<PathBuf>,
     /// LOD bias that a control map's blur = 1 stands for, when it has no sidecar.
-    #[arg(long, default_value_t = 6.0)]
+    #[arg(value_parser = super::finite_f32, long, default_value_t = 4.0)]
     pub max_lod_bias: f32,
     /// pbr reads a chain with this engine's roughness mapping, as preview's --target.
     #[arg(long, value_enum)]

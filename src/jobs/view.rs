@@ -54,7 +54,7 @@ impl ViewJob {
             single_file: false,
             decal: None,
             control: None,
-            max_lod_bias: 6.0,
+            max_lod_bias: 4.0,
             target: None,
             limits: Limits::default(),
         }

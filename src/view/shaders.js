@@ -9,7 +9,10 @@ window.cubeforgeShaders = {
   in vec2 pos;
   void main() { gl_Position = vec4(pos, 0.0, 1.0); }`,
 
-  FS: `#version 300 es
+  // The fragment program without its first line: the renderer puts the version and the
+  // variant's constants before it (MODEL 0 reflect, 1 refract, 2 dispersion, 3 pbr;
+  // PER_VERTEX, CROSS and SEAMS 0 or 1), so each variant compiles only what it runs.
+  FS: `
   precision highp float;
   precision highp samplerCube;
   uniform samplerCube env;
@@ -17,7 +20,6 @@ window.cubeforgeShaders = {
   uniform sampler2D decal;
   uniform sampler2D control;
   uniform sampler2D dfg;
-  uniform int model;              // 0 reflect, 1 refract, 2 dispersion, 3 pbr
   uniform bool hasDecal, hasControl, lodOn;
   uniform vec3 decalColor, etaRatio, baseColor;
   uniform float reflectivity, transmittance, fresnelBias, fresnelScale, fresnelPower;
@@ -30,9 +32,6 @@ window.cubeforgeShaders = {
   uniform int parallax;           // 0 none, 1 approx, 2 exact (Brennan)
   uniform float envRadius;
   uniform vec3 envCenter;
-  uniform bool perVertex;
-  uniform int mapLayout;             // 0 the sphere, 1 the map as a horizontal cross
-  uniform bool seams;             // tint lookups near a face's edge
   uniform vec2 origin;            // this cell's corner in the canvas (a sweep's row)
   uniform float crossCell;
   uniform int bands;              // the per-vertex mesh's latitude bands
@@ -88,17 +87,17 @@ window.cubeforgeShaders = {
     vec3 i = p - eye;
     factor = 0.0;
     v[1] = vec3(0.0); v[2] = vec3(0.0); v[3] = vec3(0.0);
-    if (model == 1) {
+    if (MODEL == 1) {
       v[0] = correct(refr(normalize(i), n, etaRatio.x), p);
     } else {
       v[0] = correct(reflect(i, n), p);
-      if (model == 2) {
+      if (MODEL == 2) {
         vec3 iu = normalize(i);
         v[1] = correct(refr(iu, n, etaRatio.x), p);
         v[2] = correct(refr(iu, n, etaRatio.y), p);
         v[3] = correct(refr(iu, n, etaRatio.z), p);
         factor = fres(iu, n);
-      } else if (model == 3) {
+      } else if (MODEL == 3) {
         v[1] = n;
         v[2] = -normalize(i);
       }
@@ -123,7 +122,7 @@ window.cubeforgeShaders = {
   }
   // With seams on: magenta where a lookup lands within a texel and a half of a face's edge.
   vec4 seamTint(vec3 d, vec4 c) {
-    if (!seams) return c;
+    if (SEAMS == 0) return c;
     vec3 a = abs(d);
     float ma = max(a.x, max(a.y, a.z));
     vec2 st = a.x == ma ? d.yz : (a.y == ma ? d.xz : d.xy);
@@ -154,7 +153,7 @@ window.cubeforgeShaders = {
       refl = t.x; trans = t.y; blur = t.z * maxLodBias; mask = t.w;
     }
     vec4 dc = hasDecal ? texture(decal, uv) : vec4(decalColor, 1.0);
-    if (model == 3) {
+    if (MODEL == 3) {
       vec3 bc = hasDecal ? baseColor * dc.rgb : baseColor;
       vec3 nn = normalize(v[1]);
       float nv = clamp(dot(nn, normalize(v[2])), 0.0, 1.0);
@@ -171,8 +170,8 @@ window.cubeforgeShaders = {
         lods[k] = b + lodBias + blur;
       }
     }
-    if (model == 0) return mix(dc, texCube(v[0], lods[0]), refl).rgb;
-    if (model == 1) return mix(dc, texCube(v[0], lods[0]), trans).rgb;
+    if (MODEL == 0) return mix(dc, texCube(v[0], lods[0]), refl).rgb;
+    if (MODEL == 1) return mix(dc, texCube(v[0], lods[0]), trans).rgb;
     vec3 reflected = texCube(v[0], lods[0]).rgb;
     vec3 refracted = vec3(texCube(v[1], lods[1]).x, texCube(v[2], lods[2]).y, texCube(v[3], lods[3]).z);
     float f = mask * factor + (1.0 - mask) * refl;
@@ -200,6 +199,7 @@ window.cubeforgeShaders = {
     }
     return fragmentStage(v, factor, uv, vx, vy, ok);
   }
+#if PER_VERTEX
   // The per-vertex mesh (preview's sphere::tessellate): vertex (i, j) of bands latitude
   // bands and 2 bands columns; pole vertices take their cell's middle u.
   vec3 meshPos(int i, int j) {
@@ -282,14 +282,18 @@ window.cubeforgeShaders = {
     }
     return fragmentStage(v, factor, uv, vx, vy, ok);
   }
+#endif
   vec3 shade(vec2 s) {
     vec3 d = ray(s);
     vec3 p;
     if (!hit(eye, d, p)) return background(d).rgb;
-    if (!perVertex) return shadeFragment(s, p);
+#if PER_VERTEX
     bool covered = true;
     vec3 c = shadeVertex(s, p, covered);
     return covered ? c : background(d).rgb;
+#else
+    return shadeFragment(s, p);
+#endif
   }
   float curve(float x) {
     x = max(x, 0.0);
@@ -301,6 +305,7 @@ window.cubeforgeShaders = {
     v = clamp(v, 0.0, 1.0);
     return v <= 0.0031308 ? v * 12.92 : 1.055 * pow(v, 1.0 / 2.4) - 0.055;
   }
+#if CROSS
   // The map as a horizontal cross (cubeforge's hcross: +Y above +Z, -X +Z +X -Z, -Y below),
   // each face as its image; black where no face is (as convert writes it).
   vec3 crossTexel(vec2 s) {
@@ -316,13 +321,18 @@ window.cubeforgeShaders = {
            : face == 4 ? vec3(sc, -tc, 1.0) : vec3(-sc, -tc, -1.0);
     return background(d).rgb;
   }
+#endif
   void main() {
     // Pixel (i, j) from the top left of this cell, as the CPU renderer counts them.
     vec2 px = vec2(floor(gl_FragCoord.x) - origin.x, size - 1.0 - floor(gl_FragCoord.y) + origin.y);
     vec3 acc = vec3(0.0);
     for (int k = 0; k < 16; k++) {
       if (k >= samples) break;
-      acc += mapLayout == 1 ? crossTexel(px + offsets[k]) : shade(px + offsets[k]);
+#if CROSS
+      acc += crossTexel(px + offsets[k]);
+#else
+      acc += shade(px + offsets[k]);
+#endif
     }
     vec3 c = acc / float(samples) * exp2(exposure);
     color = vec4(srgb(curve(c.r)), srgb(curve(c.g)), srgb(curve(c.b)), 1.0);

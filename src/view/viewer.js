@@ -73,6 +73,8 @@
 
   // ---- data: base64 RGBA16F, level by level, faces +X -X +Y -Y +Z -Z ----
   function halves(b64) {
+    // The platform's decoder where it has one (Chromium 140 and later), else atob.
+    if (Uint8Array.fromBase64) return new Uint16Array(Uint8Array.fromBase64(b64).buffer);
     const s = atob(b64);
     const bytes = new Uint8Array(s.length);
     for (let i = 0; i < s.length; i++) bytes[i] = s.charCodeAt(i);
@@ -149,31 +151,53 @@
     return t[i] + (t[i + 1] - t[i]) * (x - i);
   }
 
-  let program, uniforms;
-  function setup() {
-    program = gl.createProgram();
-    gl.attachShader(program, compile(gl.VERTEX_SHADER, VS));
-    gl.attachShader(program, compile(gl.FRAGMENT_SHADER, FS));
-    gl.linkProgram(program);
-    if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(program));
+  // One program per variant (material model, shading, layout, seams), compiled when first
+  // asked: SwiftShader takes seconds over a program that holds every path.
+  const programs = {};
+  let program, uniforms, buffer, textures;
+  function variant(cross) {
+    const model = { reflect: 0, refract: 1, dispersion: 2, pbr: 3 }[mat.model];
+    // pbr's own GGX chain goes up when a pbr material first needs it.
+    if (model === 3 && scene.pbr.chain && textures[1][2] === textures[0][2]) {
+      textures[1][2] = cubeTexture(scene.pbr.chain);
+      gl.activeTexture(gl.TEXTURE1);
+      gl.bindTexture(gl.TEXTURE_CUBE_MAP, textures[1][2]);
+    }
+    const defs = { MODEL: model, PER_VERTEX: state.shading === 'per-vertex' && !cross ? 1 : 0,
+                   CROSS: cross ? 1 : 0, SEAMS: state.seams ? 1 : 0 };
+    const key = JSON.stringify(defs);
+    if (!programs[key]) {
+      const header = '#version 300 es\n' + Object.entries(defs).map(([k, v]) => '#define ' + k + ' ' + v + '\n').join('');
+      const p = gl.createProgram();
+      gl.attachShader(p, compile(gl.VERTEX_SHADER, VS));
+      gl.attachShader(p, compile(gl.FRAGMENT_SHADER, header + FS));
+      gl.linkProgram(p);
+      if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(p));
+      const cache = {};
+      programs[key] = { p, u: new Proxy(cache, { get: (c, k) => (k in c ? c[k] : (c[k] = gl.getUniformLocation(p, k))) }) };
+    }
+    ({ p: program, u: uniforms } = programs[key]);
     gl.useProgram(program);
-    const buf = gl.createBuffer();
-    gl.bindBuffer(gl.ARRAY_BUFFER, buf);
-    gl.bufferData(gl.ARRAY_BUFFER, new Float32Array([-1, -1, 3, -1, -1, 3]), gl.STATIC_DRAW);
     const loc = gl.getAttribLocation(program, 'pos');
+    gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
     gl.enableVertexAttribArray(loc);
     gl.vertexAttribPointer(loc, 2, gl.FLOAT, false, 0, 0);
-    uniforms = new Proxy({}, { get: (c, k) => (k in c ? c[k] : (c[k] = gl.getUniformLocation(program, k))) });
-    const units = [['env', gl.TEXTURE_CUBE_MAP, cubeTexture(scene.env)],
-                   ['chain', gl.TEXTURE_CUBE_MAP, scene.pbr.chain ? cubeTexture(scene.pbr.chain) : null],
-                   ['decal', gl.TEXTURE_2D, scene.decal ? texture2d(scene.decal, true) : null],
-                   ['control', gl.TEXTURE_2D, scene.control ? texture2d(scene.control, true) : null],
-                   ['dfg', gl.TEXTURE_2D, texture2d(scene.dfg, false)]];
-    units.forEach(([name, target, tex], i) => {
+    textures.forEach(([name], i) => gl.uniform1i(uniforms[name], i));
+  }
+
+  function setup() {
+    buffer = gl.createBuffer();
+    gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
+    gl.bufferData(gl.ARRAY_BUFFER, new Float32Array([-1, -1, 3, -1, -1, 3]), gl.STATIC_DRAW);
+    const envTex = cubeTexture(scene.env);
+    textures = [['env', gl.TEXTURE_CUBE_MAP, envTex],
+                ['chain', gl.TEXTURE_CUBE_MAP, envTex],
+                ['decal', gl.TEXTURE_2D, scene.decal ? texture2d(scene.decal, true) : null],
+                ['control', gl.TEXTURE_2D, scene.control ? texture2d(scene.control, true) : null],
+                ['dfg', gl.TEXTURE_2D, texture2d(scene.dfg, false)]];
+    textures.forEach(([, target, tex], i) => {
       gl.activeTexture(gl.TEXTURE0 + i);
-      if (name === 'chain' && !tex) tex = units[0][2];
       if (tex) gl.bindTexture(target, tex);
-      gl.uniform1i(uniforms[name], i);
     });
   }
 
@@ -240,10 +264,9 @@
   }
 
   function drawCell(cell, x0, n, cross) {
+    variant(cross);
     const u = uniforms;
     const cam = camera();
-    const models = { reflect: 0, refract: 1, dispersion: 2, pbr: 3 };
-    gl.uniform1i(u.model, models[mat.model]);
     gl.uniform1i(u.hasDecal, scene.decal ? 1 : 0);
     gl.uniform1i(u.hasControl, scene.control ? 1 : 0);
     gl.uniform1i(u.lodOn, scene.env.levels.length > 1 && mat.model !== 'pbr' ? 1 : 0);
@@ -279,17 +302,15 @@
     gl.uniform1i(u.parallax, state.env_radius > 0 ? (state.parallax === 'exact' ? 2 : 1) : 0);
     gl.uniform1f(u.envRadius, state.env_radius);
     gl.uniform3fv(u.envCenter, state.env_center);
-    gl.uniform1i(u.perVertex, state.shading === 'per-vertex' ? 1 : 0);
     gl.uniform1i(u.bands, state.tessellation);
-    gl.uniform1i(u.mapLayout, cross ? 1 : 0);
-    gl.uniform1i(u.seams, state.seams ? 1 : 0);
     gl.uniform2f(u.origin, x0, 0);
     gl.uniform1f(u.crossCell, state.size / 4);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
   }
 
   function ready() {
-    gl.finish();
+    // Reading a pixel back waits for the frame itself (finish alone did not, in Chromium).
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
     document.title = 'ready';
     window.cubeforgeReady = true;
   }

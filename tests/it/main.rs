@@ -38,3 +38,4 @@ mod readme;
 mod real_images;
 mod rgbe;
 mod simd;
+mod view;

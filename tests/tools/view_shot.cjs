@@ -8,7 +8,8 @@
 'use strict';
 const path = require('path');
 const fs = require('fs');
-const tools = path.join(__dirname, '..', '..', 'target', 'tools', 'node_modules');
+// $CUBEFORGE_TOOLS, as the other readers, else target/tools.
+const tools = path.join(process.env.CUBEFORGE_TOOLS || path.join(__dirname, '..', '..', 'target', 'tools'), 'node_modules');
 const puppeteer = require(path.join(tools, 'puppeteer-core'));
 
 (async () => {
