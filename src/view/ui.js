@@ -15,6 +15,8 @@ window.cubeforgeUi = function (state, mat, scene, redraw) {
   function change(k, v) {
     remember(k, v);
     if (k in state) redraw({ [k]: v });
+    else if (k === 'eta') { mat.eta_ratio = [1 / v, 1 / v, 1 / v]; redraw(); }
+    else if (k.startsWith('eta_')) { mat.eta_ratio[['eta_red', 'eta_green', 'eta_blue'].indexOf(k)] = 1 / v; redraw(); }
     else { mat[k] = v; redraw(); }
   }
   const h = document.createElement('h1');
@@ -91,12 +93,15 @@ window.cubeforgeUi = function (state, mat, scene, redraw) {
     slider('roughness', 0, 1, 0.01, mat.roughness);
     slider('metallic', 0, 1, 0.01, mat.metallic);
   } else if (mat.model === 'dispersion') {
+    ['eta_red', 'eta_green', 'eta_blue'].forEach((k, i) => slider(k, 1, 2.6, 0.005, 1 / mat.eta_ratio[i]));
+    slider('reflectivity', 0, 1, 0.01, mat.reflectivity);
     slider('fresnel_bias', 0, 1, 0.01, mat.fresnel_bias);
     slider('fresnel_scale', 0, 2, 0.01, mat.fresnel_scale);
     slider('fresnel_power', 0, 8, 0.1, mat.fresnel_power);
   } else if (mat.model === 'reflect') {
     slider('reflectivity', 0, 1, 0.01, mat.reflectivity);
   } else {
+    slider('eta', 1, 2.6, 0.005, 1 / mat.eta_ratio[0]);
     slider('transmittance', 0, 1, 0.01, mat.transmittance);
   }
   slider('tessellation', 2, 64, 1, state.tessellation);

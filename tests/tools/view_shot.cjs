@@ -4,7 +4,7 @@
 // Prints one JSON line per query: {"ready": true, "ms": ...} (ms from navigation to the
 // frame) or {"error": "...", "shown": "..."} (the page's own message, for broken data). Needs
 // puppeteer-core (target/tools) and chromium (CHROMIUM names another). SHOT_PAGE=1 takes the
-// whole page (picture and panel) at 900 x 560 instead of the canvas.
+// whole page (picture and panel) at 900 x 620 instead of the canvas.
 'use strict';
 const path = require('path');
 const fs = require('fs');
@@ -39,7 +39,7 @@ const puppeteer = require(path.join(tools, 'puppeteer-core'));
       }
       if (process.env.SHOT_PAGE) {
         // The whole page (picture and panel), for the documentation.
-        await tab.setViewport({ width: 900, height: 560, deviceScaleFactor: 1 });
+        await tab.setViewport({ width: 900, height: 620, deviceScaleFactor: 1 });
         await tab.waitForFunction('window.cubeforgeReady === true');
         await tab.screenshot({ path: path.join(outdir, i + '.png') });
       } else {
