@@ -71,7 +71,7 @@
     if (q.has(k)) mat.eta_ratio[i] = 1 / num(k, 1 / base.eta_ratio[i]);
   }
 
-  // ---- data: base64 RGBA16F, level by level, faces +X -X +Y -Y +Z -Z ----
+  // ---- data: base64 half floats (cube chains RGB, images RGBA), level by level, faces +X -X +Y -Y +Z -Z ----
   function halves(b64) {
     // The platform's decoder where it has one (Chromium 140 and later), else atob.
     if (Uint8Array.fromBase64) return new Uint16Array(Uint8Array.fromBase64(b64).buffer);
@@ -81,14 +81,16 @@
     return new Uint16Array(bytes.buffer);
   }
   function cubeTexture(chain) {
+    // Rows of 6-byte texels: small levels' rows are not 4-byte aligned.
+    gl.pixelStorei(gl.UNPACK_ALIGNMENT, 2);
     const t = gl.createTexture();
     gl.bindTexture(gl.TEXTURE_CUBE_MAP, t);
     const data = halves(chain.data);
     let at = 0;
     chain.levels.forEach((n, level) => {
       for (let f = 0; f < 6; f++) {
-        const len = n * n * 4;
-        gl.texImage2D(gl.TEXTURE_CUBE_MAP_POSITIVE_X + f, level, gl.RGBA16F, n, n, 0, gl.RGBA,
+        const len = n * n * 3;
+        gl.texImage2D(gl.TEXTURE_CUBE_MAP_POSITIVE_X + f, level, gl.RGB16F, n, n, 0, gl.RGB,
                       gl.HALF_FLOAT, data.subarray(at, at + len));
         at += len;
       }

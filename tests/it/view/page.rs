@@ -89,7 +89,7 @@ fn an_unknown_material_is_named_on_the_page() {
     );
 }
 
-/// A 512-face Gaussian chain (10 levels, a 45 MB data.js) becomes ready. The target
+/// A 512-face Gaussian chain (10 levels, a 34 MB data.js) becomes ready. The target
 /// is under 2 s in headless Chromium on 2 cores (1.8 s by hand; 3.0-4.2 s here on 2 cores
 /// busy with builds); a timed assertion on a shared machine is flaky, so the bound here is
 /// generous (10 s) and the time is printed (`--nocapture`).
