@@ -362,5 +362,6 @@ pub fn encode(
         } else {
             Vec::new()
         },
+        gain_map: None,
     })
 }

@@ -48,6 +48,10 @@ pub struct Args {
     /// Write 16-bit PNG instead of 8-bit.
     #[arg(long)]
     pub png16: bool,
+    /// Write a .jpg as UltraHDR: an SDR picture (--tonemap's curve, ACES by default) with a
+    /// gain map that rebuilds the radiance (three.js's UltraHDRLoader, Android, Chrome).
+    #[arg(long)]
+    pub ultrahdr: bool,
     /// Texel format of KTX2 and DDS output (default rgba16f; bc6h and bc7 are block
     /// compressed, rgb9e5 and rg11b10 packed HDR in 4 bytes).
     #[arg(long, value_enum)]
@@ -79,6 +83,8 @@ Examples:
   cubeforge convert faces/ -o sky.ktx2 --gpu-format bc6h --zstd
   # a horizontal cross, 8-bit sRGB, the HDR range tone-mapped
   cubeforge convert panorama.hdr -o cross.png --size 256 --tonemap aces
+  # an UltraHDR panorama: any JPEG reader sees the SDR picture, HDR readers the radiance
+  cubeforge convert panorama.hdr -o panorama.jpg --to equirect --ultrahdr
   # a photographed mirror ball (square images need --from) to a panorama
   cubeforge convert ball.exr --from sphere -o from_ball.exr --to equirect";
 
@@ -107,6 +113,7 @@ pub fn job(a: Args) -> Result<ConvertJob> {
             },
         },
         png16: a.png16,
+        ultrahdr: a.ultrahdr,
         gpu_format: a.gpu_format,
         zstd: a.zstd.zstd,
         levels: a.levels,

@@ -203,6 +203,9 @@ fn decode_bytes(
             Some(result) => result.map(|(img, meta)| (Decoded::Image(img), meta)),
             None => raster::decode(bytes, FileFormat::Hdr, path, opts),
         },
+        FileFormat::Jpeg if super::ultrahdr::has_gain_map(bytes) => {
+            super::ultrahdr::decode(bytes, path, opts)
+        }
         f => raster::decode(bytes, f, path, opts),
     }
 }

@@ -18,6 +18,7 @@ mod map_kind;
 pub mod raster;
 pub mod rgbe;
 mod session;
+pub mod ultrahdr;
 
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
@@ -61,6 +62,9 @@ pub enum FileFormat {
     Ktx1,
     /// Babylon.js `.env` prefiltered environment (RGBD PNG faces).
     Env,
+    /// UltraHDR: a JPEG with a gain map (known by its content; a `.jpg` name). Not in
+    /// [`FileFormat::ALL`], whose extensions it would repeat.
+    UltraHdr,
 }
 
 impl FileFormat {
@@ -110,7 +114,7 @@ impl FileFormat {
     pub fn extension(self) -> &'static str {
         match self {
             FileFormat::Png => "png",
-            FileFormat::Jpeg => "jpg",
+            FileFormat::Jpeg | FileFormat::UltraHdr => "jpg",
             FileFormat::Tga => "tga",
             FileFormat::Hdr => "hdr",
             FileFormat::Exr => "exr",
@@ -180,6 +184,7 @@ impl FileFormat {
             FileFormat::Dds => "DDS",
             FileFormat::Ktx1 => "KTX",
             FileFormat::Env => "Babylon.js env",
+            FileFormat::UltraHdr => "UltraHDR JPEG",
         }
     }
 
@@ -210,6 +215,7 @@ impl FileFormat {
                 | FileFormat::Dds
                 | FileFormat::Ktx1
                 | FileFormat::Env
+                | FileFormat::UltraHdr
         )
     }
 }
@@ -302,7 +308,12 @@ fn read_sanitized(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     // (it cost a quarter of a 4K panorama's decode). OpenEXR sanitizes as it decodes.
     if matches!(
         meta.file_format,
-        FileFormat::Png | FileFormat::Jpeg | FileFormat::Tga | FileFormat::Hdr | FileFormat::Exr
+        FileFormat::Png
+            | FileFormat::Jpeg
+            | FileFormat::Tga
+            | FileFormat::Hdr
+            | FileFormat::Exr
+            | FileFormat::UltraHdr
     ) {
         return Ok((decoded, meta));
     }
@@ -344,6 +355,11 @@ pub struct WriteOptions {
     pub zstd: Option<i32>,
     /// Sample type of EXR output.
     pub exr_float: ExrFloat,
+    /// JPEG outputs as UltraHDR (a gain map over an SDR picture made by this curve; `None`
+    /// means ACES there): radiance kept, not clipped.
+    pub gain_map: Option<crate::tonemap::Tonemap>,
+    /// Whose arithmetic an UltraHDR output's gain map is fitted to.
+    pub gain_reader: ultrahdr::Reader,
 }
 
 /// The sample type of EXR output: half floats (what tools expect, largest 65504) or 32-bit
@@ -376,6 +392,12 @@ pub fn encode_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<Vec
                     c.name()
                 ),
             )),
+            None if f == FileFormat::Jpeg && opts.gain_map.is_some() => {
+                let curve = opts.gain_map.unwrap_or_default();
+                ultrahdr::encode(img, curve, opts.gain_reader, false)
+                    .map(|(bytes, _)| bytes)
+                    .map_err(|e| Error::file(path, e))
+            }
             None => raster::encode(img, f, opts).map_err(|e| Error::file(path, e)),
         },
     }

@@ -10,7 +10,7 @@ use std::path::Path;
 pub fn largest_value(format: FileFormat, gpu: GpuFormat) -> Option<f32> {
     match format {
         FileFormat::Exr => Some(HALF_MAX),
-        FileFormat::Hdr => Some(f32::MAX),
+        FileFormat::Hdr | FileFormat::UltraHdr => Some(f32::MAX),
         FileFormat::Env => Some(babylon_env::RGBD_MAX),
         FileFormat::Ktx2 | FileFormat::Dds | FileFormat::Ktx1 => gpu.largest_value(),
         _ => None,

@@ -21,6 +21,16 @@ fn image_format(f: FileFormat) -> ImageFormat {
     }
 }
 
+/// The width and height a PNG, JPEG, TGA or HDR header declares, nothing decoded.
+pub(crate) fn dimensions(bytes: &[u8], f: FileFormat, path: &Path) -> Result<(u32, u32)> {
+    let fail = |msg: String| Error::file(path, format!("cannot decode {}: {msg}", f.name()));
+    let reader = ::image::ImageReader::with_format(Cursor::new(bytes), image_format(f));
+    let decoder = caught(|| reader.into_decoder())
+        .map_err(fail)?
+        .map_err(|e| fail(one_line(&e.to_string())))?;
+    Ok(decoder.dimensions())
+}
+
 /// Decodes, checking the header's size against the limit before the pixels are read.
 pub fn decode(
     bytes: &[u8],

@@ -59,8 +59,10 @@ pub struct ConvertJob {
     pub levels: Option<usize>,
     /// Which level of a mip chain input to read.
     pub level: usize,
-    /// Exposure (stops) and tone curve for 8-bit outputs.
+    /// Exposure (stops) and tone curve for 8-bit outputs (for UltraHDR, the SDR picture's).
     pub tone: (f32, Tonemap),
+    /// A JPEG output as UltraHDR: an SDR picture and a gain map that keeps the radiance.
+    pub ultrahdr: bool,
     /// Limits and colour handling of the inputs (`linear` applies to the output too).
     pub read: ReadOptions,
 }
@@ -83,6 +85,7 @@ impl ConvertJob {
             levels: None,
             level: 0,
             tone: (0.0, Tonemap::None),
+            ultrahdr: false,
             read: ReadOptions::default(),
         }
     }
@@ -124,6 +127,17 @@ impl Job for ConvertJob {
         let name = self.output.name();
         let mut warnings = Vec::new();
         let mut warn = |s: String| warnings.push(Warning::new(s));
+        let jpeg = match to {
+            MapKind::Layout(Kind::Faces) => self.face_format == Some(FileFormat::Jpeg),
+            _ => FileFormat::from_extension(&name) == Some(FileFormat::Jpeg),
+        };
+        if self.ultrahdr && !jpeg {
+            return Err(Error::usage(format!(
+                "{} writes JPEG files: name the output .jpg (or give {} jpg for faces)",
+                param("ultrahdr"),
+                param("format")
+            )));
+        }
         if to.container().is_none() {
             if self.levels.is_some() {
                 warn(format!(
@@ -255,6 +269,8 @@ impl Job for ConvertJob {
             gpu_format: self.gpu_format.unwrap_or_default(),
             zstd: self.zstd.filter(|_| container),
             exr_float: self.exr_float,
+            gain_map: self.ultrahdr.then_some(self.tone.1),
+            gain_reader: Default::default(),
         };
         target.levels = self.levels;
         let (tone, tone_warning) = output::tone_for(&target, self.tone.0, self.tone.1);
@@ -274,13 +290,17 @@ impl Job for ConvertJob {
             format: target.write.gpu_format,
             psnr_db,
         });
+        let gain_map = encoded.gain_map;
         let files = encoded.into_files();
         output::deliver(&files, &self.output, &loaded.files)?;
         progress.stage("write");
         Ok(Report {
             written: files.paths(),
             warnings: warnings.into_vec(),
-            summary: Vec::new(),
+            summary: gain_map
+                .iter()
+                .map(|g| crate::error::Text::new(g.summary()))
+                .collect(),
             quality,
         })
     }

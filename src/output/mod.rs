@@ -45,6 +45,8 @@ pub struct Encoded {
     pub psnr: Option<f64>,
     /// Folders that are outputs in their own right (six faces, a chain), replaced whole.
     pub folders: Vec<PathBuf>,
+    /// What an UltraHDR output's gain map kept.
+    pub gain_map: Option<io::ultrahdr::GainStats>,
 }
 
 impl Encoded {
@@ -84,9 +86,13 @@ impl Target {
 
     /// The file type the result is encoded in (None: a name with an unknown extension).
     pub fn format(&self) -> Option<FileFormat> {
-        match self.kind {
+        let f = match self.kind {
             MapKind::Layout(Kind::Faces) => Some(self.face_format),
             _ => FileFormat::from_extension(&self.path),
+        };
+        match f {
+            Some(FileFormat::Jpeg) if self.write.gain_map.is_some() => Some(FileFormat::UltraHdr),
+            f => f,
         }
     }
 
@@ -141,6 +147,7 @@ impl Target {
         });
         let clamped = clamped.or(clipped);
         let mut psnr = None;
+        let mut gain_map = None;
         let faces = self.kind == MapKind::Layout(Kind::Faces);
         let folders = if faces {
             vec![self.path.clone()]
@@ -174,6 +181,16 @@ impl Target {
                 }
                 vec![(self.path.clone(), bytes)]
             }
+            Output::Image(img) if self.format() == Some(FileFormat::UltraHdr) => {
+                refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
+                let curve = self.write.gain_map.unwrap_or_default();
+                let equirect = self.kind == MapKind::Layout(Kind::Equirect);
+                let (bytes, stats) =
+                    io::ultrahdr::encode(&img, curve, self.write.gain_reader, equirect)
+                        .map_err(|e| Error::file(&self.path, e))?;
+                gain_map = Some(stats);
+                vec![(self.path.clone(), bytes)]
+            }
             Output::Image(img) => {
                 refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
                 let bytes = io::encode_image(&self.path, &img, &self.write)?;
@@ -185,6 +202,7 @@ impl Target {
             clamped,
             psnr,
             folders,
+            gain_map,
         })
     }
 }
@@ -264,13 +282,7 @@ pub(crate) fn encode_faces(
     write: &WriteOptions,
     inputs: &[PathBuf],
 ) -> Result<Vec<(PathBuf, Vec<u8>)>> {
-    let ext = match format {
-        FileFormat::Jpeg => "jpg",
-        FileFormat::Png => "png",
-        FileFormat::Tga => "tga",
-        FileFormat::Hdr => "hdr",
-        _ => "exr",
-    };
+    let ext = format.extension();
     let paths: Vec<PathBuf> = FACE_NAMES
         .iter()
         .map(|n| dir.join(format!("{n}.{ext}")))
@@ -339,6 +351,10 @@ pub fn tone_for(
     tonemap: Tonemap,
 ) -> (Option<(f32, Tonemap)>, Option<String>) {
     let given = exposure != 0.0 || tonemap != Tonemap::None;
+    if target.format() == Some(FileFormat::UltraHdr) {
+        // The curve makes the SDR picture ([`WriteOptions::gain_map`]); the radiance is kept.
+        return ((exposure != 0.0).then_some((exposure, Tonemap::None)), None);
+    }
     if target.is_8bit() {
         return (given.then_some((exposure, tonemap)), None);
     }

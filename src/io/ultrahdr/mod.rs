@@ -1,0 +1,389 @@
+//! UltraHDR: a JPEG whose picture is an SDR rendition (tone-mapped, sRGB) and which carries a
+//! second JPEG, the gain map, with the metadata (Adobe's `hdrgm` XMP and ISO 21496-1) that
+//! rebuilds the radiance from the two: `hdr = (sdr + k) * 2^g - k` per channel, where `g`
+//! runs from the map's smallest to its largest log2 gain over the gain map's 0..255. Every
+//! JPEG reader shows the SDR picture; three.js, Android and Chrome rebuild the radiance.
+//!
+//! The container (MPF, XMP, ISO 21496-1) is the `ultrahdr-rs` crate's; the JPEG codec is the
+//! `image` crate's. The gain range is the image's own: the largest gain is the brightest
+//! texel's over its SDR value, so a sun survives whole.
+
+#![warn(missing_docs)]
+
+use super::guard::caught;
+use super::{raster, Decoded, FileFormat, Meta, ReadOptions};
+use crate::error::{Error, Result};
+use crate::image::{linear_to_srgb, ColorSpace, Image};
+use crate::tonemap::Tonemap;
+use ::image::codecs::jpeg::JpegEncoder;
+use ::image::{ExtendedColorType, ImageEncoder};
+use glam::Vec4;
+use rayon::prelude::*;
+use std::path::Path;
+use ultrahdr_rs::{ColorGamut, Decoder, GainMapMetadata};
+
+mod fit;
+
+/// How gain-map values become radiance: per channel, the log2 gain runs from `lo` to `hi` over
+/// the map's 0..1 raised to 1/`gamma`, and `hdr = (sdr + k_sdr) * 2^gain - k_hdr`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Gains {
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+    pub gamma: [f64; 3],
+    pub k_sdr: [f64; 3],
+    pub k_hdr: [f64; 3],
+}
+
+/// Whose arithmetic rebuilds the radiance. The format's (ISO 21496-1, Android's and Chrome's
+/// readers, cubeforge's), or three.js's `UltraHDRLoader` (r187), which applies the gain to
+/// the sRGB-encoded values and linearizes after: `srgb((sdr8 + 64 k) 2^(w g) - 64 k)` with
+/// `w = log2(1.8^(capacity/2)) / capacity` (0.424) and integer steps below 1024, within
+/// 2-6% of the format's (the sign depends on the gain). A file fitted to three.js carries
+/// [`THREE_MARK`], by which cubeforge reads it three.js's way too.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Reader {
+    /// ISO 21496-1, as written.
+    #[default]
+    Format,
+    /// three.js's `UltraHDRLoader`.
+    Three,
+}
+
+/// The JPEG comment by which a gain map fitted to three.js's arithmetic says so.
+pub const THREE_MARK: &[u8] = b"cubeforge: gain map fitted to three.js UltraHDRLoader (r187)";
+
+impl Gains {
+    fn of(meta: &GainMapMetadata) -> Gains {
+        Gains {
+            lo: meta.gain_map_min,
+            hi: meta.gain_map_max,
+            gamma: meta.gamma,
+            k_sdr: meta.base_offset,
+            k_hdr: meta.alternate_offset,
+        }
+    }
+
+    /// Channel `c`'s radiance from its SDR value (linear) and gain-map value (0..1).
+    #[inline]
+    fn radiance(&self, c: usize, sdr: f32, code: f32) -> f32 {
+        let t = (code.clamp(0.0, 1.0) as f64).powf(1.0 / self.gamma[c]);
+        let log = self.lo[c] + (self.hi[c] - self.lo[c]) * t;
+        let v = (sdr as f64 + self.k_sdr[c]) * log.exp2() - self.k_hdr[c];
+        (v.max(0.0) as f32).min(1e28)
+    }
+
+    /// Channel `c`'s radiance as three.js rebuilds it (see [`Reader::Three`]).
+    #[inline]
+    fn radiance_three(&self, c: usize, sdr: f32, code: f32) -> f32 {
+        let capacity = self.hi[0].max(1e-6);
+        let weight = ((1.8f64.powf(capacity * 0.5)).log2() / capacity).clamp(0.0, 1.0);
+        let t = (code.clamp(0.0, 1.0) as f64).powf(1.0 / self.gamma[c]);
+        let log = self.lo[c] + (self.hi[c] - self.lo[c]) * t;
+        let s8 = (linear_to_srgb(sdr) * 255.0).round() as f64;
+        // Offsets from the XMP, in 8-bit steps: `OffsetSDR / (1/64)`.
+        let v = (s8 + self.k_sdr[c] * 64.0) * (log * weight).exp2() - self.k_hdr[c] * 64.0;
+        let lin = if v < 10.31475 {
+            v * 0.000303527
+        } else if v < 1024.0 {
+            (v.floor() * 0.003717127 + 0.0521327014).powf(2.4)
+        } else {
+            (v * 0.003717127 + 0.0521327014).powf(2.4)
+        };
+        lin.clamp(0.0, 65504.0) as f32
+    }
+
+    /// The radiance of `sdr` (linear) under the gain map `map` (values over 255), stretched
+    /// bilinearly over the picture where it is smaller, as `reader` rebuilds it.
+    pub(crate) fn apply(&self, sdr: &Image, map: &Image, reader: Reader) -> Image {
+        let f = match reader {
+            Reader::Format => Gains::radiance,
+            Reader::Three => Gains::radiance_three,
+        };
+        let (w, h) = (sdr.width, sdr.height);
+        let sx = map.width as f32 / w as f32;
+        let sy = map.height as f32 / h as f32;
+        let mut out = vec![Vec4::ZERO; w * h];
+        out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+            for (x, o) in row.iter_mut().enumerate() {
+                let g = map.bilinear((x as f32 + 0.5) * sx, (y as f32 + 0.5) * sy, false);
+                let s = sdr.pixels[y * w + x];
+                *o = Vec4::new(
+                    f(self, 0, s.x, g.x),
+                    f(self, 1, s.y, g.y),
+                    f(self, 2, s.z, g.z),
+                    1.0,
+                );
+            }
+        });
+        Image {
+            width: w,
+            height: h,
+            pixels: out,
+        }
+    }
+}
+
+/// The offset added to both renditions before the ratio is taken (the format's usual 1/64):
+/// it keeps the gain of black texels finite.
+const OFFSET: f64 = 1.0 / 64.0;
+/// JPEG quality of the SDR picture, and of the gain map (its steps are stops of light, so it
+/// is kept finer). Chosen on the real test panoramas at 512 x 256, the hardest case (a sun in
+/// a few texels): the largest base quality that keeps the sunniest under an eighth of its
+/// `.hdr`, with three.js reading every one's light within 1% (at 72 it was 1/7.9).
+const BASE_QUALITY: u8 = 71;
+const GAIN_QUALITY: u8 = 85;
+/// Rounds of fitting the gain map to the light through its own JPEG ([`fit::fit`]).
+const ROUNDS: usize = 8;
+/// The gain map's texels are this many picture texels a side. 1: three.js stretches a
+/// smaller map with the canvas's own filter, whose light came out 1-3% under a bilinear
+/// stretch's, where a whole map is copied as it is.
+const GAIN_SCALE: usize = 1;
+
+/// What writing a gain map kept of the radiance, read back through cubeforge's own decoder.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct GainStats {
+    /// The largest radiance the gain range rebuilds (over an SDR white).
+    pub largest_kept: f32,
+    /// The brightest channel value in the source.
+    pub brightest: f32,
+    /// The gain map's range in stops (log2 of the smallest and largest gain).
+    pub stops: (f32, f32),
+    /// The rebuilt radiance's total per channel against the source's, minus 1.
+    pub flux_error: [f64; 3],
+    /// The file's size in bytes.
+    pub bytes: usize,
+}
+
+impl GainStats {
+    /// One line for a report.
+    pub fn summary(&self) -> String {
+        let pct = |v: f64| format!("{:+.2}%", v * 100.0);
+        let e = self.flux_error;
+        format!(
+            "UltraHDR: gains 2^{:.2} to 2^{:.2}, radiance kept up to {} (the brightest texel: {}); \
+             totals read back R {} G {} B {}; {} KB",
+            self.stops.0,
+            self.stops.1,
+            short(self.largest_kept),
+            short(self.brightest),
+            pct(e[0]),
+            pct(e[1]),
+            pct(e[2]),
+            self.bytes.div_ceil(1024)
+        )
+    }
+}
+
+fn short(v: f32) -> String {
+    if v >= 100.0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
+/// Whether `bytes` is a JPEG that carries a gain map (a primary JPEG with a second one and
+/// gain-map metadata).
+pub fn has_gain_map(bytes: &[u8]) -> bool {
+    bytes.starts_with(&[0xFF, 0xD8])
+        && caught(|| {
+            Decoder::new(bytes).is_ok_and(|d| {
+                d.is_ultrahdr() && d.metadata().is_some() && d.gainmap_jpeg().is_some()
+            })
+        })
+        .unwrap_or(false)
+}
+
+/// Encodes `img` (linear radiance) as an UltraHDR JPEG whose SDR picture is `curve` of the
+/// radiance (ACES for `None`), its gain map fitted to `reader`'s arithmetic; the statistics
+/// are those of the file as that reader rebuilds it, its light weighed as an equirect's where
+/// `equirect` says the image is one.
+pub fn encode(
+    img: &Image,
+    curve: Tonemap,
+    reader: Reader,
+    equirect: bool,
+) -> std::result::Result<(Vec<u8>, GainStats), String> {
+    let (w, h) = (img.width as u32, img.height as u32);
+    let curve = if curve == Tonemap::None {
+        Tonemap::Aces
+    } else {
+        curve
+    };
+    let base: Vec<u8> = img
+        .pixels
+        .par_iter()
+        .flat_map_iter(|p| {
+            let m = curve.map(*p, 0.0);
+            [m.x, m.y, m.z].map(|v| super::unorm8(linear_to_srgb(v)))
+        })
+        .collect();
+    let mut base_jpeg = jpeg(&base, w, h, BASE_QUALITY)?;
+    // The gain is taken against the SDR picture as a reader decodes it, so the base's JPEG
+    // error is not carried into the radiance.
+    let sdr = decode_jpeg(&base_jpeg, false)?;
+    let fitted = fit::fit(
+        img,
+        &sdr,
+        reader,
+        equirect,
+        GAIN_SCALE,
+        ROUNDS,
+        |codes, gw, gh| jpeg(codes, gw as u32, gh as u32, GAIN_QUALITY),
+    )?;
+    let (lo, hi) = (fitted.gains.lo[0], fitted.gains.hi[0]);
+    if reader == Reader::Three {
+        // A comment segment right after SOI: FF FE, its length, the text.
+        let len = (THREE_MARK.len() + 2) as u16;
+        let mut seg = vec![0xFF, 0xFE];
+        seg.extend_from_slice(&len.to_be_bytes());
+        seg.extend_from_slice(THREE_MARK);
+        base_jpeg.splice(2..2, seg);
+    }
+    let mut meta = GainMapMetadata::default();
+    meta.gain_map_min = [lo; 3];
+    meta.gain_map_max = [hi; 3];
+    meta.gamma = [1.0; 3];
+    meta.base_offset = [OFFSET; 3];
+    meta.alternate_offset = [OFFSET; 3];
+    meta.base_hdr_headroom = 0.0;
+    meta.alternate_hdr_headroom = hi.max(0.0);
+    meta.use_base_color_space = true;
+    meta.backward_direction = false;
+    let bytes = caught(|| {
+        ultrahdr_rs::encode_ultrahdr(&base_jpeg, &fitted.jpeg, &meta, ColorGamut::Bt709)
+    })?
+    .map_err(|e| format!("cannot assemble the UltraHDR file: {e}"))?;
+    let (back, _) =
+        rebuild(&bytes).map_err(|e| format!("the written file does not read back: {e}"))?;
+    let largest = match reader {
+        Reader::Format => (1.0 + OFFSET) * hi.exp2() - OFFSET,
+        Reader::Three => fitted.gains.radiance_three(0, 1.0, 1.0) as f64,
+    };
+    let stats = GainStats {
+        largest_kept: largest as f32,
+        brightest: img
+            .pixels
+            .par_iter()
+            .map(|p| p.x.max(p.y).max(p.z))
+            .reduce(|| 0.0, f32::max),
+        stops: (lo as f32, hi as f32),
+        flux_error: flux_error(img, &back, equirect),
+        bytes: bytes.len(),
+    };
+    Ok((bytes, stats))
+}
+
+/// An RGB JPEG of `data` (8 bits a channel, chroma whole: the gain map's chroma is light).
+fn jpeg(data: &[u8], w: u32, h: u32, quality: u8) -> std::result::Result<Vec<u8>, String> {
+    let mut out = Vec::new();
+    JpegEncoder::new_with_quality(&mut out, quality)
+        .write_image(data, w, h, ExtendedColorType::Rgb8)
+        .map_err(|e| e.to_string())?;
+    Ok(out)
+}
+
+/// A JPEG's pixels: linear light (sRGB decoded), or its stored values over 255 (`raw`).
+fn decode_jpeg(bytes: &[u8], raw: bool) -> std::result::Result<Image, String> {
+    let opts = ReadOptions {
+        linear: raw,
+        ..ReadOptions::default()
+    };
+    match raster::decode(bytes, FileFormat::Jpeg, Path::new("-"), &opts) {
+        Ok((Decoded::Image(img), _)) => Ok(img),
+        Ok(_) => Err("not an image".into()),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// The radiance an UltraHDR file holds at full boost, its SDR picture and gain map decoded
+/// and the gain map stretched bilinearly over the picture where it is smaller, with the
+/// arithmetic it was fitted to ([`THREE_MARK`]).
+fn rebuild(bytes: &[u8]) -> std::result::Result<(Image, Reader), String> {
+    let decoder = caught(|| Decoder::new(bytes))?.map_err(|e| e.to_string())?;
+    let meta = decoder.metadata().ok_or("no gain-map metadata")?.clone();
+    if meta.backward_direction {
+        return Err("its base picture is the HDR rendition (backward direction), which cubeforge does not read".into());
+    }
+    let (Some(primary), Some(gain)) = (decoder.primary_jpeg(), decoder.gainmap_jpeg()) else {
+        return Err("the gain map or the primary picture is missing".into());
+    };
+    let sdr = decode_jpeg(primary, false)?;
+    let map = decode_jpeg(gain, true)?;
+    let bad = |v: f64| !v.is_finite();
+    if (0..3).any(|c| {
+        bad(meta.gain_map_min[c])
+            || bad(meta.gain_map_max[c])
+            || meta.gamma[c].is_nan()
+            || meta.gamma[c] <= 0.0
+            || bad(meta.base_offset[c])
+            || bad(meta.alternate_offset[c])
+    }) {
+        return Err("its gain-map metadata holds a value that is not finite".into());
+    }
+    let reader = if primary
+        .windows(THREE_MARK.len())
+        .take(4096)
+        .any(|w| w == THREE_MARK)
+    {
+        Reader::Three
+    } else {
+        Reader::Format
+    };
+    Ok((Gains::of(&meta).apply(&sdr, &map, reader), reader))
+}
+
+/// Decodes an UltraHDR file to its radiance at full boost.
+pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
+    let decoder = caught(|| Decoder::new(bytes))
+        .map_err(|e| Error::file(path, format!("cannot decode UltraHDR: {e}")))?
+        .map_err(|e| Error::file(path, format!("cannot decode UltraHDR: {e}")))?;
+    if let Some(p) = decoder.primary_jpeg() {
+        // The limits, from the primary picture's frame header, before any pixel is decoded.
+        let (w, h) = raster::dimensions(p, FileFormat::Jpeg, path)?;
+        opts.limits.check(path, w as u64, h as u64)?;
+    }
+    let (img, reader) =
+        rebuild(bytes).map_err(|e| Error::file(path, format!("cannot decode UltraHDR: {e}")))?;
+    let meta = Meta {
+        file_format: FileFormat::UltraHdr,
+        pixel_format: match reader {
+            Reader::Format => "RGB8 + RGB gain map".into(),
+            Reader::Three => "RGB8 + RGB gain map (fitted to three.js)".into(),
+        },
+        color_space: ColorSpace::Linear,
+        hdr: true,
+        replaced_values: 0,
+        stored_levels: 1,
+    };
+    Ok((Decoded::Image(img), meta))
+}
+
+/// Each channel's light in `back` against `src`'s, minus 1 (0 where the source is black):
+/// texels weighed by the solid angle they stand for in an equirect (`equirect`), else alike.
+fn flux_error(src: &Image, back: &Image, equirect: bool) -> [f64; 3] {
+    let h = src.height;
+    let sum = |img: &Image| {
+        img.pixels
+            .par_chunks(img.width)
+            .enumerate()
+            .map(|(y, row)| {
+                let w = if equirect {
+                    ((y as f64 + 0.5) / h as f64 * std::f64::consts::PI).sin()
+                } else {
+                    1.0
+                };
+                row.iter().fold([0.0; 3], |a, p| {
+                    [
+                        a[0] + w * p.x as f64,
+                        a[1] + w * p.y as f64,
+                        a[2] + w * p.z as f64,
+                    ]
+                })
+            })
+            .reduce(|| [0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
+    };
+    let (a, b) = (sum(src), sum(back));
+    [0, 1, 2].map(|c| if a[c] > 0.0 { b[c] / a[c] - 1.0 } else { 0.0 })
+}

@@ -1,0 +1,82 @@
+// Reads image files with three.js's own loaders in headless Chromium: UltraHDRLoader for .jpg,
+// HDRLoader for .hdr, EXRLoader for .exr (npm `three`, as an application imports them):
+//   node three_uhdr.cjs OUTDIR FILE...
+// For each file writes OUTDIR/<i>.f32 (the texture's data as three.js holds it: RGBA float32,
+// rows as stored in the file, top first) and prints one JSON line {"width", "height",
+// "flipY"} or {"error": "..."}. Pages are served from memory (request interception), so
+// ES modules load without a server. Needs puppeteer-core and three (target/tools) and chromium.
+'use strict';
+const path = require('path');
+const fs = require('fs');
+const tools = path.join(process.env.CUBEFORGE_TOOLS || path.join(__dirname, '..', '..', 'target', 'tools'), 'node_modules');
+const puppeteer = require(path.join(tools, 'puppeteer-core'));
+
+const ORIGIN = 'http://cubeforge.test/';
+const PAGE = `<!doctype html><script type="importmap">
+{"imports": {"three": "${ORIGIN}three/build/three.module.js",
+             "three/addons/": "${ORIGIN}three/examples/jsm/"}}</script>
+<script type="module">
+import * as THREE from 'three';
+import { UltraHDRLoader } from 'three/addons/loaders/UltraHDRLoader.js';
+import { HDRLoader } from 'three/addons/loaders/HDRLoader.js';
+import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
+window.readFile = (url) => new Promise((resolve) => {
+  const ext = url.split('.').pop().toLowerCase();
+  const loader = ext === 'jpg' ? new UltraHDRLoader() : ext === 'hdr' ? new HDRLoader() : new EXRLoader();
+  loader.setDataType(THREE.FloatType);
+  loader.load(url, (tex) => {
+    const img = tex.image;
+    const data = new Float32Array(img.data.buffer, img.data.byteOffset, img.data.length);
+    const channels = data.length / (img.width * img.height);
+    const rgba = new Float32Array(img.width * img.height * 4);
+    for (let i = 0; i < img.width * img.height; i++) {
+      for (let c = 0; c < 4; c++) rgba[i * 4 + c] = c < channels ? data[i * channels + c] : 1;
+    }
+    const bytes = new Uint8Array(rgba.buffer);
+    let s = '';
+    for (let i = 0; i < bytes.length; i += 0x8000) s += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
+    resolve({ width: img.width, height: img.height, flipY: tex.flipY, data: btoa(s) });
+  }, undefined, (e) => resolve({ error: String(e && e.message || e) }));
+});
+window.pageReady = true;
+</script>`;
+
+(async () => {
+  const [outdir, ...files] = process.argv.slice(2);
+  const browser = await puppeteer.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    headless: true,
+    args: ['--no-sandbox', '--force-color-profile=srgb'],
+  });
+  try {
+    const tab = await browser.newPage();
+    tab.on('pageerror', (e) => console.error('page:', e.message));
+    await tab.setRequestInterception(true);
+    tab.on('request', (req) => {
+      const url = req.url();
+      if (!url.startsWith(ORIGIN)) return req.abort();
+      const rel = decodeURIComponent(url.slice(ORIGIN.length));
+      if (rel === 'index.html') return req.respond({ contentType: 'text/html', body: PAGE });
+      let file;
+      if (rel.startsWith('three/')) file = path.join(tools, rel);
+      else if (rel.startsWith('file/')) file = files[Number(rel.split('/')[1])];
+      if (!file || !fs.existsSync(file)) return req.respond({ status: 404, body: '' });
+      const type = file.endsWith('.js') ? 'text/javascript' : 'application/octet-stream';
+      req.respond({ contentType: type, body: fs.readFileSync(file) });
+    });
+    await tab.goto(ORIGIN + 'index.html');
+    await tab.waitForFunction('window.pageReady === true', { timeout: 60000 });
+    for (const [i, file] of files.entries()) {
+      const ext = path.extname(file);
+      const r = await tab.evaluate((u) => window.readFile(u), `${ORIGIN}file/${i}/x${ext}`);
+      if (r.error) {
+        console.log(JSON.stringify({ error: r.error }));
+        continue;
+      }
+      fs.writeFileSync(path.join(outdir, i + '.f32'), Buffer.from(r.data, 'base64'));
+      console.log(JSON.stringify({ width: r.width, height: r.height, flipY: r.flipY }));
+    }
+  } finally {
+    await browser.close();
+  }
+})().catch((e) => { console.log(JSON.stringify({ error: String(e) })); process.exit(1); });
