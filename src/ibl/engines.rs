@@ -9,6 +9,7 @@ use crate::filter::{sh, ChainOptions};
 use crate::image::Image;
 use crate::io::{self, FileFormat, GpuFormat};
 use crate::resample::Orientation;
+use crate::tonemap::Tonemap;
 use std::path::{Path, PathBuf};
 
 /// Where and under which name an engine's files go.
@@ -108,18 +109,35 @@ pub fn defaults(engine: Engine) -> Defaults {
         },
         // These filter the panorama themselves; sizes do not apply.
         Engine::Godot | Engine::Unity | Engine::Unreal => linear(512, 1, 32),
+        // three.js's equirect mapping (`equirectUv`: u = 0.5 + atan2(z, x) / 2pi, v up) shows
+        // a panorama un-mirrored in its right-handed world, its centre at +X: a quarter turn
+        // puts the centre at +Z, as the other targets have it. PMREM makes faces of a quarter
+        // of the width (a power of two, at least 256).
+        Engine::Three => Defaults {
+            orientation: Orientation {
+                yaw: 90.0,
+                ..Orientation::default()
+            },
+            ..linear(256, 1, 32)
+        },
         Engine::Generic => linear(256, 8, 32),
     }
 }
 
 /// Engines that import a panorama and prefilter it themselves.
 pub fn filters_itself(engine: Engine) -> bool {
-    matches!(engine, Engine::Godot | Engine::Unity | Engine::Unreal)
+    matches!(
+        engine,
+        Engine::Godot | Engine::Unity | Engine::Unreal | Engine::Three
+    )
 }
 
 /// The panorama an engine that filters for itself imports, with the import settings to pick.
 pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<Delivery> {
     use crate::layout::Kind;
+    if engine == Engine::Three {
+        return three(ctx, size);
+    }
     let (ext, snippet) = match engine {
         Engine::Godot => (
             "exr",
@@ -160,6 +178,47 @@ pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<De
     Ok(Delivery::new(vec![(path, bytes)], snippet, clamped))
 }
 
+/// three.js: `NAME.jpg`, UltraHDR with its gain map fitted to `UltraHDRLoader`'s arithmetic,
+/// and `NAME.hdr` for older three.js; 4 faces wide, the face a power of two (256 to 4096, from
+/// the input's or `size`), which PMREM takes whole.
+fn three(ctx: &Context, size: Option<usize>) -> Result<Delivery> {
+    use crate::io::ultrahdr::{self, Reader};
+    let face = size
+        .unwrap_or_else(|| ctx.loaded.face_size().next_power_of_two())
+        .clamp(256, 4096);
+    let face = 1 << face.ilog2();
+    let img = crate::convert::to_image(
+        ctx.loaded,
+        crate::layout::Kind::Equirect,
+        face,
+        &ctx.resampler(),
+    );
+    let (jpg, hdr) = (ctx.path(".jpg"), ctx.path(".hdr"));
+    let (bytes, stats) = ultrahdr::encode(&img, Tonemap::Aces, Reader::Three, true)
+        .map_err(|e| crate::error::Error::file(&jpg, e))?;
+    let fallback = io::encode_image(&hdr, &img, &io::WriteOptions::default())?;
+    let snippet = format!(
+        "{}
+three.js (r17x and later): the panorama lights and backs the scene; PMREM filters it.
+         import {{ UltraHDRLoader }} from 'three/addons/loaders/UltraHDRLoader.js';
+         new UltraHDRLoader().load('{j}', (texture) => {{
+           texture.mapping = THREE.EquirectangularReflectionMapping;
+           scene.environment = texture;
+           scene.background = texture;
+         }});
+         Without UltraHDR: HDRLoader (RGBELoader before r179) with '{h}', the same lines.\n\
+         The panorama's centre faces world +Z (behind the default camera, which looks along -Z).",
+        stats.summary(),
+        j = file_name(&jpg),
+        h = file_name(&hdr),
+    );
+    Ok(Delivery::new(
+        vec![(jpg, bytes), (hdr, fallback)],
+        snippet,
+        None,
+    ))
+}
+
 /// Packs the computed lighting as `engine` loads it.
 pub fn pack(engine: Engine, l: &Lighting, ctx: &Context) -> Result<Delivery> {
     let mut delivery = match engine {
@@ -168,7 +227,7 @@ pub fn pack(engine: Engine, l: &Lighting, ctx: &Context) -> Result<Delivery> {
         Engine::Filament => filament(l, ctx)?,
         Engine::Babylon => babylon(l, ctx)?,
         Engine::Generic => generic(l, ctx)?,
-        Engine::Godot | Engine::Unity | Engine::Unreal => {
+        Engine::Godot | Engine::Unity | Engine::Unreal | Engine::Three => {
             return panorama(engine, ctx, Some(l.specular.size()))
         }
     };

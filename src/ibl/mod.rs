@@ -39,6 +39,9 @@ pub enum Engine {
     Unity,
     /// Unreal: an equirect HDR imported as a TextureCube (Unreal filters it itself).
     Unreal,
+    /// three.js: an UltraHDR equirect for `UltraHDRLoader` and a Radiance `.hdr` fallback,
+    /// sized for its PMREM (which filters it), in three.js's equirect mapping.
+    Three,
     /// No engine in particular: KTX2 specular and diffuse, SH as JSON, a DFG table.
     Generic,
 }
@@ -54,6 +57,7 @@ impl Engine {
             Engine::Godot => "godot",
             Engine::Unity => "unity",
             Engine::Unreal => "unreal",
+            Engine::Three => "three",
             Engine::Generic => "generic",
         }
     }

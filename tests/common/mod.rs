@@ -318,6 +318,15 @@ pub fn filament_js() -> Option<PathBuf> {
     )
 }
 
+/// The folder holding `node_modules/three` (three.js's loaders), for
+/// `tests/tools/three_uhdr.cjs`.
+pub fn three_js() -> Option<PathBuf> {
+    node_package(
+        "three",
+        "npm install three@0.187 in target/tools or $CUBEFORGE_TOOLS; node from your system",
+    )
+}
+
 /// A C++ compiler (`c++`), to check printed C++ snippets against stand-in declarations.
 pub fn cxx() -> bool {
     reader_found(

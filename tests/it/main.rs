@@ -38,4 +38,5 @@ mod readme;
 mod real_images;
 mod rgbe;
 mod simd;
+mod ultrahdr;
 mod view;

@@ -183,11 +183,17 @@ fn short(v: f32) -> String {
     }
 }
 
-/// Whether `bytes` is a JPEG that carries a gain map (a primary JPEG with a second one and
-/// gain-map metadata).
+/// Whether `bytes` is a JPEG that carries a gain map, or says it does (its container
+/// directory names one): a file cut short is then refused, not read as its SDR picture.
 pub fn has_gain_map(bytes: &[u8]) -> bool {
-    bytes.starts_with(&[0xFF, 0xD8])
-        && caught(|| {
+    if !bytes.starts_with(&[0xFF, 0xD8]) {
+        return false;
+    }
+    let head = &bytes[..bytes.len().min(1 << 16)];
+    let says = |needle: &[u8]| head.windows(needle.len()).any(|w| w == needle);
+    says(b"Item:Semantic=\"GainMap\"")
+        || says(b"hdr-gain-map")
+        || caught(|| {
             Decoder::new(bytes).is_ok_and(|d| {
                 d.is_ultrahdr() && d.metadata().is_some() && d.gainmap_jpeg().is_some()
             })
@@ -215,8 +221,16 @@ pub fn encode(
         .pixels
         .par_iter()
         .flat_map_iter(|p| {
-            let m = curve.map(*p, 0.0);
-            [m.x, m.y, m.z].map(|v| super::unorm8(linear_to_srgb(v)))
+            // The curve scales each texel by what it does to its largest channel: hues kept,
+            // so the three channels' gains are alike (a grey gain map, which the JPEG keeps
+            // well: its chroma is coarse) and a sun stays yellow in the picture.
+            let top = p.x.max(p.y).max(p.z).max(0.0);
+            let k = if top > 0.0 {
+                curve.curve(top) / top
+            } else {
+                0.0
+            };
+            [p.x, p.y, p.z].map(|v| super::unorm8(linear_to_srgb(v.max(0.0) * k)))
         })
         .collect();
     let mut base_jpeg = jpeg(&base, w, h, BASE_QUALITY)?;

@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 /// A dim panorama with three marks: red straight ahead (+Z, the panorama's centre), green 35
 /// degrees to its right (towards +X) and blue 35 degrees above it. A mirrored copy puts green
 /// on the left; a turned one moves red.
-fn marker_panorama(dir: &Path) -> PathBuf {
+pub(crate) fn marker_panorama(dir: &Path) -> PathBuf {
     let (w, h) = (256, 128);
     let marks = [
         (Vec3::Z, Vec4::new(40.0, 0.0, 0.0, 1.0)),
@@ -105,7 +105,7 @@ fn marks_in_world(cube: &CubeMap, world_of: impl Fn(Vec3) -> Vec3) -> [Vec3; 3] 
 
 /// Asserts the marks read un-mirrored for a viewer in a right- or left-handed Y-up world,
 /// with the centre mark at `ahead`.
-fn assert_unmirrored(engine: &str, marks: [Vec3; 3], right_handed: bool, ahead: Vec3) {
+pub(crate) fn assert_unmirrored(engine: &str, marks: [Vec3; 3], right_handed: bool, ahead: Vec3) {
     let [red, green, blue] = marks;
     assert!(
         red.dot(ahead) > 0.99,

@@ -1,0 +1,358 @@
+//! UltraHDR (gain-map JPEG): `convert --ultrahdr` and `ibl --target three` written, read back
+//! by cubeforge and by three.js's own `UltraHDRLoader` in headless Chromium
+//! (`tests/tools/three_uhdr.cjs`): light kept, the sun's range, size, and the chiral marks
+//! where three.js's equirect mapping puts them.
+
+use crate::common::{self, read_image, run, stderr};
+use cubeforge::image::Image;
+use glam::{Vec3, Vec4};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const THREE_TOOL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/tools/three_uhdr.cjs");
+
+fn ok(args: &[&str]) -> String {
+    let o = run(args);
+    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// Each channel's mean radiance over the sphere of an equirect (rows weighed by solid angle).
+fn sphere_mean(img: &Image) -> [f64; 3] {
+    let (w, h) = (img.width, img.height);
+    let (mut sum, mut weight) = ([0.0f64; 3], 0.0);
+    for y in 0..h {
+        let s = ((y as f64 + 0.5) / h as f64 * std::f64::consts::PI).sin();
+        for x in 0..w {
+            let p = img.pixels[y * w + x];
+            for c in 0..3 {
+                sum[c] += s * p[c] as f64;
+            }
+            weight += s;
+        }
+    }
+    sum.map(|v| v / weight)
+}
+
+/// The largest relative difference of the channels' means.
+fn flux_off(a: &Image, b: &Image) -> f64 {
+    let (a, b) = (sphere_mean(a), sphere_mean(b));
+    (0..3)
+        .map(|c| (a[c] / b[c] - 1.0).abs())
+        .fold(0.0, f64::max)
+}
+
+/// The files as three.js's loaders hold them (UltraHDRLoader for .jpg, HDRLoader for .hdr), rows
+/// top first; None (after a SKIPPED line, or a failure under CI) without Chromium and three.
+fn three_reads(files: &[&Path]) -> Option<Vec<Image>> {
+    if !crate::view::browser() || common::three_js().is_none() {
+        return None;
+    }
+    let out = tempfile::tempdir().unwrap();
+    let o = Command::new("node")
+        .arg(THREE_TOOL)
+        .arg(out.path())
+        .args(files)
+        .output()
+        .expect("node runs");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "three_uhdr.cjs: {stdout} {}",
+        stderr(&o)
+    );
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), files.len(), "three_uhdr.cjs printed {stdout}");
+    let images = lines
+        .iter()
+        .enumerate()
+        .map(|(i, line)| {
+            let v: serde_json::Value = serde_json::from_str(line).unwrap();
+            assert!(
+                v.get("error").is_none(),
+                "three.js read {}: {v}",
+                files[i].display()
+            );
+            let (w, h) = (
+                v["width"].as_u64().unwrap() as usize,
+                v["height"].as_u64().unwrap() as usize,
+            );
+            let bytes = std::fs::read(out.path().join(format!("{i}.f32"))).unwrap();
+            let f: Vec<f32> = bytes
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+                .collect();
+            assert_eq!(f.len(), w * h * 4);
+            Image::from_fn(w, h, |x, y| {
+                let i = (y * w + x) * 4;
+                Vec4::new(f[i], f[i + 1], f[i + 2], 1.0)
+            })
+        })
+        .collect();
+    Some(images)
+}
+
+/// A dim panorama with a sun: 20 texels at 2^13 to 2^15 over a sky near 1.
+fn sunny_panorama(dir: &Path) -> PathBuf {
+    let img = Image::from_fn(256, 128, |x, y| {
+        let sky = Vec4::new(0.4 + y as f32 / 256.0, 0.6, 0.9, 1.0);
+        let (dx, dy) = (x as f32 - 80.5, y as f32 - 30.5);
+        let r2 = dx * dx + dy * dy;
+        if r2 < 6.0 {
+            let k = (15.0 - r2 / 3.0).exp2();
+            Vec4::new(k, k * 0.9, k * 0.6, 1.0)
+        } else {
+            sky * (1.0 + (x % 7) as f32 / 7.0)
+        }
+    });
+    let path = dir.join("sunny.exr");
+    std::fs::write(
+        &path,
+        cubeforge::io::encode_image(&path, &img, &Default::default()).unwrap(),
+    )
+    .unwrap();
+    path
+}
+
+#[test]
+fn ultrahdr_round_trips_through_info_and_convert_with_its_sun() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = sunny_panorama(dir.path());
+    let jpg = dir.path().join("sunny.jpg");
+    let out = ok(&[
+        "convert",
+        src.to_str().unwrap(),
+        "-o",
+        jpg.to_str().unwrap(),
+        "--to",
+        "equirect",
+        "--ultrahdr",
+    ]);
+    assert!(out.contains("UltraHDR: gains"), "{out}");
+    let info = ok(&["info", jpg.to_str().unwrap()]);
+    assert!(
+        info.contains("UltraHDR JPEG") && info.contains("gain map"),
+        "{info}"
+    );
+    let (a, b) = (read_image(&jpg), read_image(&src));
+    let off = flux_off(&a, &b);
+    // The sun holds most of the light in 17 texels, each a code or two of an 8-bit gain map
+    // that spans 16 stops (4.5% a code): the real panoramas' suns keep theirs within 2%.
+    println!("UltraHDR round trip: light within {:.2}%", off * 100.0);
+    assert!(off < 0.03, "light off by {:.2}%", off * 100.0);
+    let top = |i: &Image| i.pixels.iter().map(|p| p.x).fold(0.0, f32::max);
+    assert!(
+        top(&a) > 0.5 * top(&b),
+        "the sun: {} of {}",
+        top(&a),
+        top(&b)
+    );
+    // Back through convert to an EXR: the radiance, not the SDR picture.
+    let exr = dir.path().join("back.exr");
+    ok(&[
+        "convert",
+        jpg.to_str().unwrap(),
+        "-o",
+        exr.to_str().unwrap(),
+        "--to",
+        "equirect",
+    ]);
+    // (half floats round the sun by a part in 2000)
+    assert!((flux_off(&read_image(&exr), &b) - off).abs() < 0.002);
+    // A plain JPEG of the same panorama still reads as an 8-bit picture.
+    let plain = dir.path().join("plain.jpg");
+    ok(&[
+        "convert",
+        src.to_str().unwrap(),
+        "-o",
+        plain.to_str().unwrap(),
+        "--to",
+        "equirect",
+        "--tonemap",
+        "aces",
+    ]);
+    let info = ok(&["info", plain.to_str().unwrap()]);
+    assert!(info.contains("format:       JPEG"), "{info}");
+}
+
+#[test]
+fn ultrahdr_is_refused_for_other_outputs_and_cut_files_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = sunny_panorama(dir.path());
+    let o = run([
+        "convert",
+        src.to_str().unwrap(),
+        "-o",
+        dir.path().join("x.png").to_str().unwrap(),
+        "--ultrahdr",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--ultrahdr writes JPEG files"),
+        "{}",
+        stderr(&o)
+    );
+    let jpg = dir.path().join("sunny.jpg");
+    ok(&[
+        "convert",
+        src.to_str().unwrap(),
+        "-o",
+        jpg.to_str().unwrap(),
+        "--to",
+        "equirect",
+        "--ultrahdr",
+    ]);
+    let bytes = std::fs::read(&jpg).unwrap();
+    // Cut inside the gain map: one line naming the file, no output.
+    let cut = dir.path().join("cut.jpg");
+    std::fs::write(&cut, &bytes[..bytes.len() - bytes.len() / 8]).unwrap();
+    let back = dir.path().join("cut.exr");
+    let o = run([
+        "convert",
+        cut.to_str().unwrap(),
+        "-o",
+        back.to_str().unwrap(),
+        "--to",
+        "equirect",
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "a cut UltraHDR file read: {err}");
+    assert!(err.contains("cut.jpg") && err.lines().count() == 1, "{err}");
+    assert!(!back.exists());
+}
+
+/// The real panoramas (../shared/fixtures/real/hdr, with suns up to 30000): `convert
+/// --ultrahdr` at their own size keeps the light within 2% as cubeforge reads it and is under
+/// an eighth of the `.hdr`; `ibl --target three` is read by three.js within 2%, its JPEG under
+/// an eighth of the `.hdr` beside it.
+#[test]
+fn real_panoramas_keep_their_light_in_ultrahdr_and_in_three() {
+    let Some(real) = common::real_dir() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let mut threes = vec![];
+    for name in ["esplanade", "park", "studio", "venice"] {
+        let src = real.join(format!("hdr/{name}.hdr"));
+        let jpg = dir.path().join(format!("{name}.jpg"));
+        ok(&[
+            "convert",
+            src.to_str().unwrap(),
+            "-o",
+            jpg.to_str().unwrap(),
+            "--to",
+            "equirect",
+            "--ultrahdr",
+        ]);
+        let (size, hdr) = (
+            std::fs::metadata(&jpg).unwrap().len(),
+            std::fs::metadata(&src).unwrap().len(),
+        );
+        let off = flux_off(&read_image(&jpg), &read_image(&src));
+        println!(
+            "{name}: UltraHDR {size} bytes (1/{:.1} of the .hdr), light within {:.2}%",
+            hdr as f64 / size as f64,
+            off * 100.0
+        );
+        assert!(
+            off < 0.02 && size * 8 < hdr,
+            "{name}: {:.2}%, {size} of {hdr} bytes",
+            off * 100.0
+        );
+        let out = dir.path().join(name);
+        ok(&[
+            "ibl",
+            src.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--target",
+            "three",
+            "-q",
+        ]);
+        threes.push((name, src, out));
+    }
+    let files: Vec<PathBuf> = threes
+        .iter()
+        .flat_map(|(_, _, o)| [o.join("env.jpg"), o.join("env.hdr")])
+        .collect();
+    let refs: Vec<&Path> = files.iter().map(|p| p.as_path()).collect();
+    let Some(read) = three_reads(&refs) else {
+        return;
+    };
+    for (i, (name, src, out)) in threes.iter().enumerate() {
+        let (jpg, hdr) = (&read[2 * i], &read[2 * i + 1]);
+        let source = read_image(src);
+        let (off, off_hdr) = (flux_off(jpg, &source), flux_off(hdr, &source));
+        let (a, b) = (
+            std::fs::metadata(out.join("env.jpg")).unwrap().len(),
+            std::fs::metadata(out.join("env.hdr")).unwrap().len(),
+        );
+        println!("{name}: three.js reads env.jpg within {:.2}% (env.hdr {:.2}%), {a} bytes, 1/{:.1} of env.hdr", off * 100.0, off_hdr * 100.0, b as f64 / a as f64);
+        assert!(
+            off < 0.02 && off_hdr < 0.02,
+            "{name}: {:.2}% / {:.2}%",
+            off * 100.0,
+            off_hdr * 100.0
+        );
+        assert!(a * 8 < b, "{name}: {a} of {b} bytes");
+        assert_eq!(
+            jpg.width, 1024,
+            "{name}: PMREM's faces are a quarter of the width, a power of two"
+        );
+    }
+}
+
+/// The marks of `tests/it/ibl`'s panorama (red at +Z, green 35 degrees right of it, blue 35
+/// degrees above) land, through three.js's own loaders and its `equirectUv` (u = 0.5 +
+/// atan2(z, x) / 2pi, v = 0.5 + asin(y) / pi, the top row at v = 1), at those directions of
+/// three.js's right-handed Y-up world.
+#[test]
+fn three_sees_the_marks_where_they_belong() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = crate::ibl::marker_panorama(dir.path());
+    let out = dir.path().join("three");
+    let said = ok(&[
+        "ibl",
+        src.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--target",
+        "three",
+    ]);
+    assert!(
+        said.contains("UltraHDRLoader") && said.contains("scene.environment"),
+        "{said}"
+    );
+    let Some(read) = three_reads(&[&out.join("env.jpg"), &out.join("env.hdr")]) else {
+        return;
+    };
+    for (img, what) in read.iter().zip(["env.jpg", "env.hdr"]) {
+        let (w, h) = (img.width, img.height);
+        let mut sums = [Vec3::ZERO; 3];
+        for y in 0..h {
+            for x in 0..w {
+                let p = img.pixels[y * w + x];
+                let u = (x as f32 + 0.5) / w as f32;
+                let v = 1.0 - (y as f32 + 0.5) / h as f32;
+                let phi = (u - 0.5) * std::f32::consts::TAU;
+                let theta = (v - 0.5) * std::f32::consts::PI;
+                let d = Vec3::new(
+                    theta.cos() * phi.cos(),
+                    theta.sin(),
+                    theta.cos() * phi.sin(),
+                );
+                for (c, sum) in sums.iter_mut().enumerate() {
+                    let others = (0..3).filter(|&o| o != c).map(|o| p[o]).fold(0.0, f32::max);
+                    if p[c] > 5.0 && p[c] > 4.0 * others {
+                        *sum += d;
+                    }
+                }
+            }
+        }
+        let marks = sums.map(|s| {
+            assert!(s.length() > 0.0, "{what}: a mark is missing");
+            s.normalize()
+        });
+        crate::ibl::assert_unmirrored(&format!("three.js {what}"), marks, true, Vec3::Z);
+    }
+}
