@@ -68,6 +68,8 @@ Examples:
   cubeforge ibl panorama.hdr -o godot/ --target godot
   cubeforge ibl panorama.hdr -o unity/ --target unity
   cubeforge ibl panorama.hdr -o unreal/ --target unreal
+  # three.js: env.jpg (UltraHDR, for UltraHDRLoader) and env.hdr, 1024 x 512 or wider
+  cubeforge ibl panorama.hdr -o three/ --target three
   # no engine in particular: KTX2 chains, SH as JSON, a DFG table
   cubeforge ibl panorama.hdr -o generic/ --target generic";
 
