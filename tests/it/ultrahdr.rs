@@ -17,6 +17,27 @@ fn ok(args: &[&str]) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
+/// `cubeforge convert IN -o OUT --to equirect EXTRA...`, its run.
+fn to_equirect(input: &Path, output: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "convert",
+        input.to_str().unwrap(),
+        "-o",
+        output.to_str().unwrap(),
+        "--to",
+        "equirect",
+    ];
+    args.extend_from_slice(extra);
+    run(&args)
+}
+
+/// [`to_equirect`], which must succeed; its standard output.
+fn to_equirect_ok(input: &Path, output: &Path, extra: &[&str]) -> String {
+    let o = to_equirect(input, output, extra);
+    assert!(o.status.success(), "{}: {}", input.display(), stderr(&o));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
 /// Each channel's mean radiance over the sphere of an equirect (rows weighed by solid angle).
 fn sphere_mean(img: &Image) -> [f64; 3] {
     let (w, h) = (img.width, img.height);
@@ -119,15 +140,7 @@ fn ultrahdr_round_trips_through_info_and_convert_with_its_sun() {
     let dir = tempfile::tempdir().unwrap();
     let src = sunny_panorama(dir.path());
     let jpg = dir.path().join("sunny.jpg");
-    let out = ok(&[
-        "convert",
-        src.to_str().unwrap(),
-        "-o",
-        jpg.to_str().unwrap(),
-        "--to",
-        "equirect",
-        "--ultrahdr",
-    ]);
+    let out = to_equirect_ok(&src, &jpg, &["--ultrahdr"]);
     assert!(out.contains("UltraHDR: gains"), "{out}");
     let info = ok(&["info", jpg.to_str().unwrap()]);
     assert!(
@@ -149,28 +162,12 @@ fn ultrahdr_round_trips_through_info_and_convert_with_its_sun() {
     );
     // Back through convert to an EXR: the radiance, not the SDR picture.
     let exr = dir.path().join("back.exr");
-    ok(&[
-        "convert",
-        jpg.to_str().unwrap(),
-        "-o",
-        exr.to_str().unwrap(),
-        "--to",
-        "equirect",
-    ]);
+    to_equirect_ok(&jpg, &exr, &[]);
     // (half floats round the sun by a part in 2000)
     assert!((flux_off(&read_image(&exr), &b) - off).abs() < 0.002);
     // A plain JPEG of the same panorama still reads as an 8-bit picture.
     let plain = dir.path().join("plain.jpg");
-    ok(&[
-        "convert",
-        src.to_str().unwrap(),
-        "-o",
-        plain.to_str().unwrap(),
-        "--to",
-        "equirect",
-        "--tonemap",
-        "aces",
-    ]);
+    to_equirect_ok(&src, &plain, &["--tonemap", "aces"]);
     let info = ok(&["info", plain.to_str().unwrap()]);
     assert!(info.contains("format:       JPEG"), "{info}");
 }
@@ -193,28 +190,13 @@ fn ultrahdr_is_refused_for_other_outputs_and_cut_files_are_named() {
         stderr(&o)
     );
     let jpg = dir.path().join("sunny.jpg");
-    ok(&[
-        "convert",
-        src.to_str().unwrap(),
-        "-o",
-        jpg.to_str().unwrap(),
-        "--to",
-        "equirect",
-        "--ultrahdr",
-    ]);
+    to_equirect_ok(&src, &jpg, &["--ultrahdr"]);
     let bytes = std::fs::read(&jpg).unwrap();
     // Cut inside the gain map: one line naming the file, no output.
     let cut = dir.path().join("cut.jpg");
     std::fs::write(&cut, &bytes[..bytes.len() - bytes.len() / 8]).unwrap();
     let back = dir.path().join("cut.exr");
-    let o = run([
-        "convert",
-        cut.to_str().unwrap(),
-        "-o",
-        back.to_str().unwrap(),
-        "--to",
-        "equirect",
-    ]);
+    let o = to_equirect(&cut, &back, &[]);
     let err = stderr(&o);
     assert!(!o.status.success(), "a cut UltraHDR file read: {err}");
     assert!(err.contains("cut.jpg") && err.lines().count() == 1, "{err}");
@@ -235,15 +217,7 @@ fn real_panoramas_keep_their_light_in_ultrahdr_and_in_three() {
     for name in ["esplanade", "park", "studio", "venice"] {
         let src = real.join(format!("hdr/{name}.hdr"));
         let jpg = dir.path().join(format!("{name}.jpg"));
-        ok(&[
-            "convert",
-            src.to_str().unwrap(),
-            "-o",
-            jpg.to_str().unwrap(),
-            "--to",
-            "equirect",
-            "--ultrahdr",
-        ]);
+        to_equirect_ok(&src, &jpg, &["--ultrahdr"]);
         let (size, hdr) = (
             std::fs::metadata(&jpg).unwrap().len(),
             std::fs::metadata(&src).unwrap().len(),
