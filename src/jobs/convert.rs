@@ -100,22 +100,28 @@ impl ConvertJob {
     }
 
     /// The memory of converting to `size`: the output (RGBA f32, twice over for mips and
-    /// encoding) beside the input's texels and pyramid (`input` bytes).
-    fn plan_bytes(to: Kind, size: usize, input: u64) -> u64 {
+    /// encoding; UltraHDR's fitting more) beside the input's texels and pyramid (`input`
+    /// bytes).
+    fn plan_bytes(&self, to: Kind, size: usize, input: u64) -> u64 {
         let (w, h) = to.image_size(size);
         let texels = if to != Kind::Faces {
             (w as u64).saturating_mul(h as u64)
         } else {
             (size as u64).saturating_mul(size as u64).saturating_mul(6)
         };
-        texels.saturating_mul(32).saturating_add(input)
+        let per_texel = if self.ultrahdr {
+            32 + io::ultrahdr::ENCODE_BYTES_PER_TEXEL
+        } else {
+            32
+        };
+        texels.saturating_mul(per_texel).saturating_add(input)
     }
 
     fn check_memory(&self, to: Kind, size: usize, input: u64) -> Result<()> {
         let (w, h) = to.image_size(size);
         self.limits().check_memory(
             format_args!("{} {size} ({w}x{h} output)", param("size")),
-            Self::plan_bytes(to, size, input),
+            self.plan_bytes(to, size, input),
         )
     }
 }
@@ -206,7 +212,7 @@ impl Job for ConvertJob {
         let to = self.target()?.kind.layout();
         let plan = chain::plan_level(&self.inputs, self.from, &self.read, self.level)?;
         Ok(match self.size.or(plan.face_size).filter(|&s| s > 0) {
-            Some(size) => Self::plan_bytes(to, size, plan.working_bytes()),
+            Some(size) => self.plan_bytes(to, size, plan.working_bytes()),
             None => plan.working_bytes(),
         })
     }

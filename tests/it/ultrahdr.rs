@@ -330,3 +330,51 @@ fn three_sees_the_marks_where_they_belong() {
         crate::ibl::assert_unmirrored(&format!("three.js {what}"), marks, true, Vec3::Z);
     }
 }
+
+/// A gain map larger than its picture, or metadata with no finite range, is refused in one
+/// line naming the file, before any radiance is made.
+#[test]
+fn ultrahdr_with_a_bad_gain_map_is_refused() {
+    use image::ImageEncoder;
+    let dir = tempfile::tempdir().unwrap();
+    let jpeg = |n: u32| {
+        let mut out = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 90)
+            .write_image(
+                &vec![128u8; (n * n * 3) as usize],
+                n,
+                n,
+                image::ExtendedColorType::Rgb8,
+            )
+            .unwrap();
+        out
+    };
+    let mut meta = ultrahdr_rs::GainMapMetadata::default();
+    meta.gain_map_max = [4.0; 3];
+    meta.alternate_hdr_headroom = 4.0;
+    let big =
+        ultrahdr_rs::encode_ultrahdr(&jpeg(16), &jpeg(32), &meta, ultrahdr_rs::ColorGamut::Bt709)
+            .unwrap();
+    meta.gain_map_max = [f64::NAN; 3];
+    let nan =
+        ultrahdr_rs::encode_ultrahdr(&jpeg(16), &jpeg(16), &meta, ultrahdr_rs::ColorGamut::Bt709)
+            .unwrap();
+    for (name, bytes, says) in [
+        ("big.jpg", big, "larger than its picture"),
+        ("nan.jpg", nan, "not finite"),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let o = run(["info", path.to_str().unwrap()]);
+        let err = stderr(&o);
+        assert!(
+            !o.status.success(),
+            "{name} read: {}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+        assert!(
+            err.contains(name) && err.contains(says) && err.lines().count() == 1,
+            "{err}"
+        );
+    }
+}

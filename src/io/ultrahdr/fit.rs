@@ -54,10 +54,11 @@ pub(super) fn fit(
     };
     // Each texel starts as its block's light over its block's SDR light.
     let s = scale as isize;
-    let mut target: Vec<[f64; 3]> = (0..gh as isize)
+    let mut target: Vec<[f32; 3]> = (0..gh as isize)
         .into_par_iter()
         .flat_map_iter(|j| {
-            (0..gw as isize).map(move |i| window(sdr, i * s, i * s + s, j * s, j * s + s))
+            (0..gw as isize)
+                .map(move |i| window(sdr, i * s, i * s + s, j * s, j * s + s).map(|v| v as f32))
         })
         .collect();
     // The range from single texels: the stretch asks more of a sun's texel than its block's.
@@ -87,11 +88,11 @@ pub(super) fn fit(
         let codes: Vec<u8> = target
             .par_iter()
             .flat_map_iter(|t| {
-                t.map(|v| ((v - gains.lo[0]) * step).round().clamp(0.0, 255.0) as u8)
+                t.map(|v| ((v as f64 - gains.lo[0]) * step).round().clamp(0.0, 255.0) as u8)
             })
             .collect();
         let jpeg = encode(&codes, gw, gh)?;
-        let map = decode_jpeg(&jpeg, true)?;
+        let map = decode_jpeg(&jpeg, true, &crate::io::Limits::default())?;
         let back = gains.apply(sdr, &map, reader);
         let off = flux_error(img, &back, equirect)
             .iter()
@@ -102,25 +103,19 @@ pub(super) fn fit(
         if round == rounds {
             break;
         }
-        let corr: Vec<[f64; 3]> = (0..gh as isize)
-            .into_par_iter()
-            .flat_map_iter(|j| {
-                let back = &back;
-                (0..gw as isize).map(move |i| {
-                    let (x0, y0) = ((i - BLUR) * s, (j - BLUR) * s);
-                    let (x1, y1) = ((i + BLUR + 1) * s, (j + BLUR + 1) * s);
-                    window(back, x0, x1, y0, y1)
-                })
-            })
-            .collect();
-        target
-            .par_iter_mut()
-            .zip(corr.par_iter())
-            .for_each(|(t, d)| {
+        // In place: a texel's correction reads the light, never the other texels' targets.
+        target.par_chunks_mut(gw).enumerate().for_each(|(j, row)| {
+            let j = j as isize;
+            for (i, t) in row.iter_mut().enumerate() {
+                let i = i as isize;
+                let (x0, y0) = ((i - BLUR) * s, (j - BLUR) * s);
+                let (x1, y1) = ((i + BLUR + 1) * s, (j + BLUR + 1) * s);
+                let d = window(&back, x0, x1, y0, y1);
                 for c in 0..3 {
-                    t[c] += d[c];
+                    t[c] += d[c] as f32;
                 }
-            });
+            }
+        });
     }
     let (_, jpeg) = best.expect("at least one round");
     Ok(Fitted { jpeg, gains })

@@ -11,7 +11,7 @@
 #![warn(missing_docs)]
 
 use super::guard::caught;
-use super::{raster, Decoded, FileFormat, Meta, ReadOptions};
+use super::{raster, Decoded, FileFormat, Limits, Meta, ReadOptions};
 use crate::error::{Error, Result};
 use crate::image::{linear_to_srgb, ColorSpace, Image};
 use crate::tonemap::Tonemap;
@@ -96,37 +96,46 @@ impl Gains {
     /// The radiance of `sdr` (linear) under the gain map `map` (values over 255), stretched
     /// bilinearly over the picture where it is smaller, as `reader` rebuilds it.
     pub(crate) fn apply(&self, sdr: &Image, map: &Image, reader: Reader) -> Image {
+        let mut out = sdr.clone();
+        self.apply_in_place(&mut out, map, reader);
+        out
+    }
+
+    /// [`Gains::apply`] in `img`'s own texels (a reader holds no second picture).
+    fn apply_in_place(&self, img: &mut Image, map: &Image, reader: Reader) {
         let f = match reader {
             Reader::Format => Gains::radiance,
             Reader::Three => Gains::radiance_three,
         };
-        let (w, h) = (sdr.width, sdr.height);
+        let w = img.width;
         let sx = map.width as f32 / w as f32;
-        let sy = map.height as f32 / h as f32;
-        let mut out = vec![Vec4::ZERO; w * h];
-        out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-            for (x, o) in row.iter_mut().enumerate() {
-                let g = map.bilinear((x as f32 + 0.5) * sx, (y as f32 + 0.5) * sy, false);
-                let s = sdr.pixels[y * w + x];
-                *o = Vec4::new(
-                    f(self, 0, s.x, g.x),
-                    f(self, 1, s.y, g.y),
-                    f(self, 2, s.z, g.z),
-                    1.0,
-                );
-            }
-        });
-        Image {
-            width: w,
-            height: h,
-            pixels: out,
-        }
+        let sy = map.height as f32 / img.height as f32;
+        img.pixels
+            .par_chunks_mut(w)
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, o) in row.iter_mut().enumerate() {
+                    let g = map.bilinear((x as f32 + 0.5) * sx, (y as f32 + 0.5) * sy, false);
+                    let s = *o;
+                    *o = Vec4::new(
+                        f(self, 0, s.x, g.x),
+                        f(self, 1, s.y, g.y),
+                        f(self, 2, s.z, g.z),
+                        1.0,
+                    );
+                }
+            });
     }
 }
 
 /// The offset added to both renditions before the ratio is taken (the format's usual 1/64):
 /// it keeps the gain of black texels finite.
 const OFFSET: f64 = 1.0 / 64.0;
+/// Bytes a texel of an UltraHDR output takes while it is encoded, beyond the image itself: the
+/// SDR picture and its decode, the gain targets, the decoded gain map and the light it rebuilds
+/// (for the jobs' memory plans).
+pub const ENCODE_BYTES_PER_TEXEL: u64 = 80;
+
 /// JPEG quality of the SDR picture, and of the gain map (its steps are stops of light, so it
 /// is kept finer). Chosen on the real test panoramas at 512 x 256, the hardest case (a sun in
 /// a few texels): the largest base quality that keeps the sunniest under an eighth of its
@@ -236,7 +245,7 @@ pub fn encode(
     let mut base_jpeg = jpeg(&base, w, h, BASE_QUALITY)?;
     // The gain is taken against the SDR picture as a reader decodes it, so the base's JPEG
     // error is not carried into the radiance.
-    let sdr = decode_jpeg(&base_jpeg, false)?;
+    let sdr = decode_jpeg(&base_jpeg, false, &Limits::default())?;
     let fitted = fit::fit(
         img,
         &sdr,
@@ -269,8 +278,8 @@ pub fn encode(
         ultrahdr_rs::encode_ultrahdr(&base_jpeg, &fitted.jpeg, &meta, ColorGamut::Bt709)
     })?
     .map_err(|e| format!("cannot assemble the UltraHDR file: {e}"))?;
-    let (back, _) =
-        rebuild(&bytes).map_err(|e| format!("the written file does not read back: {e}"))?;
+    let (back, _) = rebuild(&bytes, &Limits::default())
+        .map_err(|e| format!("the written file does not read back: {e}"))?;
     let largest = match reader {
         Reader::Format => (1.0 + OFFSET) * hi.exp2() - OFFSET,
         Reader::Three => fitted.gains.radiance_three(0, 1.0, 1.0) as f64,
@@ -298,10 +307,12 @@ fn jpeg(data: &[u8], w: u32, h: u32, quality: u8) -> std::result::Result<Vec<u8>
     Ok(out)
 }
 
-/// A JPEG's pixels: linear light (sRGB decoded), or its stored values over 255 (`raw`).
-fn decode_jpeg(bytes: &[u8], raw: bool) -> std::result::Result<Image, String> {
+/// A JPEG's pixels: linear light (sRGB decoded), or its stored values over 255 (`raw`), its
+/// size checked against `limits` first.
+fn decode_jpeg(bytes: &[u8], raw: bool, limits: &Limits) -> std::result::Result<Image, String> {
     let opts = ReadOptions {
         linear: raw,
+        limits: *limits,
         ..ReadOptions::default()
     };
     match raster::decode(bytes, FileFormat::Jpeg, Path::new("-"), &opts) {
@@ -314,7 +325,7 @@ fn decode_jpeg(bytes: &[u8], raw: bool) -> std::result::Result<Image, String> {
 /// The radiance an UltraHDR file holds at full boost, its SDR picture and gain map decoded
 /// and the gain map stretched bilinearly over the picture where it is smaller, with the
 /// arithmetic it was fitted to ([`THREE_MARK`]).
-fn rebuild(bytes: &[u8]) -> std::result::Result<(Image, Reader), String> {
+fn rebuild(bytes: &[u8], limits: &Limits) -> std::result::Result<(Image, Reader), String> {
     let decoder = caught(|| Decoder::new(bytes))?.map_err(|e| e.to_string())?;
     let meta = decoder.metadata().ok_or("no gain-map metadata")?.clone();
     if meta.backward_direction {
@@ -323,18 +334,24 @@ fn rebuild(bytes: &[u8]) -> std::result::Result<(Image, Reader), String> {
     let (Some(primary), Some(gain)) = (decoder.primary_jpeg(), decoder.gainmap_jpeg()) else {
         return Err("the gain map or the primary picture is missing".into());
     };
-    let sdr = decode_jpeg(primary, false)?;
-    let map = decode_jpeg(gain, true)?;
     let bad = |v: f64| !v.is_finite();
     if (0..3).any(|c| {
         bad(meta.gain_map_min[c])
             || bad(meta.gain_map_max[c])
-            || meta.gamma[c].is_nan()
+            || bad(meta.gamma[c])
             || meta.gamma[c] <= 0.0
             || bad(meta.base_offset[c])
             || bad(meta.alternate_offset[c])
     }) {
         return Err("its gain-map metadata holds a value that is not finite".into());
+    }
+    let map = decode_jpeg(gain, true, limits)?;
+    let mut img = decode_jpeg(primary, false, limits)?;
+    if map.width > img.width || map.height > img.height {
+        return Err(format!(
+            "its gain map ({} x {}) is larger than its picture ({} x {})",
+            map.width, map.height, img.width, img.height
+        ));
     }
     let reader = if primary
         .windows(THREE_MARK.len())
@@ -345,7 +362,8 @@ fn rebuild(bytes: &[u8]) -> std::result::Result<(Image, Reader), String> {
     } else {
         Reader::Format
     };
-    Ok((Gains::of(&meta).apply(&sdr, &map, reader), reader))
+    Gains::of(&meta).apply_in_place(&mut img, &map, reader);
+    Ok((img, reader))
 }
 
 /// Decodes an UltraHDR file to its radiance at full boost.
@@ -358,8 +376,8 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<(Decoded,
         let (w, h) = raster::dimensions(p, FileFormat::Jpeg, path)?;
         opts.limits.check(path, w as u64, h as u64)?;
     }
-    let (img, reader) =
-        rebuild(bytes).map_err(|e| Error::file(path, format!("cannot decode UltraHDR: {e}")))?;
+    let (img, reader) = rebuild(bytes, &opts.limits)
+        .map_err(|e| Error::file(path, format!("cannot decode UltraHDR: {e}")))?;
     let meta = Meta {
         file_format: FileFormat::UltraHdr,
         pixel_format: match reader {
