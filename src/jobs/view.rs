@@ -268,8 +268,19 @@ fn ibl_folder(dir: &std::path::Path) -> Option<(PathBuf, Option<Engine>)> {
         .iter()
         .filter(|p| crate::io::FileFormat::from_extension(p).is_some())
         .collect();
+    // three.js's folder: NAME.jpg (UltraHDR) and its NAME.hdr fallback; the JPEG is shown.
+    let stem = |p: &PathBuf| p.with_extension("");
     match images.as_slice() {
         [one] => Some(((*one).clone(), None)),
+        [a, b] if stem(a) == stem(b) => {
+            let jpg = |p: &PathBuf| {
+                crate::io::FileFormat::from_extension(p) == Some(crate::io::FileFormat::Jpeg)
+            };
+            [a, b]
+                .into_iter()
+                .find(|p| jpg(p))
+                .map(|p| ((*p).clone(), None))
+        }
         _ => None,
     }
 }

@@ -297,6 +297,13 @@ fn three_sees_the_marks_where_they_belong() {
         said.contains("UltraHDRLoader") && said.contains("scene.environment"),
         "{said}"
     );
+    // `view` takes the folder: the UltraHDR panorama, as it is.
+    let page = dir.path().join("page");
+    let shown = ok(&["view", out.to_str().unwrap(), "-o", page.to_str().unwrap()]);
+    assert!(
+        shown.contains("showing") && shown.contains("env.jpg"),
+        "{shown}"
+    );
     let Some(read) = three_reads(&[&out.join("env.jpg"), &out.join("env.hdr")]) else {
         return;
     };
