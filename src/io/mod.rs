@@ -358,8 +358,6 @@ pub struct WriteOptions {
     /// JPEG outputs as UltraHDR (a gain map over an SDR picture made by this curve; `None`
     /// means ACES there): radiance kept, not clipped.
     pub gain_map: Option<crate::tonemap::Tonemap>,
-    /// Whose arithmetic an UltraHDR output's gain map is fitted to.
-    pub gain_reader: ultrahdr::Reader,
 }
 
 /// The sample type of EXR output: half floats (what tools expect, largest 65504) or 32-bit
@@ -394,7 +392,7 @@ pub fn encode_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<Vec
             )),
             None if f == FileFormat::Jpeg && opts.gain_map.is_some() => {
                 let curve = opts.gain_map.unwrap_or_default();
-                ultrahdr::encode(img, curve, opts.gain_reader, false)
+                ultrahdr::encode(img, curve, ultrahdr::Reader::Format, false)
                     .map(|(bytes, _)| bytes)
                     .map_err(|e| Error::file(path, e))
             }

@@ -276,7 +276,6 @@ impl Job for ConvertJob {
             zstd: self.zstd.filter(|_| container),
             exr_float: self.exr_float,
             gain_map: self.ultrahdr.then_some(self.tone.1),
-            gain_reader: Default::default(),
         };
         target.levels = self.levels;
         let (tone, tone_warning) = output::tone_for(&target, self.tone.0, self.tone.1);

@@ -186,7 +186,7 @@ impl Target {
                 let curve = self.write.gain_map.unwrap_or_default();
                 let equirect = self.kind == MapKind::Layout(Kind::Equirect);
                 let (bytes, stats) =
-                    io::ultrahdr::encode(&img, curve, self.write.gain_reader, equirect)
+                    io::ultrahdr::encode(&img, curve, io::ultrahdr::Reader::Format, equirect)
                         .map_err(|e| Error::file(&self.path, e))?;
                 gain_map = Some(stats);
                 vec![(self.path.clone(), bytes)]
