@@ -1,16 +1,22 @@
-//! The gain map fitted to the light. Each gain texel starts as the log2 of the radiance over
-//! the SDR value (offsets included); then rounds of encode, decode, rebuild as the chosen reader
-//! does, and correct move each texel by the log2 of the light its neighbourhood should hold
-//! over the light it rebuilt. The correction is smooth, which the JPEG keeps (a texel-by-texel
-//! one it turns to noise), and the round whose light reads back closest is kept: a sun's few
-//! texels hold much of a sky's flux, and their codes are what the rounds settle.
+//! The gain map fitted to the light. Each texel starts as the log2 of its radiance over its SDR
+//! value (offsets included); then rounds of encode, decode, rebuild as the chosen reader does,
+//! and correct move each texel by the log2 of the light its neighbourhood should hold over the
+//! light it rebuilt. The correction is smooth, which the JPEG keeps (a texel-by-texel one it
+//! turns to noise), and the round whose light reads back closest is kept: a sun's few texels
+//! hold much of a sky's flux, and their codes are what the rounds settle.
+//!
+//! The gain map is the picture's size: three.js stretches a smaller one with the canvas's own
+//! filter, whose light came out 1-3% under a bilinear stretch's.
 
 use super::{decode_jpeg, flux_error, Gains, Reader, OFFSET};
 use crate::image::Image;
 use rayon::prelude::*;
 
 /// The neighbourhood radius of the corrections, in texels.
-const BLUR: isize = 2;
+const BLUR: usize = 2;
+
+/// The light read back this close to the source's (largest channel error) ends the rounds.
+const GOOD_ENOUGH: f64 = 0.0025;
 
 /// A gain map as written.
 pub(super) struct Fitted {
@@ -20,58 +26,52 @@ pub(super) struct Fitted {
     pub gains: Gains,
 }
 
-/// Fits a gain map of texels `scale` picture texels a side that takes `sdr` (the picture as a
-/// reader decodes it) to
-/// `img` as `reader` rebuilds it, keeping the best of `rounds` + 1 tries (by the light,
-/// weighed as an equirect's where `equirect`); `encode` makes the JPEG of RGB codes.
+/// Each texel's sum of `value` over the texels within `BLUR` of it (the window cut at the
+/// edges), per channel: a row pass, then a column pass.
+fn window_sums(w: usize, h: usize, value: impl Fn(usize) -> [f32; 3] + Sync) -> Vec<[f32; 3]> {
+    let add = |a: [f32; 3], b: [f32; 3]| [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+    let mut rows = vec![[0.0f32; 3]; w * h];
+    rows.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, out) in row.iter_mut().enumerate() {
+            let (a, b) = (x.saturating_sub(BLUR), (x + BLUR + 1).min(w));
+            *out = (a..b).fold([0.0; 3], |s, i| add(s, value(y * w + i)));
+        }
+    });
+    let mut out = vec![[0.0f32; 3]; w * h];
+    out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let (a, b) = (y.saturating_sub(BLUR), (y + BLUR + 1).min(h));
+        for (x, o) in row.iter_mut().enumerate() {
+            *o = (a..b).fold([0.0; 3], |s, j| add(s, rows[j * w + x]));
+        }
+    });
+    out
+}
+
+/// Fits a gain map the size of `sdr` (the picture as a reader decodes it) that takes it to
+/// `img` as `reader` rebuilds it, keeping the best of `rounds` + 1 tries (by the light, weighed
+/// as an equirect's where `equirect`; one within [`GOOD_ENOUGH`] ends them); `encode` makes the JPEG of RGB codes.
 pub(super) fn fit(
     img: &Image,
     sdr: &Image,
     reader: Reader,
     equirect: bool,
-    scale: usize,
     rounds: usize,
-    encode: impl Fn(&[u8], usize, usize) -> Result<Vec<u8>, String>,
+    encode: impl Fn(&[u8]) -> Result<Vec<u8>, String>,
 ) -> Result<Fitted, String> {
     let (w, h) = (img.width, img.height);
-    let (gw, gh) = (w.div_ceil(scale), h.div_ceil(scale));
-    // The light of the picture texels [x0, x1) x [y0, y1) wanted and rebuilt (`back`), per
-    // channel, offsets included.
-    let window = |back: &Image, x0: isize, x1: isize, y0: isize, y1: isize| {
-        let (mut num, mut den) = ([0.0f64; 3], [0.0f64; 3]);
-        for y in y0.max(0)..y1.min(h as isize) {
-            for x in x0.max(0)..x1.min(w as isize) {
-                let i = y as usize * w + x as usize;
-                let (p, q) = (img.pixels[i], back.pixels[i]);
-                let (p, q) = ([p.x, p.y, p.z], [q.x, q.y, q.z]);
-                for c in 0..3 {
-                    num[c] += p[c].max(0.0) as f64 + OFFSET;
-                    den[c] += q[c] as f64 + OFFSET;
-                }
-            }
-        }
-        [0, 1, 2].map(|c| (num[c] / den[c]).log2())
-    };
-    // Each texel starts as its block's light over its block's SDR light.
-    let s = scale as isize;
-    let mut target: Vec<[f32; 3]> = (0..gh as isize)
-        .into_par_iter()
-        .flat_map_iter(|j| {
-            (0..gw as isize)
-                .map(move |i| window(sdr, i * s, i * s + s, j * s, j * s + s).map(|v| v as f32))
-        })
-        .collect();
-    // The range from single texels: the stretch asks more of a sun's texel than its block's.
+    let light = |p: glam::Vec4| [p.x, p.y, p.z].map(|v| v.max(0.0) + OFFSET as f32);
     let ratio = |a: f32, b: f32| ((a.max(0.0) as f64 + OFFSET) / (b as f64 + OFFSET)).log2();
-    let (lo, hi) = img
+    let mut target: Vec<[f32; 3]> = img
         .pixels
         .par_iter()
         .zip(sdr.pixels.par_iter())
-        .map(|(p, q)| {
-            let t = [ratio(p.x, q.x), ratio(p.y, q.y), ratio(p.z, q.z)];
-            (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]))
-        })
+        .map(|(p, q)| [ratio(p.x, q.x), ratio(p.y, q.y), ratio(p.z, q.z)].map(|v| v as f32))
+        .collect();
+    let (lo, hi) = target
+        .par_iter()
+        .map(|t| (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2])))
         .reduce(|| (0.0, 0.0), |a, b| (a.0.min(b.0), a.1.max(b.1)));
+    let (lo, hi) = (lo as f64, hi as f64);
     // An SDR source still gets a range (the format needs max > min); corrections a margin.
     let hi = hi.max(lo + 1.0 / 16.0);
     let margin = (hi - lo) / 64.0;
@@ -83,6 +83,8 @@ pub(super) fn fit(
         k_hdr: [OFFSET; 3],
     };
     let step = 255.0 / (gains.hi[0] - gains.lo[0]);
+    // The light each neighbourhood should hold, the same every round.
+    let wanted = window_sums(w, h, |i| light(img.pixels[i]));
     let mut best: Option<(f64, Vec<u8>)> = None;
     for round in 0..=rounds {
         let codes: Vec<u8> = target
@@ -91,31 +93,29 @@ pub(super) fn fit(
                 t.map(|v| ((v as f64 - gains.lo[0]) * step).round().clamp(0.0, 255.0) as u8)
             })
             .collect();
-        let jpeg = encode(&codes, gw, gh)?;
+        let jpeg = encode(&codes)?;
         let map = decode_jpeg(&jpeg, true, &crate::io::Limits::default())?;
         let back = gains.apply(sdr, &map, reader);
+        drop(map);
         let off = flux_error(img, &back, equirect)
             .iter()
             .fold(0.0, |m: f64, e| m.max(e.abs()));
         if best.as_ref().is_none_or(|b| off < b.0) {
             best = Some((off, jpeg));
         }
-        if round == rounds {
+        if round == rounds || off < GOOD_ENOUGH {
             break;
         }
-        // In place: a texel's correction reads the light, never the other texels' targets.
-        target.par_chunks_mut(gw).enumerate().for_each(|(j, row)| {
-            let j = j as isize;
-            for (i, t) in row.iter_mut().enumerate() {
-                let i = i as isize;
-                let (x0, y0) = ((i - BLUR) * s, (j - BLUR) * s);
-                let (x1, y1) = ((i + BLUR + 1) * s, (j + BLUR + 1) * s);
-                let d = window(&back, x0, x1, y0, y1);
+        let rebuilt = window_sums(w, h, |i| light(back.pixels[i]));
+        drop(back);
+        target
+            .par_iter_mut()
+            .zip(wanted.par_iter().zip(rebuilt.par_iter()))
+            .for_each(|(t, (n, d))| {
                 for c in 0..3 {
-                    t[c] += d[c] as f32;
+                    t[c] += (n[c] / d[c]).log2();
                 }
-            }
-        });
+            });
     }
     let (_, jpeg) = best.expect("at least one round");
     Ok(Fitted { jpeg, gains })

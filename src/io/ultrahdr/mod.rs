@@ -101,13 +101,37 @@ impl Gains {
         out
     }
 
-    /// [`Gains::apply`] in `img`'s own texels (a reader holds no second picture).
+    /// [`Gains::apply`] in `img`'s own texels (a reader holds no second picture). A gain map
+    /// the picture's size is read code by code, through a table of the 256 gains.
     fn apply_in_place(&self, img: &mut Image, map: &Image, reader: Reader) {
         let f = match reader {
             Reader::Format => Gains::radiance,
             Reader::Three => Gains::radiance_three,
         };
         let w = img.width;
+        if reader == Reader::Format && (map.width, map.height) == (w, img.height) {
+            let table: Vec<[f64; 3]> = (0..256)
+                .map(|code| {
+                    [0, 1, 2].map(|c| {
+                        let t = (code as f64 / 255.0).powf(1.0 / self.gamma[c]);
+                        (self.lo[c] + (self.hi[c] - self.lo[c]) * t).exp2()
+                    })
+                })
+                .collect();
+            let k = (self.k_sdr, self.k_hdr);
+            img.pixels
+                .par_iter_mut()
+                .zip(map.pixels.par_iter())
+                .for_each(|(o, g)| {
+                    let ch = |c: usize, sdr: f32, code: f32| {
+                        let gain = table[(code.clamp(0.0, 1.0) * 255.0).round() as usize][c];
+                        let v = (sdr as f64 + k.0[c]) * gain - k.1[c];
+                        (v.max(0.0) as f32).min(1e28)
+                    };
+                    *o = Vec4::new(ch(0, o.x, g.x), ch(1, o.y, g.y), ch(2, o.z, g.z), 1.0);
+                });
+            return;
+        }
         let sx = map.width as f32 / w as f32;
         let sy = map.height as f32 / img.height as f32;
         img.pixels
@@ -132,9 +156,9 @@ impl Gains {
 /// it keeps the gain of black texels finite.
 const OFFSET: f64 = 1.0 / 64.0;
 /// Bytes a texel of an UltraHDR output takes while it is encoded, beyond the image itself: the
-/// SDR picture and its decode, the gain targets, the decoded gain map and the light it rebuilds
-/// (for the jobs' memory plans).
-pub const ENCODE_BYTES_PER_TEXEL: u64 = 80;
+/// SDR picture and its decode, the gain targets, the decoded gain map, the light it rebuilds
+/// and the neighbourhood sums (for the jobs' memory plans).
+pub const ENCODE_BYTES_PER_TEXEL: u64 = 112;
 
 /// JPEG quality of the SDR picture, and of the gain map (its steps are stops of light, so it
 /// is kept finer). Chosen on the real test panoramas at 512 x 256, the hardest case (a sun in
@@ -144,11 +168,6 @@ const BASE_QUALITY: u8 = 71;
 const GAIN_QUALITY: u8 = 85;
 /// Rounds of fitting the gain map to the light through its own JPEG ([`fit::fit`]).
 const ROUNDS: usize = 8;
-/// The gain map's texels are this many picture texels a side. 1: three.js stretches a
-/// smaller map with the canvas's own filter, whose light came out 1-3% under a bilinear
-/// stretch's, where a whole map is copied as it is.
-const GAIN_SCALE: usize = 1;
-
 /// What writing a gain map kept of the radiance, read back through cubeforge's own decoder.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct GainStats {
@@ -246,15 +265,9 @@ pub fn encode(
     // The gain is taken against the SDR picture as a reader decodes it, so the base's JPEG
     // error is not carried into the radiance.
     let sdr = decode_jpeg(&base_jpeg, false, &Limits::default())?;
-    let fitted = fit::fit(
-        img,
-        &sdr,
-        reader,
-        equirect,
-        GAIN_SCALE,
-        ROUNDS,
-        |codes, gw, gh| jpeg(codes, gw as u32, gh as u32, GAIN_QUALITY),
-    )?;
+    let fitted = fit::fit(img, &sdr, reader, equirect, ROUNDS, |codes| {
+        jpeg(codes, w, h, GAIN_QUALITY)
+    })?;
     let (lo, hi) = (fitted.gains.lo[0], fitted.gains.hi[0]);
     if reader == Reader::Three {
         // A comment segment right after SOI: FF FE, its length, the text.
