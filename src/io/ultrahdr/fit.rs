@@ -24,6 +24,8 @@ pub(super) struct Fitted {
     pub jpeg: Vec<u8>,
     /// How its values become radiance.
     pub gains: Gains,
+    /// Each channel's light as the reader rebuilds it against the source's, minus 1.
+    pub flux_error: [f64; 3],
 }
 
 /// Each texel's sum of `value` over the texels within `BLUR` of it (the window cut at the
@@ -85,7 +87,7 @@ pub(super) fn fit(
     let step = 255.0 / (gains.hi[0] - gains.lo[0]);
     // The light each neighbourhood should hold, the same every round.
     let wanted = window_sums(w, h, |i| light(img.pixels[i]));
-    let mut best: Option<(f64, Vec<u8>)> = None;
+    let mut best: Option<(f64, [f64; 3], Vec<u8>)> = None;
     for round in 0..=rounds {
         let codes: Vec<u8> = target
             .par_iter()
@@ -97,11 +99,10 @@ pub(super) fn fit(
         let map = decode_jpeg(&jpeg, true, &crate::io::Limits::default())?;
         let back = gains.apply(sdr, &map, reader);
         drop(map);
-        let off = flux_error(img, &back, equirect)
-            .iter()
-            .fold(0.0, |m: f64, e| m.max(e.abs()));
+        let errors = flux_error(img, &back, equirect);
+        let off = errors.iter().fold(0.0, |m: f64, e| m.max(e.abs()));
         if best.as_ref().is_none_or(|b| off < b.0) {
-            best = Some((off, jpeg));
+            best = Some((off, errors, jpeg));
         }
         if round == rounds || off < GOOD_ENOUGH {
             break;
@@ -117,6 +118,10 @@ pub(super) fn fit(
                 }
             });
     }
-    let (_, jpeg) = best.expect("at least one round");
-    Ok(Fitted { jpeg, gains })
+    let (_, flux_error, jpeg) = best.expect("at least one round");
+    Ok(Fitted {
+        jpeg,
+        gains,
+        flux_error,
+    })
 }

@@ -13,7 +13,9 @@
 use super::guard::caught;
 use super::{raster, Decoded, FileFormat, Limits, Meta, ReadOptions};
 use crate::error::{Error, Result};
+use crate::flux::Grid;
 use crate::image::{linear_to_srgb, ColorSpace, Image};
+use crate::layout::Projection;
 use crate::tonemap::Tonemap;
 use ::image::codecs::jpeg::JpegEncoder;
 use ::image::{ExtendedColorType, ImageEncoder};
@@ -168,7 +170,7 @@ const BASE_QUALITY: u8 = 71;
 const GAIN_QUALITY: u8 = 85;
 /// Rounds of fitting the gain map to the light through its own JPEG ([`fit::fit`]).
 const ROUNDS: usize = 8;
-/// What writing a gain map kept of the radiance, read back through cubeforge's own decoder.
+/// What writing a gain map kept of the radiance, as the reader it was fitted to rebuilds it.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct GainStats {
     /// The largest radiance the gain range rebuilds (over an SDR white).
@@ -291,8 +293,14 @@ pub fn encode(
         ultrahdr_rs::encode_ultrahdr(&base_jpeg, &fitted.jpeg, &meta, ColorGamut::Bt709)
     })?
     .map_err(|e| format!("cannot assemble the UltraHDR file: {e}"))?;
-    let (back, _) = rebuild(&bytes, &Limits::default())
-        .map_err(|e| format!("the written file does not read back: {e}"))?;
+    // The light was measured on the kept round's own decode; the file is checked to hold the
+    // two pictures and the metadata.
+    let assembled = caught(|| Decoder::new(&bytes))?.is_ok_and(|d| {
+        d.metadata().is_some() && d.primary_jpeg().is_some() && d.gainmap_jpeg().is_some()
+    });
+    if !assembled {
+        return Err("the assembled UltraHDR file does not read back".into());
+    }
     let largest = match reader {
         Reader::Format => (1.0 + OFFSET) * hi.exp2() - OFFSET,
         Reader::Three => fitted.gains.radiance_three(0, 1.0, 1.0) as f64,
@@ -305,7 +313,7 @@ pub fn encode(
             .map(|p| p.x.max(p.y).max(p.z))
             .reduce(|| 0.0, f32::max),
         stops: (lo as f32, hi as f32),
-        flux_error: flux_error(img, &back, equirect),
+        flux_error: fitted.flux_error,
         bytes: bytes.len(),
     };
     Ok((bytes, stats))
@@ -338,8 +346,7 @@ fn decode_jpeg(bytes: &[u8], raw: bool, limits: &Limits) -> std::result::Result<
 /// The radiance an UltraHDR file holds at full boost, its SDR picture and gain map decoded
 /// and the gain map stretched bilinearly over the picture where it is smaller, with the
 /// arithmetic it was fitted to ([`THREE_MARK`]).
-fn rebuild(bytes: &[u8], limits: &Limits) -> std::result::Result<(Image, Reader), String> {
-    let decoder = caught(|| Decoder::new(bytes))?.map_err(|e| e.to_string())?;
+fn rebuild(decoder: &Decoder, limits: &Limits) -> std::result::Result<(Image, Reader), String> {
     let meta = decoder.metadata().ok_or("no gain-map metadata")?.clone();
     if meta.backward_direction {
         return Err("its base picture is the HDR rendition (backward direction), which cubeforge does not read".into());
@@ -389,7 +396,7 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<(Decoded,
         let (w, h) = raster::dimensions(p, FileFormat::Jpeg, path)?;
         opts.limits.check(path, w as u64, h as u64)?;
     }
-    let (img, reader) = rebuild(bytes, &opts.limits)
+    let (img, reader) = rebuild(&decoder, &opts.limits)
         .map_err(|e| Error::file(path, format!("cannot decode UltraHDR: {e}")))?;
     let meta = Meta {
         file_format: FileFormat::UltraHdr,
@@ -408,27 +415,16 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<(Decoded,
 /// Each channel's light in `back` against `src`'s, minus 1 (0 where the source is black):
 /// texels weighed by the solid angle they stand for in an equirect (`equirect`), else alike.
 fn flux_error(src: &Image, back: &Image, equirect: bool) -> [f64; 3] {
-    let h = src.height;
-    let sum = |img: &Image| {
+    let light = |img: &Image| {
+        if equirect {
+            let grid = Grid::Projection(Projection::Equirect, img.width, img.height);
+            return crate::flux::mean_radiance(grid, &[img]);
+        }
         img.pixels
-            .par_chunks(img.width)
-            .enumerate()
-            .map(|(y, row)| {
-                let w = if equirect {
-                    ((y as f64 + 0.5) / h as f64 * std::f64::consts::PI).sin()
-                } else {
-                    1.0
-                };
-                row.iter().fold([0.0; 3], |a, p| {
-                    [
-                        a[0] + w * p.x as f64,
-                        a[1] + w * p.y as f64,
-                        a[2] + w * p.z as f64,
-                    ]
-                })
-            })
+            .par_iter()
+            .map(|p| [p.x as f64, p.y as f64, p.z as f64])
             .reduce(|| [0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
     };
-    let (a, b) = (sum(src), sum(back));
+    let (a, b) = (light(src), light(back));
     [0, 1, 2].map(|c| if a[c] > 0.0 { b[c] / a[c] - 1.0 } else { 0.0 })
 }

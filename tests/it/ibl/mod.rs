@@ -126,7 +126,7 @@ pub(crate) fn assert_unmirrored(engine: &str, marks: [Vec3; 3], right_handed: bo
     );
 }
 
-fn ibl(input: &Path, out: &Path, target: &str, extra: &[&str]) {
+pub(crate) fn ibl(input: &Path, out: &Path, target: &str, extra: &[&str]) {
     let mut args = vec![
         "ibl",
         input.to_str().unwrap(),
