@@ -90,6 +90,14 @@ pub(crate) fn box_reduce_face(src: &Image, n: usize, weights: &[f32], ceiling: V
     })
 }
 
+/// Six faces made by a fallible `f` (face index 0..6), the first error returned.
+pub(crate) fn try_faces<E>(
+    mut f: impl FnMut(usize) -> std::result::Result<Image, E>,
+) -> std::result::Result<Faces, E> {
+    let [a, b, c, d, e, g] = [0, 1, 2, 3, 4, 5];
+    Ok([f(a)?, f(b)?, f(c)?, f(d)?, f(e)?, f(g)?])
+}
+
 /// Reads a cube map from six same-size images, naming the file of a face that does not fit.
 pub(crate) fn faces_from_images(
     images: Vec<Image>,

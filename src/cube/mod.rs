@@ -18,7 +18,7 @@ pub use face::{
     FACE_NAMES,
 };
 pub(crate) use face::{texel_angle, texel_density, texel_footprint, texel_solid_angle};
-pub(crate) use map::{box_reduce_face, faces_from_images};
+pub(crate) use map::{box_reduce_face, faces_from_images, try_faces};
 pub use map::{CubeMap, Faces};
 pub use sampler::CubeSampler;
 pub(crate) use sampler::{TapLevels, TapScratch};

@@ -162,6 +162,9 @@ pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<De
         .unwrap_or_else(|| ctx.loaded.face_size())
         .clamp(1, 8192);
     let img = crate::convert::to_image(ctx.loaded, Kind::Equirect, face, &ctx.resampler());
+    if let (Engine::Godot, Some(format)) = (engine, ctx.opts.gpu_format) {
+        return godot_ktx2(ctx, img, format);
+    }
     let path = ctx.path(&format!(".{ext}"));
     let write = io::WriteOptions {
         exr_float: ctx.opts.exr_float,
@@ -176,6 +179,41 @@ pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<De
     );
     let snippet = snippet.replace("{f}", &file_name(&path));
     Ok(Delivery::new(vec![(path, bytes)], snippet, clamped))
+}
+
+/// Godot with a GPU format (mobile builds: ASTC HDR 4x4): the panorama as a 2D KTX2 texture
+/// with its solid-angle-weighted mips, in `format`, which Godot's KTX loader uploads as stored.
+fn godot_ktx2(ctx: &Context, img: Image, format: GpuFormat) -> Result<Delivery> {
+    let path = ctx.path(".ktx2");
+    let mut levels = vec![img];
+    while let Some(last) = levels.last().filter(|l| l.height > 1) {
+        let weights = crate::layout::equirect::row_weights(last.width, last.height);
+        let next = last.downsample_2x_rows(&weights, glam::Vec4::INFINITY);
+        levels.push(next);
+    }
+    let bytes = io::ktx2::encode_2d_with(&levels, format, ctx.opts.zstd)
+        .map_err(|e| crate::Error::file(&path, e))?;
+    let write = io::WriteOptions {
+        gpu_format: format,
+        ..Default::default()
+    };
+    let clamped = io::clamp_warning_with(&path, FileFormat::Ktx2, &write, [&levels[0]]);
+    let psnr = format
+        .is_lossy()
+        .then(|| io::container_psnr(&bytes, format, &[&levels[0]]))
+        .flatten();
+    let snippet = format!(
+        "Godot 4: WorldEnvironment > Environment > Sky > PanoramaSkyMaterial, panorama = {f}\n\
+         ({levels} levels of {name}: Godot loads .ktx2 as stored, no import step; a device \
+         without the format cannot show it).\n\
+         The panorama's centre faces world +Z (behind the default camera, which looks along -Z).",
+        f = file_name(&path),
+        levels = levels.len(),
+        name = format.name(),
+    );
+    let mut delivery = Delivery::new(vec![(path, bytes)], snippet, clamped);
+    delivery.psnr = psnr;
+    Ok(delivery)
 }
 
 /// three.js: `NAME.jpg`, UltraHDR with its gain map fitted to `UltraHDRLoader`'s arithmetic,

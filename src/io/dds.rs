@@ -36,8 +36,9 @@ const HEADER10_END: usize = HEADER_END + 20;
 const SUPPORTED: &str =
     "cubeforge reads RGBA16F, RGBA32F, RGBA8 sRGB/UNORM, BC6H UF16, BC7 sRGB/UNORM, R9G9B9E5 and R11G11B10";
 
-fn dxgi_format(format: GpuFormat) -> DxgiFormat {
-    match format {
+/// The DXGI format of `format`; None for ASTC, which DXGI does not define.
+fn dxgi_format(format: GpuFormat) -> Option<DxgiFormat> {
+    Some(match format {
         GpuFormat::Rgba16f => DxgiFormat::R16G16B16A16_Float,
         GpuFormat::Rgba32f => DxgiFormat::R32G32B32A32_Float,
         GpuFormat::Rgba8Srgb => DxgiFormat::R8G8B8A8_UNorm_sRGB,
@@ -47,22 +48,14 @@ fn dxgi_format(format: GpuFormat) -> DxgiFormat {
         GpuFormat::Bc7Srgb => DxgiFormat::BC7_UNorm_sRGB,
         GpuFormat::Rgb9e5 => DxgiFormat::R9G9B9E5_SharedExp,
         GpuFormat::Rg11b10 => DxgiFormat::R11G11B10_Float,
-    }
+        GpuFormat::AstcHdr4x4 | GpuFormat::AstcHdr6x6 => return None,
+    })
 }
 
 fn from_dxgi(raw: u32) -> Option<GpuFormat> {
-    const ALL: [GpuFormat; 9] = [
-        GpuFormat::Rgba16f,
-        GpuFormat::Rgba32f,
-        GpuFormat::Rgba8Srgb,
-        GpuFormat::Rgba8,
-        GpuFormat::Bc6h,
-        GpuFormat::Bc7,
-        GpuFormat::Bc7Srgb,
-        GpuFormat::Rgb9e5,
-        GpuFormat::Rg11b10,
-    ];
-    ALL.into_iter().find(|&f| dxgi_format(f) as u32 == raw)
+    GpuFormat::ALL
+        .into_iter()
+        .find(|&f| dxgi_format(f).is_some_and(|d| d as u32 == raw))
 }
 
 /// Encodes every level of `cube` as a DX10 DDS cube map in `format`; every face of every
@@ -75,7 +68,12 @@ pub fn encode(cube: &CubeMap, format: GpuFormat) -> std::result::Result<Vec<u8>,
         .filter(|n| n.checked_mul(format.block_bytes() as u32).is_some())
         .ok_or_else(|| format!("faces of {size}x{size} pixels are too large for DDS"))?;
     let levels = u32::try_from(cube.levels.len()).map_err(|_| "too many mip levels for DDS")?;
-    let dxgi = dxgi_format(format);
+    let dxgi = dxgi_format(format).ok_or_else(|| {
+        format!(
+            "DDS has no {} format (DXGI defines no ASTC): write .ktx2",
+            format.name()
+        )
+    })?;
     let mut header = Header::new_dxgi(
         edge,
         edge,
@@ -105,7 +103,7 @@ pub fn encode(cube: &CubeMap, format: GpuFormat) -> std::result::Result<Vec<u8>,
     let encoded: Vec<Vec<u8>> = images
         .par_iter()
         .map(|img| format.encode_image(img))
-        .collect();
+        .collect::<std::result::Result<_, String>>()?;
     let texels: usize = encoded.iter().map(Vec::len).sum();
     let mut out = Vec::with_capacity(HEADER10_END + texels);
     out.extend_from_slice(MAGIC);
@@ -259,7 +257,8 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
     let mut scratch = Vec::new();
     if !cube {
         let (w, h) = shape.level_size(0);
-        let img = texels_image(&data[..needed as usize], w, h, format, order, &mut scratch);
+        let img = texels_image(&data[..needed as usize], w, h, format, order, &mut scratch)
+            .map_err(err)?;
         let mut meta = meta(format);
         meta.stored_levels = shape.levels;
         return Ok((Decoded::Image(img), meta));
@@ -273,7 +272,7 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             let len = shape.face_bytes(l);
             let texels = &data[pos..pos + len];
             pos += len;
-            faces.push(texels_image(texels, w, h, format, order, &mut scratch));
+            faces.push(texels_image(texels, w, h, format, order, &mut scratch).map_err(err)?);
         }
     }
     let levels = levels
@@ -297,7 +296,7 @@ fn texels_image(
     format: GpuFormat,
     order: Order,
     scratch: &mut Vec<u8>,
-) -> Image {
+) -> std::result::Result<Image, String> {
     let texels = if order == Order::Rgba {
         texels
     } else {

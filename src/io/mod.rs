@@ -451,6 +451,26 @@ pub fn encode_cube_with(
     }
 }
 
+/// Refuses `format` for a `container` file (named `path`) that cannot hold it, or that this
+/// build cannot encode: ASTC goes into KTX2 only (DXGI and cubeforge's KTX 1 define none) and
+/// needs the cargo feature `astc`. Jobs call it in `validate`, before any work.
+pub fn check_gpu_format(path: &Path, container: FileFormat, format: GpuFormat) -> Result<()> {
+    if !format.is_astc() {
+        return Ok(());
+    }
+    if container != FileFormat::Ktx2 {
+        return Err(Error::file(
+            path,
+            format!(
+                "{} holds no {}: write .ktx2",
+                container.name(),
+                format.name()
+            ),
+        ));
+    }
+    format.check_built().map_err(Error::usage)
+}
+
 /// The error for `--zstd` with an output that is not KTX2.
 pub fn zstd_needs_ktx2(path: &Path) -> Error {
     Error::file(

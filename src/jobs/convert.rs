@@ -166,6 +166,9 @@ impl Job for ConvertJob {
         } else if to == MapKind::Container(Container::Dds) && self.zstd.is_some() {
             return Err(io::zstd_needs_ktx2(&name));
         }
+        if let (Some(c), Some(f)) = (to.container(), self.gpu_format) {
+            io::check_gpu_format(&name, c.format(), f)?;
+        }
         if self.levels == Some(0) {
             return Err(Error::usage(format!(
                 "{} 0: a map has at least 1 level",

@@ -5,7 +5,7 @@ use crate::chain;
 use crate::convert;
 use crate::error::{param, Error, Result};
 use crate::ibl::{self, Engine, IblOptions};
-use crate::io::ReadOptions;
+use crate::io::{self, GpuFormat, ReadOptions};
 use crate::output::{self, Destination, Files};
 use std::path::PathBuf;
 
@@ -112,12 +112,40 @@ impl IblJob {
     }
 }
 
+impl IblJob {
+    /// Refuses a `--gpu-format` the target has no file for, before any work.
+    fn check_gpu_format(&self, format: GpuFormat) -> Result<()> {
+        let flag = param("gpu_format");
+        let target = self.engine.name();
+        match self.engine {
+            Engine::Unity | Engine::Unreal | Engine::Three => Err(Error::usage(format!(
+                "{flag}: {target} imports a panorama and compresses it itself: leave out {flag}"
+            ))),
+            Engine::Babylon => Err(Error::usage(format!(
+                "{flag}: Babylon's .env holds RGBD PNG faces only"
+            ))),
+            Engine::Filament => io::ktx1::Ktx1Format::from_gpu(format)
+                .map(|_| ())
+                .map_err(Error::usage),
+            // Godot's images know ASTC HDR in 4x4 and 8x8 blocks only.
+            Engine::Godot if format == GpuFormat::AstcHdr6x6 => Err(Error::usage(format!(
+                "{flag} {}: Godot reads ASTC HDR in 4x4 blocks (astc-hdr-4x4)",
+                format.name()
+            ))),
+            _ => format.check_built().map_err(Error::usage),
+        }
+    }
+}
+
 impl Job for IblJob {
     fn validate(&self) -> Result<Vec<Warning>> {
         if self.output == std::path::Path::new("-") {
             return Err(Error::usage(
                 "-o - (standard output) takes one file, and ibl writes several (a specular chain, a diffuse map, tables): name a folder",
             ));
+        }
+        if let Some(format) = self.options.gpu_format {
+            self.check_gpu_format(format)?;
         }
         Ok(Vec::new())
     }

@@ -122,6 +122,9 @@ impl Job for IrradianceJob {
                 )));
             }
         }
+        if let Some(c) = target.kind.container() {
+            io::check_gpu_format(&name, c.format(), self.gpu_format)?;
+        }
         let mut warnings = Vec::new();
         match target.kind.container() {
             Some(Container::Ktx2) => {}

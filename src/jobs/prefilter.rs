@@ -143,6 +143,9 @@ impl Job for PrefilterJob {
                 FileFormat::list(FileFormat::is_image, false)
             )));
         }
+        if let Some(c) = container {
+            io::check_gpu_format(&name, c, self.gpu_format)?;
+        }
         let mut warnings = Vec::new();
         match container {
             Some(FileFormat::Ktx2) => {}

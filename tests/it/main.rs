@@ -4,6 +4,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod astc;
 mod atomic_writes;
 mod batch;
 mod batched;

@@ -1,6 +1,6 @@
 //! Texel formats of GPU containers (KTX2, DDS): plain RGBA (half, float, 8-bit), the packed HDR
 //! formats E5B9G9R9 (shared exponent) and B10G11R11, and the block-compressed BC6H (HDR) and
-//! BC7 (LDR). Every format encodes and decodes a whole image at a time, in parallel over rows or
+//! BC7 (LDR), and ASTC HDR in 4x4 and 6x6 blocks (phones; see [`astc`]'s feature). Every format encodes and decodes a whole image at a time, in parallel over rows or
 //! block rows, so a container encodes face by face and level by level; the bytes never depend on
 //! the number of threads (every block and texel is encoded on its own).
 //!
@@ -18,6 +18,7 @@
 
 #![warn(missing_docs)]
 
+mod astc;
 mod packed;
 
 use crate::image::{linear_to_srgb, srgb_to_linear, Image};
@@ -49,6 +50,15 @@ pub enum GpuFormat {
     Rgb9e5,
     /// B10G11R11 unsigned floats: HDR RGB in 4 bytes (6, 6 and 5 bits of mantissa).
     Rg11b10,
+    /// ASTC HDR 4x4 blocks (phones, Apple GPUs, WebGPU/WebGL with ASTC HDR): 1 byte a texel
+    /// (cargo feature `astc`).
+    #[serde(rename = "astc-hdr-4x4")]
+    #[cfg_attr(feature = "cli", value(name = "astc-hdr-4x4"))]
+    AstcHdr4x4,
+    /// ASTC HDR 6x6 blocks: 0.44 bytes a texel, coarser (cargo feature `astc`).
+    #[serde(rename = "astc-hdr-6x6")]
+    #[cfg_attr(feature = "cli", value(name = "astc-hdr-6x6"))]
+    AstcHdr6x6,
 }
 
 /// The largest half float: values above it would be written as infinity.
@@ -61,13 +71,43 @@ pub const UF10_MAX: f32 = 64512.0;
 const UF11_MAX: f32 = 65024.0;
 
 impl GpuFormat {
-    /// Edge of the format's texel block: 4 for BC6H and BC7, 1 for the others.
+    /// Every format, in the order help lists them.
+    pub const ALL: [GpuFormat; 11] = [
+        GpuFormat::Rgba16f,
+        GpuFormat::Rgba32f,
+        GpuFormat::Rgba8Srgb,
+        GpuFormat::Rgba8,
+        GpuFormat::Bc6h,
+        GpuFormat::Bc7,
+        GpuFormat::Bc7Srgb,
+        GpuFormat::Rgb9e5,
+        GpuFormat::Rg11b10,
+        GpuFormat::AstcHdr4x4,
+        GpuFormat::AstcHdr6x6,
+    ];
+
+    /// Edge of the format's texel block: 4 for BC6H, BC7 and ASTC 4x4, 6 for ASTC 6x6, 1 for
+    /// the others.
     pub fn block_dim(self) -> usize {
-        if self.is_block_compressed() {
-            4
-        } else {
-            1
+        match self {
+            GpuFormat::AstcHdr6x6 => 6,
+            f if f.is_block_compressed() => 4,
+            _ => 1,
         }
+    }
+
+    /// Whether this build encodes and decodes the format: ASTC needs the cargo feature `astc`.
+    pub fn check_built(self) -> Result<(), String> {
+        if self.is_astc() {
+            astc::check_built()
+        } else {
+            Ok(())
+        }
+    }
+
+    /// ASTC blocks (decoded and encoded by astcenc, behind the cargo feature `astc`).
+    pub fn is_astc(self) -> bool {
+        matches!(self, GpuFormat::AstcHdr4x4 | GpuFormat::AstcHdr6x6)
     }
 
     /// Bytes of one texel block (one texel for the uncompressed formats).
@@ -76,13 +116,17 @@ impl GpuFormat {
             GpuFormat::Rgba16f => 8,
             GpuFormat::Rgba32f => 16,
             GpuFormat::Rgba8Srgb | GpuFormat::Rgba8 | GpuFormat::Rgb9e5 | GpuFormat::Rg11b10 => 4,
-            GpuFormat::Bc6h | GpuFormat::Bc7 | GpuFormat::Bc7Srgb => 16,
+            GpuFormat::Bc6h
+            | GpuFormat::Bc7
+            | GpuFormat::Bc7Srgb
+            | GpuFormat::AstcHdr4x4
+            | GpuFormat::AstcHdr6x6 => 16,
         }
     }
 
-    /// BC6H and BC7: 4x4 blocks, lossy.
+    /// BC6H, BC7 and ASTC: blocks of texels, lossy.
     pub fn is_block_compressed(self) -> bool {
-        matches!(self, GpuFormat::Bc6h | GpuFormat::Bc7 | GpuFormat::Bc7Srgb)
+        matches!(self, GpuFormat::Bc6h | GpuFormat::Bc7 | GpuFormat::Bc7Srgb) || self.is_astc()
     }
 
     /// Holds values above 1 (HDR).
@@ -94,7 +138,7 @@ impl GpuFormat {
                 | GpuFormat::Bc6h
                 | GpuFormat::Rgb9e5
                 | GpuFormat::Rg11b10
-        )
+        ) || self.is_astc()
     }
 
     /// Colour stored sRGB-encoded (alpha stays linear).
@@ -110,12 +154,13 @@ impl GpuFormat {
         )
     }
 
-    /// Float formats without a sign: negative values are clamped to 0.
+    /// Float formats without a sign: negative values are clamped to 0 (ASTC's HDR endpoints
+    /// have no sign either, though Vulkan names the format SFLOAT).
     pub fn is_unsigned_float(self) -> bool {
         matches!(
             self,
             GpuFormat::Bc6h | GpuFormat::Rgb9e5 | GpuFormat::Rg11b10
-        )
+        ) || self.is_astc()
     }
 
     /// Lossy beyond rounding to the format's precision: worth a quality report.
@@ -127,7 +172,10 @@ impl GpuFormat {
     /// matter of course).
     pub fn largest_value(self) -> Option<f32> {
         match self {
-            GpuFormat::Rgba16f | GpuFormat::Bc6h => Some(HALF_MAX),
+            GpuFormat::Rgba16f
+            | GpuFormat::Bc6h
+            | GpuFormat::AstcHdr4x4
+            | GpuFormat::AstcHdr6x6 => Some(HALF_MAX),
             GpuFormat::Rgba32f => Some(f32::MAX),
             GpuFormat::Rgb9e5 => Some(RGB9E5_MAX),
             GpuFormat::Rg11b10 => Some(UF10_MAX),
@@ -147,6 +195,8 @@ impl GpuFormat {
             GpuFormat::Bc7Srgb => "BC7 sRGB",
             GpuFormat::Rgb9e5 => "E5B9G9R9 UFLOAT",
             GpuFormat::Rg11b10 => "B10G11R11 UFLOAT",
+            GpuFormat::AstcHdr4x4 => "ASTC 4x4 HDR",
+            GpuFormat::AstcHdr6x6 => "ASTC 6x6 HDR",
         }
     }
 
@@ -158,11 +208,13 @@ impl GpuFormat {
             .checked_mul(self.block_bytes() as u64)
     }
 
-    /// Encodes a whole image (rows top to bottom, blocks row by row), in parallel.
-    pub fn encode_image(self, img: &Image) -> Vec<u8> {
-        match self {
+    /// Encodes a whole image (rows top to bottom, blocks row by row), in parallel. Fails only
+    /// for ASTC in a build without its encoder.
+    pub fn encode_image(self, img: &Image) -> Result<Vec<u8>, String> {
+        Ok(match self {
             GpuFormat::Bc6h => encode_bc6h(img),
             GpuFormat::Bc7 | GpuFormat::Bc7Srgb => encode_bc7(img, self.is_srgb()),
+            GpuFormat::AstcHdr4x4 | GpuFormat::AstcHdr6x6 => astc::encode(img, self.block_dim())?,
             _ => {
                 let bpt = self.block_bytes();
                 let mut out = vec![0u8; img.width * img.height * bpt];
@@ -175,12 +227,16 @@ impl GpuFormat {
                     });
                 out
             }
-        }
+        })
     }
 
     /// Decodes a `w` x `h` image from `bytes`, which must hold at least
-    /// [`image_bytes`](Self::image_bytes) of it.
-    pub fn decode_image(self, bytes: &[u8], w: usize, h: usize) -> Image {
+    /// [`image_bytes`](Self::image_bytes) of it. Fails only for ASTC in a build without its
+    /// decoder.
+    pub fn decode_image(self, bytes: &[u8], w: usize, h: usize) -> Result<Image, String> {
+        if self.is_astc() {
+            return astc::decode(bytes, w, h, self.block_dim());
+        }
         let mut pixels = vec![Vec4::ZERO; w * h];
         if w > 0 && h > 0 {
             if self.is_block_compressed() {
@@ -201,11 +257,11 @@ impl GpuFormat {
                     });
             }
         }
-        Image {
+        Ok(Image {
             width: w,
             height: h,
             pixels,
-        }
+        })
     }
 
     fn encode_texel(self, p: Vec4, t: &mut [u8]) {
@@ -239,9 +295,7 @@ impl GpuFormat {
                 let b = pack_ufloat(a[2], 5, UF10_MAX);
                 t.copy_from_slice(&(r | (g << 11) | (b << 22)).to_le_bytes());
             }
-            GpuFormat::Bc6h | GpuFormat::Bc7 | GpuFormat::Bc7Srgb => {
-                unreachable!("block formats encode whole images")
-            }
+            _ => unreachable!("block formats encode whole images"),
         }
     }
 
@@ -276,9 +330,7 @@ impl GpuFormat {
                     1.0,
                 )
             }
-            GpuFormat::Bc6h | GpuFormat::Bc7 | GpuFormat::Bc7Srgb => {
-                unreachable!("block formats decode whole images")
-            }
+            _ => unreachable!("block formats decode whole images"),
         }
     }
 
@@ -443,7 +495,12 @@ pub fn psnr<'a>(
             v.clamp(0.0, 1.0) as f64
         }
     };
-    let channels = if format.has_alpha() { 4 } else { 3 };
+    // HDR formats compare colour only: an alpha of 1 kept exactly would flatter them.
+    let channels = if format.has_alpha() && !format.is_float() {
+        4
+    } else {
+        3
+    };
     let (mut sum, mut n) = (0.0f64, 0u64);
     for (a, b) in original.into_iter().zip(decoded) {
         // Rows summed in parallel, then in order: the same sum on any number of threads.
@@ -491,12 +548,12 @@ mod tests {
                         .map(|i| Vec4::new(0.1 + 0.05 * i as f32, 0.5, 0.25, 1.0))
                         .collect(),
                 };
-                let bytes = format.encode_image(&img);
+                let bytes = format.encode_image(&img).unwrap();
                 assert_eq!(
                     bytes.len() as u64,
                     format.image_bytes(w as u64, h as u64).unwrap()
                 );
-                let back = format.decode_image(&bytes, w, h);
+                let back = format.decode_image(&bytes, w, h).unwrap();
                 // Within 8 %: BC6H interpolates 16 steps between half-float bit patterns,
                 // about log-spaced, and this block spans three octaves (0.1 to 0.75).
                 for (a, b) in img.pixels.iter().zip(&back.pixels) {

@@ -153,11 +153,15 @@ impl Ktx1Format {
     }
 
     /// Appends one face's texels, row by row, each row padded to 4 bytes.
-    pub(super) fn encode_face(self, face: &Image, out: &mut Vec<u8>) {
+    pub(super) fn encode_face(
+        self,
+        face: &Image,
+        out: &mut Vec<u8>,
+    ) -> std::result::Result<(), String> {
         let row = self.row_bytes(face.width);
         let texels = face.width * self.bytes_per_texel();
         let bytes = match self.gpu() {
-            Some(g) => g.encode_image(face),
+            Some(g) => g.encode_image(face)?,
             None => {
                 let mut b = Vec::with_capacity(face.pixels.len() * 6);
                 for p in &face.pixels {
@@ -174,18 +178,24 @@ impl Ktx1Format {
             out.extend_from_slice(r);
             out.resize(start + row, 0);
         }
+        Ok(())
     }
 
     /// Decodes one face of `w` x `h` texels from little-endian `bytes` (padded rows).
-    pub(super) fn decode_face(self, bytes: &[u8], w: usize, h: usize) -> Image {
+    pub(super) fn decode_face(
+        self,
+        bytes: &[u8],
+        w: usize,
+        h: usize,
+    ) -> std::result::Result<Image, String> {
         let row = self.row_bytes(w);
         let texels = w * self.bytes_per_texel();
         let mut packed = Vec::with_capacity(texels * h);
         for y in 0..h {
             packed.extend_from_slice(&bytes[y * row..y * row + texels]);
         }
-        match self.gpu() {
-            Some(g) => g.decode_image(&packed, w, h),
+        Ok(match self.gpu() {
+            Some(g) => g.decode_image(&packed, w, h)?,
             None => Image {
                 width: w,
                 height: h,
@@ -198,6 +208,6 @@ impl Ktx1Format {
                     })
                     .collect(),
             },
-        }
+        })
     }
 }

@@ -140,7 +140,7 @@ pub fn encode(
         // A non-array cube map's imageSize is the bytes of one face.
         out.extend_from_slice(&(face_len(faces[0].width) as u32).to_le_bytes());
         for face in faces {
-            format.encode_face(face, &mut out);
+            format.encode_face(face, &mut out)?;
         }
     }
     debug_assert_eq!(out.len(), total);
@@ -359,16 +359,17 @@ pub fn read(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Ktx1> {
         } else {
             format.decode_face(b, w, h)
         }
+        .map_err(err)
     };
     let texture = if cube {
         Decoded::Cube(CubeMap {
             levels: spans
                 .iter()
-                .map(|s| std::array::from_fn(|f| face(s, f)))
-                .collect(),
+                .map(|s| crate::cube::try_faces(|f| face(s, f)))
+                .collect::<Result<_>>()?,
         })
     } else {
-        Decoded::Image(face(&spans[0], 0))
+        Decoded::Image(face(&spans[0], 0)?)
     };
     Ok(Ktx1 {
         texture,

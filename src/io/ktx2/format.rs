@@ -12,6 +12,9 @@ pub(super) const VK_FORMAT_E5B9G9R9_UFLOAT_PACK32: u32 = 123;
 pub(super) const VK_FORMAT_BC6H_UFLOAT_BLOCK: u32 = 143;
 pub(super) const VK_FORMAT_BC7_UNORM_BLOCK: u32 = 145;
 pub(super) const VK_FORMAT_BC7_SRGB_BLOCK: u32 = 146;
+/// VK_EXT_texture_compression_astc_hdr (core in Vulkan 1.3).
+pub(super) const VK_FORMAT_ASTC_4X4_SFLOAT_BLOCK: u32 = 1_000_066_000;
+pub(super) const VK_FORMAT_ASTC_6X6_SFLOAT_BLOCK: u32 = 1_000_066_004;
 
 /// supercompressionScheme of Zstandard.
 pub(super) const SCHEME_ZSTD: u32 = 2;
@@ -23,6 +26,7 @@ pub(super) const KHR_DF_VERSIONNUMBER_1_3: u32 = 2;
 pub(super) const KHR_DF_MODEL_RGBSDA: u32 = 1;
 pub(super) const KHR_DF_MODEL_BC6H: u32 = 133;
 pub(super) const KHR_DF_MODEL_BC7: u32 = 134;
+pub(super) const KHR_DF_MODEL_ASTC: u32 = 162;
 pub(super) const KHR_DF_PRIMARIES_BT709: u32 = 1;
 pub(super) const KHR_DF_TRANSFER_LINEAR: u32 = 1;
 pub(super) const KHR_DF_TRANSFER_SRGB: u32 = 2;
@@ -50,6 +54,8 @@ pub(super) fn vk_format(format: GpuFormat) -> u32 {
         GpuFormat::Bc7Srgb => VK_FORMAT_BC7_SRGB_BLOCK,
         GpuFormat::Rgb9e5 => VK_FORMAT_E5B9G9R9_UFLOAT_PACK32,
         GpuFormat::Rg11b10 => VK_FORMAT_B10G11R11_UFLOAT_PACK32,
+        GpuFormat::AstcHdr4x4 => VK_FORMAT_ASTC_4X4_SFLOAT_BLOCK,
+        GpuFormat::AstcHdr6x6 => VK_FORMAT_ASTC_6X6_SFLOAT_BLOCK,
     }
 }
 
@@ -64,13 +70,15 @@ pub(super) fn from_vk_format(vk: u32) -> Option<GpuFormat> {
         VK_FORMAT_BC7_SRGB_BLOCK => GpuFormat::Bc7Srgb,
         VK_FORMAT_E5B9G9R9_UFLOAT_PACK32 => GpuFormat::Rgb9e5,
         VK_FORMAT_B10G11R11_UFLOAT_PACK32 => GpuFormat::Rg11b10,
+        VK_FORMAT_ASTC_4X4_SFLOAT_BLOCK => GpuFormat::AstcHdr4x4,
+        VK_FORMAT_ASTC_6X6_SFLOAT_BLOCK => GpuFormat::AstcHdr6x6,
         _ => return None,
     })
 }
 
 /// What the reader takes, for messages.
 pub(super) const SUPPORTED: &str =
-    "cubeforge reads RGBA16F, RGBA32F, RGBA8 sRGB/UNORM, BC6H UFLOAT, BC7 sRGB/UNORM, E5B9G9R9 and B10G11R11";
+    "cubeforge reads RGBA16F, RGBA32F, RGBA8 sRGB/UNORM, BC6H UFLOAT, BC7 sRGB/UNORM, E5B9G9R9, B10G11R11 and ASTC 4x4/6x6 SFLOAT (HDR)";
 
 /// typeSize: the size of the data type for endian conversion (1 for block formats, 4 for
 /// the packed 32-bit ones).
@@ -163,6 +171,12 @@ pub(super) fn data_format_descriptor(format: GpuFormat) -> Vec<u8> {
         // One 128-bit sample over the whole block.
         GpuFormat::Bc6h => (KHR_DF_MODEL_BC6H, vec![(0, 128, float, 0, ONE)]),
         GpuFormat::Bc7 | GpuFormat::Bc7Srgb => (KHR_DF_MODEL_BC7, vec![(0, 128, 0, 0, u32::MAX)]),
+        // SFLOAT: the ASTC data channel (0) marked signed float, from -1 to 1, as libktx
+        // describes every *_SFLOAT_BLOCK.
+        GpuFormat::AstcHdr4x4 | GpuFormat::AstcHdr6x6 => (
+            KHR_DF_MODEL_ASTC,
+            vec![(0, 128, signed_float, MINUS_ONE, ONE)],
+        ),
     };
     let block_size = DFD_BLOCK_HEADER_LEN + samples.len() as u32 * DFD_SAMPLE_LEN;
     let dim = format.block_dim() as u32 - 1;

@@ -152,14 +152,16 @@ pub fn metadata(bytes: &[u8]) -> Vec<(String, Vec<u8>)> {
     out
 }
 
-/// Encodes every level of `cube` as a KTX2 cube map in `format`.
+/// Encodes every level of `cube` as a KTX2 cube map in `format`, which this build must
+/// have ([`GpuFormat::check_built`]; otherwise the result is empty: use [`encode_cube_with`]
+/// to be told why).
 pub fn encode(cube: &CubeMap, format: GpuFormat) -> Vec<u8> {
     encode_with_metadata(cube, format, &[])
 }
 
 /// Encodes a cube map with extra key/value entries (e.g. [`LEVELS_KEY`]).
 pub fn encode_with_metadata(cube: &CubeMap, format: GpuFormat, extra: &[(&str, &[u8])]) -> Vec<u8> {
-    // Without supercompression nothing can fail.
+    // Without supercompression only a format missing from this build fails (see `encode`).
     encode_cube_with(cube, format, None, extra).unwrap_or_default()
 }
 
@@ -210,7 +212,7 @@ fn level_data(
     let encoded: Vec<Vec<u8>> = images
         .par_iter()
         .map(|(_, img)| format.encode_image(img))
-        .collect();
+        .collect::<std::result::Result<_, String>>()?;
     let mut plain: Vec<Vec<u8>> = vec![Vec::new(); levels.len()];
     for ((l, _), bytes) in images.iter().zip(encoded) {
         plain[*l].extend_from_slice(&bytes);
@@ -498,16 +500,18 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
     let image = |l: usize, face: usize| {
         let (w, h) = shape.level_size(l);
         let len = shape.face_bytes(l);
-        format.decode_image(&inflated[l][face * len..(face + 1) * len], w, h)
+        format
+            .decode_image(&inflated[l][face * len..(face + 1) * len], w, h)
+            .map_err(err)
     };
     let decoded = if cube {
         Decoded::Cube(CubeMap {
             levels: (0..level_count)
-                .map(|l| std::array::from_fn(|f| image(l, f)))
-                .collect(),
+                .map(|l| crate::cube::try_faces(|f| image(l, f)))
+                .collect::<Result<_>>()?,
         })
     } else {
-        Decoded::Image(image(0, 0))
+        Decoded::Image(image(0, 0)?)
     };
 
     let mut meta = Meta::for_gpu(FileFormat::Ktx2, format, level_count);

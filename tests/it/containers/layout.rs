@@ -121,7 +121,7 @@ fn dds_legacy_headers_are_read() {
         for f in 0..6 {
             for level in &cube.levels {
                 let start = data.len();
-                data.extend(format.encode_image(&level[f]));
+                data.extend(format.encode_image(&level[f]).unwrap());
                 if bgra {
                     for t in data[start..].chunks_exact_mut(4) {
                         t.swap(0, 2);
