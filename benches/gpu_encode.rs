@@ -1,7 +1,8 @@
 //! Benchmark (not a timed test): the GPU texel formats on a 512-face GGX chain (all ten
 //! levels), against the GGX filtering that made it. Target: BC6H-encoding the chain takes less
 //! than filtering it. Also BC7, the packed HDR formats and Zstandard levels, and the PSNR of
-//! each lossy format at level 0. Run with `cargo bench --bench gpu_encode`.
+//! each lossy format at level 0. Run with `cargo bench --bench gpu_encode` (add `--features astc`
+//! for ASTC HDR 4x4 and 6x6).
 
 use cubeforge::cube::CubeMap;
 use cubeforge::filter::{self, ChainOptions, FilterKind};
@@ -30,7 +31,12 @@ fn main() {
         .map(|l| 6 * l[0].width * l[0].width)
         .sum();
     let faces: Vec<&Image> = chain.levels[0].iter().collect();
-    for (format, zstd) in [
+    let astc: &[(GpuFormat, Option<i32>)] = if cfg!(feature = "astc") {
+        &[(GpuFormat::AstcHdr4x4, None), (GpuFormat::AstcHdr6x6, None)]
+    } else {
+        &[]
+    };
+    for &(format, zstd) in [
         (GpuFormat::Bc6h, None),
         (GpuFormat::Bc6h, Some(19)),
         (GpuFormat::Bc7Srgb, None),
@@ -40,7 +46,10 @@ fn main() {
         (GpuFormat::Rgba16f, Some(3)),
         (GpuFormat::Rgba16f, Some(9)),
         (GpuFormat::Rgba16f, Some(19)),
-    ] {
+    ]
+    .iter()
+    .chain(astc)
+    {
         let t = Instant::now();
         let bytes = ktx2::encode_cube_with(&chain, format, zstd, &[]).expect("encodes");
         let s = t.elapsed().as_secs_f64();

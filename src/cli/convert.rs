@@ -53,7 +53,8 @@ pub struct Args {
     #[arg(long)]
     pub ultrahdr: bool,
     /// Texel format of KTX2 and DDS output (default rgba16f; bc6h and bc7 are block
-    /// compressed, rgb9e5 and rg11b10 packed HDR in 4 bytes).
+    /// compressed, rgb9e5 and rg11b10 packed HDR in 4 bytes; astc-hdr-4x4 and astc-hdr-6x6,
+    /// KTX2 only, are HDR blocks for phones, in builds with the cargo feature astc).
     #[arg(long, value_enum)]
     pub gpu_format: Option<GpuFormat>,
     #[command(flatten)]

@@ -32,7 +32,8 @@ pub struct Args {
     /// Importance samples per texel at the sharpest filtered level (doubled per level after it).
     #[arg(value_parser = clap::value_parser!(u32).range(1..=65536), long)]
     pub samples: Option<u32>,
-    /// Texel format of the KTX2 files (default: the target's).
+    /// Texel format of the KTX2 files (default: the target's; astc-hdr-4x4 for phones with
+    /// bevy, gltf, generic and godot, whose panorama it writes as a 2D KTX2).
     #[arg(long, value_enum)]
     pub gpu_format: Option<GpuFormat>,
     #[command(flatten)]

@@ -8,8 +8,8 @@
 //! encoded from its own texels only (astcenc repeats the last row and column past the edge),
 //! so the bytes do not depend on the number of threads.
 //!
-//! astcenc weighs HDR errors in log space, where a sun of 4500 read back as 2300 is a small
-//! error; to a light probe it is most of the light. So each block whose read-back light is off
+//! astcenc weighs HDR errors in log space, where a sun's block of 3600 read back as 2300 is a
+//! small error; to a light probe it is most of the light. So each block whose read-back light is off
 //! by more than `LIGHT_SHARE` of the image's is fitted again on its own: its texels scaled by
 //! what it lost, per channel, a few rounds, the closest kept. A block that spans 15 stops has
 //! weights a stop or two apart, so the sun's blocks stay coarse: on the real panoramas' 256 px
