@@ -53,6 +53,7 @@ impl Loaded {
                 hdr: true,
                 replaced_values: 0,
                 stored_levels: 1,
+                declared: None,
             },
             files: Vec::new(),
         }

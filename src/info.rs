@@ -65,6 +65,9 @@ pub struct Report {
     /// Why the layout is unknown or ambiguous.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub kind_note: Option<String>,
+    /// The layout the file declares of itself and how it was read (OpenEXR's `envmap`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub declared: Option<String>,
     /// Image width in texels (a face's, for faces and containers).
     pub width: usize,
     /// Image height in texels (a face's, for faces and containers).
@@ -246,7 +249,8 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
     if path.is_dir() {
         return describe_folder(path, from, opts);
     }
-    let (decoded, meta) = io::read_raw(path, opts)?;
+    let (decoded, mut meta) = io::read_raw(path, opts)?;
+    let declared = meta.declared.take();
     let file = path.display().to_string();
     Ok(match decoded {
         Decoded::Cube(cube) => {
@@ -274,6 +278,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 file_format: meta.file_format,
                 kind: Some(kind),
                 kind_note: None,
+                declared,
                 width: n,
                 height: n,
                 face_size: Some(n),
@@ -316,6 +321,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 file_format: meta.file_format,
                 kind: kind.map(MapKind::Layout),
                 kind_note: note,
+                declared,
                 width: w,
                 height: h,
                 // Unknown where the layout is: a square image's face is its width or half of it.
@@ -372,6 +378,7 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
         file_format: meta.file_format,
         kind: Some(Kind::Faces.into()),
         kind_note: None,
+        declared: None,
         width: n,
         height: n,
         face_size: Some(n),
@@ -405,6 +412,12 @@ impl std::fmt::Display for Report {
         writeln!(f, "{}", self.file.replace('\n', "\\n").replace('\r', "\\r"))?;
         writeln!(f, "  format:       {}", self.file_format.name())?;
         match (&self.kind, &self.kind_note) {
+            (Some(k), _) if self.declared.is_some() => writeln!(
+                f,
+                "  layout:       {} ({})",
+                k.name(),
+                self.declared.as_deref().unwrap_or_default()
+            )?,
             (Some(MapKind::Layout(Kind::Faces)), _) if self.mip_levels > 1 => writeln!(
                 f,
                 "  layout:       faces, a prefiltered chain (folders m0 to m{})",

@@ -369,6 +369,7 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Deco
         hdr: true,
         replaced_values: 0,
         stored_levels: levels,
+        declared: None,
     };
     Ok((Decoded::Cube(env.cube), meta))
 }

@@ -236,6 +236,9 @@ pub struct Meta {
     /// Mip levels the file holds (1 for plain images): a 2D KTX2 or DDS is read at level 0
     /// only, and this says how many it has.
     pub stored_levels: usize,
+    /// The layout the file declares and how it was read (OpenEXR's `envmap` attribute), for
+    /// `info`; None where the layout comes from the shape.
+    pub declared: Option<String>,
 }
 
 impl Meta {
@@ -257,6 +260,7 @@ impl Meta {
             hdr: format.is_float(),
             replaced_values: 0,
             stored_levels,
+            declared: None,
         }
     }
 }

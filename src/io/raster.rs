@@ -128,6 +128,7 @@ pub fn decode(
         hdr: float,
         replaced_values: 0,
         stored_levels: 1,
+        declared: None,
     };
     Ok((
         Decoded::Image(Image {

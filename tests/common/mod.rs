@@ -221,6 +221,15 @@ pub fn oiiotool() -> bool {
     )
 }
 
+/// OpenEXR's `exrenvmap` (Debian's `openexr`; it exits non-zero when given no file).
+pub fn exrenvmap() -> bool {
+    reader_found(
+        "exrenvmap",
+        "apt-get install openexr",
+        runs("exrenvmap", &["-h"], true),
+    )
+}
+
 /// NVIDIA Texture Tools' `nvddsinfo` (it exits non-zero when given no file).
 pub fn nvddsinfo() -> bool {
     reader_found(

@@ -20,6 +20,7 @@ fn meta() -> Meta {
         hdr: true,
         replaced_values: 0,
         stored_levels: 1,
+        declared: None,
     }
 }
 

@@ -79,6 +79,7 @@ fn panorama(img: Image) -> Loaded {
             hdr: true,
             replaced_values: 0,
             stored_levels: 1,
+            declared: None,
         },
         files: vec![],
     }

@@ -16,6 +16,7 @@ mod control;
 mod conversions;
 mod doc_pictures;
 mod engine_containers;
+mod exr_envmap;
 mod fault_campaign;
 mod fault_outputs;
 mod finite;

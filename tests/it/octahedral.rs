@@ -25,6 +25,7 @@ fn loaded(source: Source, kind: Kind) -> Loaded {
             hdr: true,
             replaced_values: 0,
             stored_levels: 1,
+            declared: None,
         },
         files: vec![],
     }

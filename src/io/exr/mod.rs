@@ -6,7 +6,8 @@
 //! allow), and every call into the crate runs behind `catch_unwind`, so a corrupt file is a
 //! one-line error, never a panic or an abort on a huge allocation. The common layout (one
 //! scan-line part of half or full floats) decodes a block per task straight into the image,
-//! its ZIP and RLE blocks unpacked here (see `blocks`).
+//! its ZIP and RLE blocks unpacked here (see `blocks`). A file whose `envmap` attribute
+//! declares OpenEXR's latlong or cube layout is read by that layout's definition (`envmap`).
 
 #![warn(missing_docs)]
 
@@ -21,6 +22,7 @@ use std::path::Path;
 
 mod blocks;
 mod checks;
+mod envmap;
 mod piz;
 use checks::{read_chunks, read_meta, RawChunk};
 
@@ -101,6 +103,20 @@ pub(crate) fn decode_with(
         }),
     }
     .map_err(fail)?;
+    // OpenEXR's own environment maps, read by their definitions (see `envmap`).
+    let (decoded, declared) = match header.own_attributes.environment_map {
+        None => (Decoded::Image(image), None),
+        Some(exr::meta::attribute::EnvironmentMap::LatitudeLongitude) => (
+            Decoded::Image(envmap::latlong(&image)),
+            Some("declared by its envmap attribute: an OpenEXR latlong map, read by OpenEXR's mapping".into()),
+        ),
+        Some(exr::meta::attribute::EnvironmentMap::Cube) => (
+            Decoded::Cube(crate::cube::CubeMap {
+                levels: vec![envmap::cube(&image).map_err(|e| Error::file(path, e))?],
+            }),
+            Some("declared by its envmap attribute: an OpenEXR cube map, read by OpenEXR's faces".into()),
+        ),
+    };
     let meta = Meta {
         file_format: FileFormat::Exr,
         pixel_format,
@@ -108,8 +124,9 @@ pub(crate) fn decode_with(
         hdr: true,
         replaced_values,
         stored_levels: 1,
+        declared,
     };
-    Ok((Decoded::Image(image), meta))
+    Ok((decoded, meta))
 }
 
 /// Runs one call into the exr crate: its errors become messages, and so do its panics (see

@@ -393,6 +393,7 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Deco
         hdr: k.format.is_float(),
         replaced_values: 0,
         stored_levels: k.levels,
+        declared: None,
     };
     Ok((k.texture, meta))
 }

@@ -84,6 +84,7 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(I
         hdr: true,
         replaced_values: 0,
         stored_levels: 1,
+        declared: None,
     };
     Some(Ok((img, meta)))
 }

@@ -408,6 +408,7 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<(Decoded,
         hdr: true,
         replaced_values: 0,
         stored_levels: 1,
+        declared: None,
     };
     Ok((Decoded::Image(img), meta))
 }
