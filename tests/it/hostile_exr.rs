@@ -455,3 +455,33 @@ fn valid_files_decode_as_the_crate_reads_them() {
         }
     }
 }
+
+#[test]
+fn newer_compressions_are_named_not_called_invalid() {
+    let dir = tempfile::tempdir().unwrap();
+    let plain = written(Blocks::ScanLines, Compression::Uncompressed);
+    let key = b"compression\0compression\0";
+    let at = plain
+        .windows(key.len())
+        .position(|w| w == key)
+        .expect("a compression attribute")
+        + key.len()
+        + 4;
+    // OpenEXR 3.4's numbers past DWAB (9), and one no version has.
+    for (method, name) in [
+        (10u8, "HTJ2K256"),
+        (11, "HTJ2K32"),
+        (12, "ZSTD"),
+        (200, "unknown"),
+    ] {
+        let mut bytes = plain.clone();
+        bytes[at] = method;
+        let e = refused(dir.path(), "new.exr", &bytes, name);
+        assert!(
+            e.contains(&format!(
+                "unsupported compression ({name}, method {method})"
+            )),
+            "{e}"
+        );
+    }
+}

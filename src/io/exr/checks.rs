@@ -26,8 +26,26 @@ fn u64_at(bytes: &[u8], at: usize) -> Option<u64> {
     ))
 }
 
-/// The headers through the crate, after checking that each attribute lies inside the file;
-/// and where the chunk table starts (after the headers).
+/// The last compression method the exr crate decodes: DWAB (9).
+const LAST_KNOWN_COMPRESSION: u8 = 9;
+
+/// The message for a compression method past DWAB: named as OpenEXR 3.4 numbers them.
+fn unsupported_compression(method: u8) -> String {
+    let name = match method {
+        10 => "HTJ2K256",
+        11 => "HTJ2K32",
+        12 => "ZSTD",
+        _ => "unknown",
+    };
+    format!(
+        "unsupported compression ({name}, method {method}): save it with ZIP, PIZ or DWAB \
+         (oiiotool IN --compression zip -o OUT)"
+    )
+}
+
+/// The headers through the crate, after checking that each attribute lies inside the file
+/// (and that its compression is one the crate knows); and where the chunk table starts (after
+/// the headers).
 pub(super) fn read_meta(bytes: &[u8]) -> std::result::Result<(MetaData, usize), String> {
     if bytes.get(..4) != Some(&[0x76, 0x2f, 0x31, 0x01]) || bytes.len() < 8 {
         return Err("not an OpenEXR file (no magic number)".into());
@@ -58,6 +76,12 @@ pub(super) fn read_meta(bytes: &[u8]) -> std::result::Result<(MetaData, usize), 
                 return Err(format!(
                     "attribute {name:?} claims {size} bytes, more than the file holds"
                 ));
+            }
+            // A compression newer than the exr crate knows is named, not called invalid.
+            if &bytes[at..name_end] == b"compression" && size == 1 {
+                if let Some(&method) = bytes.get(value).filter(|&&m| m > LAST_KNOWN_COMPRESSION) {
+                    return Err(unsupported_compression(method));
+                }
             }
             at = value + size as usize;
             attributes += 1;
