@@ -447,7 +447,10 @@ fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Lo
             let cannot_hold = |k: Kind| {
                 Error::file(
                     path,
-                    format!("a {w}x{h} image cannot hold a {} layout", k.name()),
+                    format!(
+                        "a {w}x{h} image cannot hold {} layout",
+                        crate::error::with_article(k.name())
+                    ),
                 )
             };
             let kind = match from {

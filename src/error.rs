@@ -130,6 +130,16 @@ pub enum LimitKind {
 const OPEN: char = '\u{e000}';
 const CLOSE: char = '\u{e001}';
 
+/// `word` with its indefinite article, as read aloud: "an equirect", "an hcross" (aitch),
+/// "a vcross", "an OpenEXR", "a KTX2".
+pub(crate) fn with_article(word: &str) -> String {
+    let lower = word.to_ascii_lowercase();
+    let an = lower.starts_with(['a', 'e', 'i', 'o', 'u'])
+        || lower.starts_with("hc")
+        || lower.starts_with("hs");
+    format!("{} {word}", if an { "an" } else { "a" })
+}
+
 /// A parameter in a message: `` `from` `` where the library shows it, `--from` where a
 /// command line does ([`Error::with_flags`], [`name_params`]).
 pub(crate) fn param(name: &str) -> String {

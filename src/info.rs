@@ -263,10 +263,10 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 return Err(Error::file(
                     path,
                     format!(
-                        "{} {}: the file is a {} cube map",
+                        "{} {}: the file is {} cube map",
                         param("from"),
                         k.name(),
-                        meta.file_format.name()
+                        crate::error::with_article(meta.file_format.name())
                     ),
                 ));
             }
@@ -306,7 +306,10 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 Some(k) if !k.fits(w, h) => {
                     return Err(Error::file(
                         path,
-                        format!("a {w}x{h} image cannot hold a {} layout", k.name()),
+                        format!(
+                            "a {w}x{h} image cannot hold {} layout",
+                            crate::error::with_article(k.name())
+                        ),
                     ))
                 }
                 Some(k) => (Some(k), None),

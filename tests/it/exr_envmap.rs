@@ -3,7 +3,7 @@
 //! and `CubeMap::pixelPosition`, written out here from OpenEXR's ImfEnvmap.cpp), made by this
 //! test with the exr crate and by OpenEXR's own `exrenvmap`, read by cubeforge: every texel
 //! lands within about a texel of its direction (seamless, the right way round), and `info`
-//! says what the file declared.
+//! says what the file declared; and how `info` names an EXR's samples and compression.
 
 use crate::common;
 use cubeforge::cube::{texel_dir, CubeMap};
@@ -235,4 +235,41 @@ fn exrenvmaps_own_files_land_every_texel_at_its_direction() {
     let (worst, texel) = check_latlong(&made_ll);
     println!("exrenvmap -l: {worst:.2} degrees at worst, a texel {texel:.2}");
     assert!(worst <= 0.25 * texel, "{worst} > {texel} / 4");
+}
+
+#[test]
+fn info_names_exr_compressions_and_mixed_channel_types() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("mixed.exr");
+    let channels = SpecificChannels::rgb(|_: exr::math::Vec2<usize>| {
+        (half::f16::from_f32(0.5), 0.25f32, 0.125f32)
+    });
+    let encoding = Encoding {
+        compression: exr::prelude::Compression::DWAB(None),
+        ..Encoding::FAST_LOSSLESS
+    };
+    let layer = Layer::new((64, 32), LayerAttributes::default(), encoding, channels);
+    exr::image::Image::from_layer(layer)
+        .write()
+        .to_file(&path)
+        .unwrap();
+    let o = common::run(["info".as_ref(), path.as_os_str()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("pixel format: R16F G32F B32F (DWAB)"),
+        "{text}"
+    );
+    assert!(!text.contains("None"), "{text}");
+    // And the article before a layout's name.
+    let o = common::run([
+        "info".as_ref(),
+        path.as_os_str(),
+        "--from".as_ref(),
+        "angular".as_ref(),
+    ]);
+    assert!(
+        common::stderr(&o).contains("cannot hold an angular layout"),
+        "{}",
+        common::stderr(&o)
+    );
 }

@@ -135,7 +135,10 @@ fn square_images_need_from_for_their_face_size() {
         &["--from".as_ref(), "hcross".as_ref(), p.as_os_str()],
         "square.exr",
     );
-    assert!(e.contains("64x64 image cannot hold a hcross layout"), "{e}");
+    assert!(
+        e.contains("64x64 image cannot hold an hcross layout"),
+        "{e}"
+    );
     let e = one_error(
         &["--from".as_ref(), "faces".as_ref(), p.as_os_str()],
         "square.exr",
@@ -155,7 +158,7 @@ fn from_applies_to_other_shapes() {
     );
     let e = describe(&p, Some(Kind::Angular)).unwrap_err().to_string();
     assert!(
-        e.contains("32x16 image cannot hold a angular layout"),
+        e.contains("32x16 image cannot hold an angular layout"),
         "{e}"
     );
 }

@@ -83,17 +83,7 @@ pub(crate) fn decode_with(
             size.1
         )));
     }
-    let sample = match channel("R").map(|c| c.sample_type) {
-        Some(SampleType::F16) => "16F",
-        Some(SampleType::U32) => "32UI",
-        _ => "32F",
-    };
-    let alpha = channel("A").is_some();
-    let pixel_format = format!(
-        "{}{sample} ({})",
-        if alpha { "RGBA" } else { "RGB" },
-        header.compression
-    );
+    let pixel_format = pixel_format(header, channel("A").is_some());
     let chunks = read_chunks(bytes, &meta, table_start).map_err(fail)?;
     let (image, replaced_values) = match fast_layout(&meta) {
         Some(layout) => blocks::decode_blocks(&meta, &layout, chunks, sanitize),
@@ -127,6 +117,63 @@ pub(crate) fn decode_with(
         declared,
     };
     Ok((decoded, meta))
+}
+
+/// How `info` names the first layer's samples and compression: "RGBA16F (ZIP, 16 lines)", and
+/// each channel's type where they differ ("R16F G16F B32F").
+fn pixel_format(header: &exr::meta::header::Header, alpha: bool) -> String {
+    let kind = |t: SampleType| match t {
+        SampleType::F16 => "16F",
+        SampleType::U32 => "32UI",
+        SampleType::F32 => "32F",
+    };
+    let names: &[&str] = if alpha {
+        &["R", "G", "B", "A"]
+    } else {
+        &["R", "G", "B"]
+    };
+    let types: Vec<SampleType> = names
+        .iter()
+        .filter_map(|n| header.channels.list.iter().find(|c| c.name.eq(n)))
+        .map(|c| c.sample_type)
+        .collect();
+    let samples = if types.windows(2).all(|w| w[0] == w[1]) {
+        format!(
+            "{}{}",
+            names.concat(),
+            types.first().map_or("", |&t| kind(t))
+        )
+    } else {
+        let each: Vec<String> = names
+            .iter()
+            .zip(&types)
+            .map(|(n, &t)| format!("{n}{}", kind(t)))
+            .collect();
+        each.join(" ")
+    };
+    let compression = match header.compression {
+        Compression::Uncompressed => "uncompressed".to_string(),
+        Compression::RLE => "RLE".into(),
+        Compression::ZIP1 => "ZIPS, 1 line".into(),
+        Compression::ZIP16 => "ZIP, 16 lines".into(),
+        Compression::PIZ => "PIZ".into(),
+        Compression::PXR24 => "PXR24".into(),
+        Compression::B44 => "B44".into(),
+        Compression::B44A => "B44A".into(),
+        Compression::DWAA(level) => dwa("DWAA", level),
+        Compression::DWAB(level) => dwa("DWAB", level),
+        #[allow(unreachable_patterns)]
+        other => format!("{other:?}"),
+    };
+    format!("{samples} ({compression})")
+}
+
+/// A DWA compression's name, with its level where the file states one.
+fn dwa(name: &str, level: Option<f32>) -> String {
+    match level {
+        Some(l) => format!("{name}, level {l}"),
+        None => name.into(),
+    }
 }
 
 /// Runs one call into the exr crate: its errors become messages, and so do its panics (see
