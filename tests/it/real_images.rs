@@ -487,7 +487,7 @@ fn info_json_on_each_kind() {
             (512, 256),
             128,
             "linear",
-            "dwab compression",
+            "RGB16F (DWAB)",
         ),
         expect(
             "zip/venice.exr",
@@ -496,7 +496,7 @@ fn info_json_on_each_kind() {
             (512, 256),
             128,
             "linear",
-            "zip block compression",
+            "(ZIP, 16 lines)",
         ),
         expect("hdr/park.hdr", "hdr", eq, (512, 256), 128, "linear", "RGBE"),
         expect("png/city.png", "png", eq, (512, 256), 128, "srgb", "RGB8"),
