@@ -9,6 +9,22 @@ fn cli(args: &[&dyn AsRef<std::ffi::OsStr>]) -> std::process::Output {
     common::run(args.iter().map(|a| a.as_ref()))
 }
 
+/// `convert INPUT -o OUT --gpu-format astc-hdr-4x4`, which must fail and write nothing: its
+/// message.
+fn astc_refused(input: &std::path::Path, out: &std::path::Path) -> String {
+    let o = cli(&[
+        &"convert",
+        &input,
+        &"-o",
+        &out,
+        &"--gpu-format",
+        &"astc-hdr-4x4",
+    ]);
+    assert!(!o.status.success());
+    assert!(!out.exists());
+    common::stderr(&o)
+}
+
 #[cfg(not(feature = "astc"))]
 #[test]
 fn astc_without_the_feature_is_refused_before_any_work() {
@@ -20,19 +36,8 @@ fn astc_without_the_feature_is_refused_before_any_work() {
         pixels: vec![glam::Vec4::ONE; 128],
     };
     common::write_image(&input, &img);
-    let out = dir.path().join("o.ktx2");
-    let o = cli(&[
-        &"convert",
-        &input,
-        &"-o",
-        &out,
-        &"--gpu-format",
-        &"astc-hdr-4x4",
-    ]);
-    assert!(!o.status.success());
-    let e = common::stderr(&o);
+    let e = astc_refused(&input, &dir.path().join("o.ktx2"));
     assert!(e.contains("--features astc"), "{e}");
-    assert!(!out.exists());
 }
 
 #[cfg(feature = "astc")]
@@ -46,15 +51,11 @@ mod with_astc {
     use std::path::{Path, PathBuf};
     use std::process::Command;
 
+    use crate::gpu_formats::panoramas;
+
     /// The first real panorama (.hdr), or None when the fixtures are absent.
     fn panorama() -> Option<PathBuf> {
-        let mut files: Vec<PathBuf> = std::fs::read_dir(common::real_dir()?.join("hdr"))
-            .ok()?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|e| e == "hdr"))
-            .collect();
-        files.sort();
-        files.into_iter().next()
+        panoramas().into_iter().next()
     }
 
     /// Level 0 of a 256-face cube of each real panorama against the uncompressed map, by
@@ -70,18 +71,6 @@ mod with_astc {
         // Smaller levels: at least 22.2 dB.
         (GpuFormat::AstcHdr6x6, 37.0, 4.0, 20.0),
     ];
-
-    fn panoramas() -> Vec<PathBuf> {
-        let Some(real) = common::real_dir() else {
-            return Vec::new();
-        };
-        let mut files: Vec<PathBuf> = std::fs::read_dir(real.join("hdr"))
-            .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
-            .unwrap_or_default();
-        files.retain(|p| p.extension().is_some_and(|e| e == "hdr"));
-        files.sort();
-        files
-    }
 
     fn cube_of(bytes: &[u8]) -> CubeMap {
         match ktx2::decode(bytes, Path::new("t"), &Limits::default())
@@ -215,20 +204,9 @@ mod with_astc {
         }
         // Containers without ASTC are refused in one line, before any work.
         for ext in ["dds", "ktx"] {
-            let out = dir.path().join(format!("o.{ext}"));
-            let o = cli(&[
-                &"convert",
-                &pano,
-                &"-o",
-                &out,
-                &"--gpu-format",
-                &"astc-hdr-4x4",
-            ]);
-            assert!(!o.status.success());
-            let e = common::stderr(&o);
+            let e = astc_refused(&pano, &dir.path().join(format!("o.{ext}")));
             assert!(e.contains("holds no ASTC 4x4 HDR: write .ktx2"), "{e}");
             assert_eq!(e.trim().lines().count(), 1, "{e}");
-            assert!(!out.exists());
         }
     }
 
@@ -318,16 +296,18 @@ mod with_astc {
         }
     }
 
+    /// `cubeforge ibl INPUT -o OUT --target TARGET EXTRA...`, its outcome unchecked.
     fn ibl(input: &Path, out: &Path, target: &str, extra: &[&str]) -> std::process::Output {
-        let mut args = vec![
-            "ibl",
-            input.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "--target",
-            target,
+        let head = [
+            input.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+            "--target".as_ref(),
         ];
-        args.extend_from_slice(extra);
-        common::run(&args)
+        let args = std::iter::once("ibl".as_ref())
+            .chain(head)
+            .chain([target.as_ref()])
+            .chain(extra.iter().map(|a| a.as_ref()));
+        common::run(args.collect::<Vec<&std::ffi::OsStr>>())
     }
 }

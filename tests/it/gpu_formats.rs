@@ -69,7 +69,7 @@ fn test_cube(size: usize) -> CubeMap {
 }
 
 /// The real panoramas (.hdr), or none when the fixtures are absent.
-fn panoramas() -> Vec<PathBuf> {
+pub(crate) fn panoramas() -> Vec<PathBuf> {
     let Some(real) = common::real_dir() else {
         return Vec::new();
     };
