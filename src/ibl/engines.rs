@@ -204,7 +204,7 @@ fn godot_ktx2(ctx: &Context, img: Image, format: GpuFormat) -> Result<Delivery> 
         .flatten();
     let snippet = format!(
         "Godot 4: WorldEnvironment > Environment > Sky > PanoramaSkyMaterial, panorama = {f}\n\
-         ({levels} levels of {name}: Godot loads .ktx2 as stored, no import step; a device \
+         ({levels} levels of {name}, read by Godot's KTX loader and uploaded as stored; a device \
          without the format cannot show it).\n\
          The panorama's centre faces world +Z (behind the default camera, which looks along -Z).",
         f = file_name(&path),
