@@ -119,7 +119,7 @@ impl IblJob {
         let target = self.engine.name();
         match self.engine {
             Engine::Unity | Engine::Unreal | Engine::Three => Err(Error::usage(format!(
-                "{flag}: {target} imports a panorama and compresses it itself: leave out {flag}"
+                "{flag}: {target} is given a panorama that it filters itself, no KTX2: leave out {flag}"
             ))),
             Engine::Babylon => Err(Error::usage(format!(
                 "{flag}: Babylon's .env holds RGBD PNG faces only"

@@ -284,7 +284,7 @@ mod with_astc {
             (
                 "unity",
                 "astc-hdr-4x4",
-                "unity imports a panorama and compresses it itself",
+                "unity is given a panorama that it filters itself",
             ),
             ("filament", "astc-hdr-4x4", "KTX 1 output takes"),
         ] {
