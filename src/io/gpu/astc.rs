@@ -154,11 +154,11 @@ mod with_astcenc {
 
     /// Per-channel light (sums) of the in-image texels of block `b` of `img`, read through
     /// `texel` as the encoder took them.
-    fn block_light(img: &Image, dim: usize, b: (usize, usize), scale: [f32; 3]) -> [f64; 3] {
+    fn block_light(img: &Image, dim: usize, b: (usize, usize)) -> [f64; 3] {
         let mut sum = [0f64; 3];
         for y in b.1 * dim..((b.1 + 1) * dim).min(img.height) {
             for x in b.0 * dim..((b.0 + 1) * dim).min(img.width) {
-                let t = texel(img.pixels[y * img.width + x], scale);
+                let t = texel(img.pixels[y * img.width + x], [1.0; 3]);
                 for c in 0..3 {
                     sum[c] += t[c] as f64;
                 }
@@ -177,8 +177,8 @@ mod with_astcenc {
         let lights: Vec<([f64; 3], [f64; 3])> = (0..count)
             .into_par_iter()
             .map(|b| {
-                let s = block_light(img, dim, at(b), [1.0; 3]);
-                (s, block_light(&back, dim, at(b), [1.0; 3]))
+                let s = block_light(img, dim, at(b));
+                (s, block_light(&back, dim, at(b)))
             })
             .collect();
         let mut total = [0f64; 3];
