@@ -230,6 +230,30 @@ pub fn exrenvmap() -> bool {
     )
 }
 
+/// OpenEXR's own Python bindings (PyPI `OpenEXR` 3.5, which writes ZSTD), with numpy.
+pub fn openexr_python() -> bool {
+    reader_found(
+        "OpenEXR 3.5 (Python)",
+        "python3 -m pip install OpenEXR==3.5.3",
+        runs(
+            "python3",
+            &["-c", "import OpenEXR, numpy; OpenEXR.ZSTD_COMPRESSION"],
+            false,
+        ),
+    )
+}
+
+/// Runs a Python `script` (given `dir` as its argument) that writes files with OpenEXR's
+/// bindings; panics with its stderr if it fails.
+pub fn openexr_script(script: &str, dir: &Path) {
+    let o = Command::new("python3")
+        .args(["-c", script])
+        .arg(dir)
+        .output()
+        .expect("runs python3");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
 /// NVIDIA Texture Tools' `nvddsinfo` (it exits non-zero when given no file).
 pub fn nvddsinfo() -> bool {
     reader_found(

@@ -467,11 +467,12 @@ fn newer_compressions_are_named_not_called_invalid() {
         .expect("a compression attribute")
         + key.len()
         + 4;
-    // OpenEXR 3.4's numbers past DWAB (9), and one no version has.
+    // OpenEXR 3.5's numbers past DWAB (9) that are not decoded (13, ZSTD, is), and one no
+    // version has.
     for (method, name) in [
         (10u8, "HTJ2K256"),
         (11, "HTJ2K32"),
-        (12, "ZSTD"),
+        (12, "LJ2K"),
         (200, "unknown"),
     ] {
         let mut bytes = plain.clone();

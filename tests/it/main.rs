@@ -17,6 +17,7 @@ mod conversions;
 mod doc_pictures;
 mod engine_containers;
 mod exr_envmap;
+mod exr_openexr;
 mod fault_campaign;
 mod fault_outputs;
 mod finite;

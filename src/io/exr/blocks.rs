@@ -2,9 +2,9 @@
 //! decoded a block per task, straight into the image's rows. ZIP and RLE blocks are unpacked
 //! here: libdeflate inflates (about 3x faster than the crate's inflater), then OpenEXR's byte
 //! predictor is undone in place and the samples are read from the two halves the encoder
-//! split each block's bytes into, with no copy of the block to interleave them. Other
-//! compressions (PIZ, PXR24, B44, DWAA, DWAB) go through the crate's decompressor, a block
-//! per task likewise.
+//! split each block's bytes into, with no copy of the block to interleave them. PIZ and ZSTD
+//! have their own modules; the other compressions (PXR24, B44, DWAA, DWAB) go through the
+//! crate's decompressor, a block per task likewise.
 
 use super::checks::RawChunk;
 use super::{guarded, Layout};
@@ -20,6 +20,8 @@ use rayon::prelude::*;
 struct Scratch {
     inflate: libdeflater::Decompressor,
     piz: super::piz::Scratch,
+    zstd: Option<zstd::bulk::Decompressor<'static>>,
+    inner: Vec<u8>,
     bytes: Vec<u8>,
     floats: Vec<f32>,
     halves: Vec<f16>,
@@ -37,12 +39,14 @@ enum Samples<'a> {
 /// The layer's texels from `chunks` (those `read_chunks` checked: each block of the layer
 /// once), each block decompressed and converted in parallel into its own rows. With
 /// `sanitize`, each line is then sanitized while it is in cache (see `Image::sanitize`), and
-/// the count of values replaced comes back; the image is otherwise as stored.
+/// the count of values replaced comes back; the image is otherwise as stored. `zstd`: the
+/// header says uncompressed, the chunks are ZSTD (see `read_meta`).
 pub(super) fn decode_blocks(
     meta: &MetaData,
     (slots, alpha): &Layout,
     chunks: Vec<RawChunk>,
     sanitize: bool,
+    zstd: bool,
 ) -> std::result::Result<(Image, usize), String> {
     let header = &meta.headers[0];
     let (w, h) = (header.layer_size.0, header.layer_size.1);
@@ -79,6 +83,8 @@ pub(super) fn decode_blocks(
     let scratch = || Scratch {
         inflate: libdeflater::Decompressor::new(),
         piz: Default::default(),
+        zstd: None,
+        inner: Vec::new(),
         bytes: Vec::new(),
         floats: vec![0.0; w],
         halves: vec![f16::ZERO; w],
@@ -89,6 +95,8 @@ pub(super) fn decode_blocks(
             let Scratch {
                 inflate,
                 piz,
+                zstd: inflate_zstd,
+                inner,
                 bytes,
                 floats,
                 halves,
@@ -98,6 +106,11 @@ pub(super) fn decode_blocks(
             let samples = match (header.compression, chunk.data) {
                 // A block that would not shrink is stored as it is, whatever the compression.
                 (_, data) if data.len() == expected => Samples::Plain(data),
+                (_, data) if zstd => {
+                    super::zstd::unpack(data, header, &chunk.bounds, inflate_zstd, inner, bytes)
+                        .map_err(|e| format!("{e} (block at line {y})"))?;
+                    Samples::Plain(&bytes[..])
+                }
                 (Compression::ZIP1 | Compression::ZIP16, data) => {
                     bytes.resize(expected, 0);
                     let n = inflate.zlib_decompress(data, &mut bytes[..expected]);

@@ -29,12 +29,13 @@ fn u64_at(bytes: &[u8], at: usize) -> Option<u64> {
 /// The last compression method the exr crate decodes: DWAB (9).
 const LAST_KNOWN_COMPRESSION: u8 = 9;
 
-/// The message for a compression method past DWAB: named as OpenEXR 3.4 numbers them.
+/// The message for a compression method past DWAB that is not decoded: named as OpenEXR 3.5
+/// numbers them.
 fn unsupported_compression(method: u8) -> String {
     let name = match method {
         10 => "HTJ2K256",
         11 => "HTJ2K32",
-        12 => "ZSTD",
+        12 => "LJ2K",
         _ => "unknown",
     };
     format!(
@@ -44,16 +45,20 @@ fn unsupported_compression(method: u8) -> String {
 }
 
 /// The headers through the crate, after checking that each attribute lies inside the file
-/// (and that its compression is one the crate knows); and where the chunk table starts (after
-/// the headers).
-pub(super) fn read_meta(bytes: &[u8]) -> std::result::Result<(MetaData, usize), String> {
+/// (and that its compression is one the crate knows, or ZSTD); where the chunk table starts
+/// (after the headers); and which parts are ZSTD-compressed. The crate does not know ZSTD:
+/// it is given those headers as uncompressed (ZSTD's blocks are single lines, as uncompressed
+/// ones are), and each chunk is inflated by [`super::zstd::unpack`] before it reaches the crate.
+pub(super) fn read_meta(bytes: &[u8]) -> std::result::Result<(MetaData, usize, Vec<bool>), String> {
     if bytes.get(..4) != Some(&[0x76, 0x2f, 0x31, 0x01]) || bytes.len() < 8 {
         return Err("not an OpenEXR file (no magic number)".into());
     }
     let multipart = u32_at(bytes, 4).is_some_and(|v| v & 0x1000 != 0);
     let truncated = || "the header is truncated".to_string();
     let mut at = 8;
+    let mut zstd = Vec::new();
     loop {
+        let mut zstd_at = None;
         // One header: attributes (name, type name, size, value) up to an empty name.
         let mut attributes = 0;
         loop {
@@ -79,20 +84,35 @@ pub(super) fn read_meta(bytes: &[u8]) -> std::result::Result<(MetaData, usize), 
             }
             // A compression newer than the exr crate knows is named, not called invalid.
             if &bytes[at..name_end] == b"compression" && size == 1 {
-                if let Some(&method) = bytes.get(value).filter(|&&m| m > LAST_KNOWN_COMPRESSION) {
-                    return Err(unsupported_compression(method));
+                match bytes.get(value) {
+                    Some(&super::zstd::METHOD) => zstd_at = Some(value),
+                    Some(&method) if method > LAST_KNOWN_COMPRESSION => {
+                        return Err(unsupported_compression(method))
+                    }
+                    _ => {}
                 }
             }
             at = value + size as usize;
             attributes += 1;
+        }
+        if attributes > 0 {
+            zstd.push(zstd_at);
         }
         // A multi-part file ends its list of headers with an empty one.
         if !multipart || attributes == 0 {
             break;
         }
     }
-    let meta = guarded(|| MetaData::read_from_buffered(Cursor::new(bytes), false))?;
-    Ok((meta, at))
+    let meta = if zstd.iter().any(Option::is_some) {
+        let mut headers = bytes[..at].to_vec();
+        for &place in zstd.iter().flatten() {
+            headers[place] = 0;
+        }
+        guarded(|| MetaData::read_from_buffered(Cursor::new(&headers), false))?
+    } else {
+        guarded(|| MetaData::read_from_buffered(Cursor::new(bytes), false))?
+    };
+    Ok((meta, at, zstd.iter().map(Option::is_some).collect()))
 }
 
 /// A checked chunk, its bytes left in the file (a 4K float panorama's are 70 MB, copied
@@ -111,7 +131,11 @@ pub(super) struct RawChunk<'a> {
 impl RawChunk<'_> {
     /// The chunk as the exr crate reads it, its bytes copied.
     pub fn to_chunk(&self) -> Chunk {
-        let data = self.data.to_vec();
+        self.with_data(self.data.to_vec())
+    }
+
+    /// The chunk as the exr crate reads it, holding `data` (its bytes, inflated).
+    pub fn with_data(&self, data: Vec<u8>) -> Chunk {
         let compressed_block = match &self.block {
             CompressedBlock::ScanLine(b) => CompressedBlock::ScanLine(CompressedScanLineBlock {
                 y_coordinate: b.y_coordinate,

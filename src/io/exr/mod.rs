@@ -24,6 +24,7 @@ mod blocks;
 mod checks;
 mod envmap;
 mod piz;
+mod zstd;
 use checks::{read_chunks, read_meta, RawChunk};
 
 /// Decodes an OpenEXR file's first RGB(A) layer; `path` names it in errors, `limits` are checked before any pixel is allocated.
@@ -41,7 +42,8 @@ pub(crate) fn decode_with(
     sanitize: bool,
 ) -> Result<(Decoded, Meta)> {
     let fail = |msg: String| Error::file(path, format!("cannot decode OpenEXR: {msg}"));
-    let (meta, table_start) = read_meta(bytes).map_err(fail)?;
+    let (meta, table_start, zstd) = read_meta(bytes).map_err(fail)?;
+    let zstd = zstd.first() == Some(&true);
     let header = meta
         .headers
         .first()
@@ -83,11 +85,11 @@ pub(crate) fn decode_with(
             size.1
         )));
     }
-    let pixel_format = pixel_format(header, channel("A").is_some());
+    let pixel_format = pixel_format(header, channel("A").is_some(), zstd);
     let chunks = read_chunks(bytes, &meta, table_start).map_err(fail)?;
     let (image, replaced_values) = match fast_layout(&meta) {
-        Some(layout) => blocks::decode_blocks(&meta, &layout, chunks, sanitize),
-        None => read_layer(&meta, chunks).map(|mut img| {
+        Some(layout) => blocks::decode_blocks(&meta, &layout, chunks, sanitize, zstd),
+        None => read_layer(&meta, chunks, zstd).map(|mut img| {
             let n = if sanitize { img.sanitize() } else { 0 };
             (img, n)
         }),
@@ -121,7 +123,7 @@ pub(crate) fn decode_with(
 
 /// How `info` names the first layer's samples and compression: "RGBA16F (ZIP, 16 lines)", and
 /// each channel's type where they differ ("R16F G16F B32F").
-fn pixel_format(header: &exr::meta::header::Header, alpha: bool) -> String {
+fn pixel_format(header: &exr::meta::header::Header, alpha: bool, zstd: bool) -> String {
     let kind = |t: SampleType| match t {
         SampleType::F16 => "16F",
         SampleType::U32 => "32UI",
@@ -152,6 +154,7 @@ fn pixel_format(header: &exr::meta::header::Header, alpha: bool) -> String {
         each.join(" ")
     };
     let compression = match header.compression {
+        _ if zstd => "ZSTD".to_string(),
         Compression::Uncompressed => "uncompressed".to_string(),
         Compression::RLE => "RLE".into(),
         Compression::ZIP1 => "ZIPS, 1 line".into(),
@@ -237,7 +240,12 @@ pub fn crate_reader(bytes: &[u8]) -> exr::error::Result<Image> {
 /// layout: tiles, mip levels, subsampling, integer samples), texel by texel on one thread.
 /// The chunks are those `read_chunks` checked, decompressed here in parallel batches with
 /// rayon, rather than by the crate's own thread pool, where a panic would abort the process.
-fn read_layer(meta: &MetaData, chunks: Vec<RawChunk>) -> std::result::Result<Image, String> {
+/// `zstd`: the chunks are ZSTD, inflated here (the header given to the crate says uncompressed).
+fn read_layer(
+    meta: &MetaData,
+    chunks: Vec<RawChunk>,
+    zstd: bool,
+) -> std::result::Result<Image, String> {
     use exr::block::{BlockIndex, UncompressedBlock};
     use exr::image::read::image::{LayersReader, ReadLayers};
     use rayon::prelude::*;
@@ -283,7 +291,21 @@ fn read_layer(meta: &MetaData, chunks: Vec<RawChunk>) -> std::result::Result<Ima
         let blocks: Vec<UncompressedBlock> = some
             .into_par_iter()
             .map(|raw| {
-                let chunk = raw.to_chunk();
+                let chunk = if zstd {
+                    let mut data = Vec::new();
+                    let (mut inflate, mut inner) = (None, Vec::new());
+                    zstd::unpack(
+                        raw.data,
+                        header,
+                        &raw.bounds,
+                        &mut inflate,
+                        &mut inner,
+                        &mut data,
+                    )?;
+                    raw.with_data(data)
+                } else {
+                    raw.to_chunk()
+                };
                 guarded(|| UncompressedBlock::decompress_chunk(chunk, meta, false))
             })
             .collect::<std::result::Result<_, _>>()?;

@@ -4,11 +4,11 @@ use super::*;
 
 /// The fast path's texels, None where it declines the file.
 fn fast(bytes: &[u8]) -> Option<Image> {
-    let (meta, start) = read_meta(bytes).unwrap();
+    let (meta, start, _) = read_meta(bytes).unwrap();
     let layout = fast_layout(&meta)?;
     let chunks = read_chunks(bytes, &meta, start).unwrap();
     Some(
-        blocks::decode_blocks(&meta, &layout, chunks, false)
+        blocks::decode_blocks(&meta, &layout, chunks, false, false)
             .unwrap()
             .0,
     )
@@ -16,8 +16,8 @@ fn fast(bytes: &[u8]) -> Option<Image> {
 
 /// The crate's pixel reader on the checked chunks.
 fn slow(bytes: &[u8]) -> Image {
-    let (meta, start) = read_meta(bytes).unwrap();
-    read_layer(&meta, read_chunks(bytes, &meta, start).unwrap()).unwrap()
+    let (meta, start, _) = read_meta(bytes).unwrap();
+    read_layer(&meta, read_chunks(bytes, &meta, start).unwrap(), false).unwrap()
 }
 
 fn crate_reader(bytes: &[u8]) -> Image {
@@ -256,7 +256,7 @@ fn corrupt_piz_blocks_are_errors() {
     for types in ["fff", "hhhh"] {
         let good = written((64, 33), Compression::PIZ, types);
         both(&good, types);
-        let (meta, start) = read_meta(&good).unwrap();
+        let (meta, start, _) = read_meta(&good).unwrap();
         let chunks = read_chunks(&good, &meta, start).unwrap();
         let data = chunks[0].data;
         let stored = 64 * 32 * if types == "fff" { 12 } else { 8 };
@@ -307,7 +307,7 @@ fn piz_header_at(block: &[u8]) -> usize {
 #[test]
 fn piz_first_symbol_after_the_last_is_an_error() {
     let good = written((64, 33), Compression::PIZ, "hhhh");
-    let (meta, start) = read_meta(&good).unwrap();
+    let (meta, start, _) = read_meta(&good).unwrap();
     let chunks = read_chunks(&good, &meta, start).unwrap();
     let data = chunks[0].data;
     let at = data.as_ptr() as usize - good.as_ptr() as usize + piz_header_at(data);
@@ -356,7 +356,7 @@ fn piz_mutations_never_panic() {
         ((16, 70), "hhh+zu"),
     ] {
         let good = written(size, Compression::PIZ, types);
-        let (meta, start) = read_meta(&good).unwrap();
+        let (meta, start, _) = read_meta(&good).unwrap();
         let chunks = read_chunks(&good, &meta, start).unwrap();
         let blocks: Vec<(usize, usize)> = chunks
             .iter()
