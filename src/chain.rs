@@ -178,6 +178,16 @@ pub fn load_level_planned(
             return convert::load_planned(&[sub], from, read);
         }
     }
+    // A mip-mapped OpenEXR file's level is read alone, as its decoder picks it.
+    if let [file] = inputs {
+        if level > 0 && io::is_exr(file) {
+            let read = ReadOptions {
+                exr_level: level,
+                ..*read
+            };
+            return convert::load_planned(inputs, from, &read);
+        }
+    }
     let mut loaded = convert::load_planned(inputs, from, read)?;
     loaded.keep_level(level)?;
     Ok(loaded)

@@ -54,6 +54,7 @@ impl Loaded {
                 replaced_values: 0,
                 stored_levels: 1,
                 declared: None,
+                part: None,
             },
             files: Vec::new(),
         }
@@ -367,6 +368,19 @@ pub(crate) fn find_faces(dir: &Path) -> Result<(Vec<PathBuf>, FaceNaming)> {
         }
     }
     Ok((found, naming))
+}
+
+/// The warning for a multi-part OpenEXR input read without a part chosen: which was read.
+pub fn part_note(loaded: &Loaded, read: &ReadOptions) -> Option<String> {
+    let part = loaded
+        .meta
+        .part
+        .as_deref()
+        .filter(|_| read.exr_part.is_none())?;
+    Some(format!(
+        "{}: a multi-part OpenEXR file: read {part}",
+        loaded.files.first()?.display()
+    ))
 }
 
 /// The warning that says how a folder's skybox names were read (None for any other input).

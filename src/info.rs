@@ -68,6 +68,13 @@ pub struct Report {
     /// The layout the file declares of itself and how it was read (OpenEXR's `envmap`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub declared: Option<String>,
+    /// Which part of a multi-part file was read, of how many.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub part: Option<String>,
+    /// Why the file is taken for a 2D texture rather than an environment map (a container of
+    /// one face, a lookup table's channels): it gets no layout, face size or flux.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub texture: Option<String>,
     /// Image width in texels (a face's, for faces and containers).
     pub width: usize,
     /// Image height in texels (a face's, for faces and containers).
@@ -229,6 +236,23 @@ fn cube_flux(faces: &Faces) -> [f64; 3] {
 }
 
 /// What a square image with no `--from` may be.
+/// Why a single image is a 2D texture, not an environment map: a GPU container holding one
+/// face (a cube map's container holds six), or a square table whose B channel is 0 everywhere
+/// (what `cubeforge lut` and other BRDF tables store: R and G only).
+fn texture_2d(meta: &io::Meta, img: &Image) -> Option<String> {
+    if meta.file_format.container().is_some() {
+        return Some(format!(
+            "{} file of one face, not a cube map",
+            crate::error::with_article(meta.file_format.name())
+        ));
+    }
+    let square_table = img.width == img.height && img.width <= 1024;
+    let two_channels = img.pixels.iter().all(|p| p.z == 0.0)
+        && img.pixels.iter().any(|p| p.x != 0.0 || p.y != 0.0);
+    (square_table && two_channels)
+        .then(|| "R and G hold data and B is 0 everywhere, as in a BRDF lookup table".into())
+}
+
 fn square_note(n: usize) -> String {
     format!(
         "a square {n}x{n} image: a sphere, angular or octahedral map (face size {}; say which with {f} sphere, {f} angular or {f} octahedral) or a single face (face size {n})",
@@ -251,6 +275,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
     }
     let (decoded, mut meta) = io::read_raw(path, opts)?;
     let declared = meta.declared.take();
+    let part = meta.part.take();
     let file = path.display().to_string();
     Ok(match decoded {
         Decoded::Cube(cube) => {
@@ -279,6 +304,8 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 kind: Some(kind),
                 kind_note: None,
                 declared,
+                part,
+                texture: None,
                 width: n,
                 height: n,
                 face_size: Some(n),
@@ -293,6 +320,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
         }
         Decoded::Image(img) => {
             let (w, h) = (img.width, img.height);
+            let texture = from.is_none().then(|| texture_2d(&meta, &img)).flatten();
             let (kind, note) = match from {
                 Some(Kind::Faces) => {
                     return Err(Error::file(
@@ -313,6 +341,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                     ))
                 }
                 Some(k) => (Some(k), None),
+                None if texture.is_some() => (None, None),
                 None if w == h => (None, Some(square_note(w))),
                 None => match layout::detect(w, h) {
                     Ok(k) => (Some(k), None),
@@ -325,6 +354,8 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 kind: kind.map(MapKind::Layout),
                 kind_note: note,
                 declared,
+                part,
+                texture,
                 width: w,
                 height: h,
                 // Unknown where the layout is: a square image's face is its width or half of it.
@@ -382,6 +413,8 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
         kind: Some(Kind::Faces.into()),
         kind_note: None,
         declared: None,
+        part: None,
+        texture: None,
         width: n,
         height: n,
         face_size: Some(n),
@@ -415,6 +448,11 @@ impl std::fmt::Display for Report {
         writeln!(f, "{}", self.file.replace('\n', "\\n").replace('\r', "\\r"))?;
         writeln!(f, "  format:       {}", self.file_format.name())?;
         match (&self.kind, &self.kind_note) {
+            _ if self.texture.is_some() => writeln!(
+                f,
+                "  layout:       2D texture ({})",
+                self.texture.as_deref().unwrap_or_default()
+            )?,
             (Some(k), _) if self.declared.is_some() => writeln!(
                 f,
                 "  layout:       {} ({})",
@@ -433,8 +471,16 @@ impl std::fmt::Display for Report {
             (None, Some(n)) => writeln!(f, "  layout:       unknown: {n}")?,
             _ => {}
         }
+        if let Some(p) = &self.part {
+            writeln!(
+                f,
+                "  part:         {}",
+                p.strip_prefix("part ").unwrap_or(p)
+            )?;
+        }
         writeln!(f, "  dimensions:   {} x {}", self.width, self.height)?;
         match self.face_size {
+            _ if self.texture.is_some() => {}
             Some(n) => writeln!(f, "  face size:    {n}")?,
             None if self.kind.is_none() && self.width == self.height => writeln!(
                 f,

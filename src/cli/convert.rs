@@ -62,8 +62,8 @@ pub struct Args {
     /// Mip levels in KTX2 and DDS output (default: the full chain down to 1x1).
     #[arg(long)]
     pub levels: Option<usize>,
-    /// Which level of a KTX2 or DDS mip chain (or which mN folder of a prefiltered chain) to
-    /// read; 0 is the full size.
+    /// Which level of a KTX2 or DDS mip chain, of a mip-mapped OpenEXR file, or which mN
+    /// folder of a prefiltered chain to read; 0 is the full size.
     #[arg(long, default_value_t = 0)]
     pub level: usize,
     #[command(flatten)]
@@ -121,7 +121,7 @@ pub fn job(a: Args) -> Result<ConvertJob> {
         level: a.level,
         tone: (a.tone.exposure, a.tone.tonemap),
         exr_float: a.exr.exr_float,
-        read: a.input.read_options(),
+        read: a.input.read_options(&a.inputs)?,
         ..ConvertJob::new(a.inputs, output)
     };
     Ok(job)

@@ -91,7 +91,7 @@ pub fn job(a: Args) -> Result<IblJob> {
             exr_float: a.exr.exr_float,
             yaw: a.yaw,
         },
-        read: a.input.read_options(),
+        read: a.input.read_options(&a.inputs)?,
         ..IblJob::new(a.inputs, a.output, a.target)
     };
     Ok(job)

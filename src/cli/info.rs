@@ -22,6 +22,8 @@ pub struct Args {
     #[arg(long)]
     pub linear: bool,
     #[command(flatten)]
+    pub part: super::PartArg,
+    #[command(flatten)]
     pub limits: super::LimitArgs,
 }
 
@@ -41,6 +43,8 @@ pub fn run(args: Args) -> Result<()> {
         limits: args.limits.limits(),
         linear: args.linear,
         as_stored: true,
+        exr_part: args.part.index(&args.files)?,
+        exr_level: 0,
     };
     let mut reports = Vec::new();
     let mut failed = 0;

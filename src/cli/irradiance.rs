@@ -71,7 +71,7 @@ pub fn job(a: Args) -> Result<IrradianceJob> {
         zstd: a.zstd.zstd,
         tone: (a.tone.exposure, a.tone.tonemap),
         exr_float: a.exr.exr_float,
-        read: a.input.read_options(),
+        read: a.input.read_options(&a.inputs)?,
         ..IrradianceJob::new(a.inputs, output)
     };
     Ok(job)

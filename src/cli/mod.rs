@@ -112,7 +112,35 @@ pub struct InputArgs {
     #[arg(long)]
     pub linear: bool,
     #[command(flatten)]
+    pub part: PartArg,
+    #[command(flatten)]
     pub limits: LimitArgs,
+}
+
+/// Which part of a multi-part OpenEXR input to read.
+#[derive(clap::Args, Debug)]
+pub struct PartArg {
+    /// Which part of a multi-part OpenEXR file to read: its index (0 is the first) or its
+    /// name. Without it the first is read, and a warning says so.
+    #[arg(long, value_name = "N|NAME")]
+    pub part: Option<String>,
+}
+
+impl PartArg {
+    /// The part's index, a name looked up in `inputs` (one OpenEXR file).
+    pub fn index(&self, inputs: &[std::path::PathBuf]) -> cubeforge::Result<Option<usize>> {
+        let Some(choice) = &self.part else {
+            return Ok(None);
+        };
+        match inputs {
+            [file] => cubeforge::io::exr_part(file, choice).map(Some),
+            _ => choice.parse().map(Some).map_err(|_| {
+                cubeforge::Error::usage(format!(
+                    "--part {choice:?}: a part's name needs one OpenEXR input"
+                ))
+            }),
+        }
+    }
 }
 
 impl InputArgs {
@@ -120,12 +148,18 @@ impl InputArgs {
         self.limits.limits()
     }
 
-    pub fn read_options(&self) -> cubeforge::io::ReadOptions {
-        cubeforge::io::ReadOptions {
+    /// How `inputs` are read: `--part NAME` is looked up in them.
+    pub fn read_options(
+        &self,
+        inputs: &[std::path::PathBuf],
+    ) -> cubeforge::Result<cubeforge::io::ReadOptions> {
+        Ok(cubeforge::io::ReadOptions {
             limits: self.limits(),
             linear: self.linear,
             as_stored: false,
-        }
+            exr_part: self.part.index(inputs)?,
+            exr_level: 0,
+        })
     }
 }
 

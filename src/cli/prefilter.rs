@@ -102,7 +102,7 @@ pub fn job(a: Args) -> Result<PrefilterJob> {
         zstd: a.zstd.zstd,
         exr_float: a.exr.exr_float,
         exposure: a.exposure.exposure,
-        read: a.input.read_options(),
+        read: a.input.read_options(&a.inputs)?,
         ..PrefilterJob::new(a.inputs, output)
     };
     Ok(job)

@@ -59,6 +59,7 @@ pub fn job(a: Args) -> Result<ViewJob> {
         max_lod_bias: a.max_lod_bias,
         target: a.target,
         limits: a.input_args.limits(),
+        exr_part: a.input_args.part.index(std::slice::from_ref(&a.input))?,
         ..ViewJob::new(a.input, a.output)
     })
 }

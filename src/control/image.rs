@@ -160,6 +160,7 @@ fn load_image(name: &str) -> std::result::Result<ImageFile, String> {
             limits: ctx.limits,
             linear: true,
             as_stored: false,
+            ..Default::default()
         };
         // The recipe's images together within the budget, each checked before its decode.
         let claim = io::claim(&path, &read).map_err(|e| e.to_string())?;

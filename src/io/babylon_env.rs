@@ -370,6 +370,7 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Deco
         replaced_values: 0,
         stored_levels: levels,
         declared: None,
+        part: None,
     };
     Ok((Decoded::Cube(env.cube), meta))
 }

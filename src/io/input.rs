@@ -194,7 +194,7 @@ fn decode_bytes(
         )),
     };
     match format {
-        FileFormat::Exr => exr::decode_with(bytes, path, &opts.limits, sanitize),
+        FileFormat::Exr => exr::decode_with(bytes, path, opts, sanitize),
         FileFormat::Ktx2 => ktx2::decode(bytes, path, &opts.limits),
         FileFormat::Dds => dds::decode(bytes, path, &opts.limits),
         FileFormat::Ktx1 => ktx1::decode(bytes, path, &opts.limits),

@@ -239,6 +239,9 @@ pub struct Meta {
     /// The layout the file declares and how it was read (OpenEXR's `envmap` attribute), for
     /// `info`; None where the layout comes from the shape.
     pub declared: Option<String>,
+    /// Which part of a multi-part file was read, for `info` and a warning (None: the file has
+    /// one).
+    pub part: Option<String>,
 }
 
 impl Meta {
@@ -261,6 +264,7 @@ impl Meta {
             replaced_values: 0,
             stored_levels,
             declared: None,
+            part: None,
         }
     }
 }
@@ -284,12 +288,55 @@ pub struct ReadOptions {
     /// Keep values as stored (NaN, infinities, negatives): for inspecting a file, not for
     /// computing with it.
     pub as_stored: bool,
+    /// Which part of a multi-part OpenEXR file to read (None: the first, and `Meta::part`
+    /// says so).
+    pub exr_part: Option<usize>,
+    /// Which stored level of a mip-mapped OpenEXR file to read (0: the full size).
+    pub exr_level: usize,
+}
+
+impl ReadOptions {
+    /// Whether this reads a file's usual image (no EXR part or level chosen): the reads a
+    /// session keeps.
+    fn usual(&self) -> bool {
+        self.exr_part.is_none() && self.exr_level == 0
+    }
+}
+
+/// Whether `path` is an OpenEXR file, by its magic number (false where it cannot be read).
+pub fn is_exr(path: &Path) -> bool {
+    use std::io::Read;
+    let mut magic = [0u8; 4];
+    std::fs::File::open(path).is_ok_and(|mut f| f.read_exact(&mut magic).is_ok())
+        && magic == [0x76, 0x2f, 0x31, 0x01]
+}
+
+/// Which part of the OpenEXR file `path` `choice` names: an index ("2"), or a part's name
+/// ("diffuse", its `name` attribute). How `--part N|NAME` becomes
+/// [`ReadOptions::exr_part`].
+pub fn exr_part(path: &Path, choice: &str) -> Result<usize> {
+    if let Ok(k) = choice.parse::<usize>() {
+        return Ok(k);
+    }
+    if !is_exr(path) {
+        return Err(Error::file(
+            path,
+            format!(
+                "{} {choice:?}: only an OpenEXR file has named parts",
+                crate::error::param("part")
+            ),
+        ));
+    }
+    exr::part_index(&read_file(path)?, path, choice)
 }
 
 /// Reads any supported file and replaces NaN, infinite and negative values by 0, counting
 /// them in `Meta::replaced_values`.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     let session = opts.limits.session;
+    if !opts.usual() {
+        return read_sanitized(path, opts);
+    }
     if let Some(kept) = session.cached(path, opts.linear, opts.as_stored) {
         session.note(path);
         return Ok((*kept).clone());

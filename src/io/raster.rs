@@ -129,6 +129,7 @@ pub fn decode(
         replaced_values: 0,
         stored_levels: 1,
         declared: None,
+        part: None,
     };
     Ok((
         Decoded::Image(Image {

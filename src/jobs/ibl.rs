@@ -176,6 +176,9 @@ impl Job for IblJob {
         if let Some(w) = convert::skybox_note(&self.inputs) {
             warnings.push(w);
         }
+        if let Some(w) = convert::part_note(&loaded, &self.read) {
+            warnings.push(w);
+        }
         if let Some(w) = super::display_referred(&loaded) {
             warnings.push(w);
         }

@@ -165,6 +165,9 @@ impl Job for IrradianceJob {
         if let Some(w) = convert::skybox_note(&self.inputs) {
             warnings.push(w);
         }
+        if let Some(w) = convert::part_note(&loaded, &self.read) {
+            warnings.push(w);
+        }
         if let Some(w) = super::display_referred(&loaded) {
             warnings.push(w);
         }

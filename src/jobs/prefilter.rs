@@ -195,6 +195,9 @@ impl Job for PrefilterJob {
         if let Some(w) = convert::skybox_note(&self.inputs) {
             warnings.push(w);
         }
+        if let Some(w) = convert::part_note(&loaded, &self.read) {
+            warnings.push(w);
+        }
         if let Some(w) = replaced_values(&loaded.files[0], loaded.meta.replaced_values as u64) {
             warnings.push(w);
         }

@@ -42,6 +42,8 @@ pub struct ViewJob {
     pub target: Option<Engine>,
     /// Size limits and the memory budget.
     pub limits: Limits,
+    /// Which part of a multi-part OpenEXR input to show (None: the first).
+    pub exr_part: Option<usize>,
 }
 
 impl ViewJob {
@@ -57,6 +59,7 @@ impl ViewJob {
             max_lod_bias: 4.0,
             target: None,
             limits: Limits::default(),
+            exr_part: None,
         }
     }
 
@@ -75,6 +78,8 @@ impl ViewJob {
             limits: self.limits,
             linear: false,
             as_stored: false,
+            exr_part: self.exr_part,
+            exr_level: 0,
         }
     }
 }

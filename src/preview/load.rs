@@ -85,6 +85,7 @@ pub fn read_texture(path: &Path, linear: bool, limits: &Limits) -> Result<Image>
         linear,
         limits: *limits,
         as_stored: false,
+        ..Default::default()
     };
     match io::read(path, &opts)?.0 {
         Decoded::Image(img) => Ok(img),

@@ -254,6 +254,37 @@ pub fn openexr_script(script: &str, dir: &Path) {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
+/// OpenEXR's C++ library and headers (Debian's `libopenexr-dev`), with a C++ compiler: for
+/// the tools in tests/tools that write and read files through `RgbaOutputFile` and
+/// `RgbaInputFile`.
+pub fn openexr_cxx() -> bool {
+    reader_found(
+        "OpenEXR's C++ library (libopenexr-dev) and c++",
+        "apt-get install libopenexr-dev g++",
+        runs("pkg-config", &["--exists", "OpenEXR"], false) && runs("c++", &["--version"], false),
+    )
+}
+
+/// Builds `tests/tools/NAME.cpp` against OpenEXR into `dir`; the program's path.
+pub fn build_openexr_tool(name: &str, dir: &Path) -> PathBuf {
+    let flags = Command::new("pkg-config")
+        .args(["--cflags", "--libs", "OpenEXR"])
+        .output()
+        .expect("runs pkg-config");
+    let flags = String::from_utf8_lossy(&flags.stdout).to_string();
+    let exe = dir.join(name);
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/tools/{name}.cpp"));
+    let o = Command::new("c++")
+        .args(["-std=c++17", "-O1", "-o"])
+        .arg(&exe)
+        .arg(&source)
+        .args(flags.split_whitespace())
+        .output()
+        .expect("runs c++");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    exe
+}
+
 /// NVIDIA Texture Tools' `nvddsinfo` (it exits non-zero when given no file).
 pub fn nvddsinfo() -> bool {
     reader_found(

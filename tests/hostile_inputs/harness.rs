@@ -151,6 +151,7 @@ pub fn image_door(dir: &Path, name: &str) -> impl Fn(&[u8]) -> cubeforge::Result
             limits: limits(),
             linear: false,
             as_stored: false,
+            ..Default::default()
         };
         let (decoded, _) = io::read(&path, &opts)?;
         match decoded {

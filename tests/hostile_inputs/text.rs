@@ -120,6 +120,7 @@ fn sidecar_mutations() {
         limits: limits(),
         linear: false,
         as_stored: false,
+        ..Default::default()
     };
     campaign("levels.json", text, mutator, 100, "chain.dds", &|b| {
         std::fs::write(&levels, b).unwrap();

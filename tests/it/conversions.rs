@@ -21,6 +21,7 @@ fn meta() -> Meta {
         replaced_values: 0,
         stored_levels: 1,
         declared: None,
+        part: None,
     }
 }
 

@@ -80,6 +80,7 @@ fn panorama(img: Image) -> Loaded {
             replaced_values: 0,
             stored_levels: 1,
             declared: None,
+            part: None,
         },
         files: vec![],
     }

@@ -26,6 +26,7 @@ fn loaded(source: Source, kind: Kind) -> Loaded {
             replaced_values: 0,
             stored_levels: 1,
             declared: None,
+            part: None,
         },
         files: vec![],
     }

@@ -236,7 +236,7 @@ fn split_range(d: &[u8], from: usize, size: usize) -> (&[u8], &[u8]) {
 
 /// Undoes OpenEXR's byte predictor in place: after the first, each byte was stored as its
 /// difference from the one before, plus 128. A running sum, 16 bytes at a time with SSE2.
-fn undo_differences(bytes: &mut [u8]) {
+pub(super) fn undo_differences(bytes: &mut [u8]) {
     let Some((&mut first, rest)) = bytes.split_first_mut() else {
         return;
     };
@@ -282,7 +282,7 @@ fn sums_sse2<'a>(bytes: &'a mut [u8], prev: &mut u8) -> &'a mut [u8] {
 /// Expands OpenEXR's run-length tokens (a signed count byte: -n, then n bytes as they are;
 /// n >= 0, then one byte n + 1 times) into `out`, which they must fill exactly. Tokens past
 /// that are ignored, as the crate ignores them.
-fn unpack_rle(data: &[u8], out: &mut [u8]) -> std::result::Result<(), &'static str> {
+pub(super) fn unpack_rle(data: &[u8], out: &mut [u8]) -> std::result::Result<(), &'static str> {
     let overrun = "is corrupt (its runs overrun the block)";
     let short = "is corrupt (a run is cut short)";
     let (mut i, mut o) = (0, 0);

@@ -122,7 +122,8 @@ pub(super) struct RawChunk<'a> {
     pub part: usize,
     /// The block as the crate describes it, with no bytes.
     block: CompressedBlock,
-    /// The block's pixels, in the layer's absolute coordinates.
+    /// The block's pixels, relative to the part's data window (the crate's "absolute" block
+    /// coordinates).
     pub bounds: IntegerBounds,
     /// The compressed bytes.
     pub data: &'a [u8],

@@ -24,75 +24,101 @@ mod blocks;
 mod checks;
 mod envmap;
 mod piz;
+mod planes;
+mod select;
 mod zstd;
 use checks::{read_chunks, read_meta, RawChunk};
 
 /// Decodes an OpenEXR file's first RGB(A) layer; `path` names it in errors, `limits` are checked before any pixel is allocated.
 pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
-    decode_with(bytes, path, limits, false)
+    let opts = super::ReadOptions {
+        limits: *limits,
+        ..Default::default()
+    };
+    decode_with(bytes, path, &opts, false)
 }
 
-/// `decode`, and with `sanitize` the texels sanitized as [`crate::image::Image::sanitize`]
-/// does, counted in `Meta::replaced_values`: the common layout does it a line at a time as
-/// it decodes, rather than in another pass over a 128 MB panorama.
+/// The parts of an OpenEXR file as messages name them ("0", or "1 \"diffuse\"" where a
+/// part has a name), and the index of the one named `name` if given: how `--part NAME` is
+/// turned into an index.
+pub fn part_index(bytes: &[u8], path: &Path, name: &str) -> Result<usize> {
+    let fail = |msg: String| Error::file(path, msg);
+    let (meta, _, _) = read_meta(bytes).map_err(|e| fail(format!("cannot decode OpenEXR: {e}")))?;
+    select::part_named(&meta, name).map_err(fail)
+}
+
+/// `decode`, with the part and level `opts` choose, and with `sanitize` the texels sanitized
+/// as [`crate::image::Image::sanitize`] does, counted in `Meta::replaced_values`: the common
+/// layout does it a line at a time as it decodes, rather than in another pass over a 128 MB
+/// panorama.
 pub(crate) fn decode_with(
     bytes: &[u8],
     path: &Path,
-    limits: &Limits,
+    opts: &super::ReadOptions,
     sanitize: bool,
 ) -> Result<(Decoded, Meta)> {
     let fail = |msg: String| Error::file(path, format!("cannot decode OpenEXR: {msg}"));
     let (meta, table_start, zstd) = read_meta(bytes).map_err(fail)?;
-    let zstd = zstd.first() == Some(&true);
-    let header = meta
-        .headers
-        .first()
-        .ok_or_else(|| Error::file(path, "OpenEXR file has no layers"))?;
-    let size = header.layer_size;
-    limits.check(path, size.0 as u64, size.1 as u64)?;
-    let channel = |n: &str| header.channels.list.iter().find(|c| c.name.eq(n));
-    if channel("R").is_none() || channel("G").is_none() || channel("B").is_none() {
-        // Quoted with escapes (a corrupt name can hold a newline), at most eight of them.
-        let list = &header.channels.list;
-        let mut names: Vec<String> = list
-            .iter()
-            .take(8)
-            .map(|c| format!("{:?}", c.name.to_string()))
-            .collect();
-        if list.len() > 8 {
-            names.push(format!("and {} more", list.len() - 8));
-        }
+    if meta.headers.is_empty() {
+        return Err(Error::file(path, "OpenEXR file has no layers"));
+    }
+    let part = select::part(&meta, opts.exr_part).map_err(|e| Error::file(path, e))?;
+    let header = &meta.headers[part];
+    let zstd = zstd.get(part) == Some(&true);
+    let level = opts.exr_level;
+    let levels = select::level_count(header);
+    if level >= levels {
         return Err(Error::file(
             path,
             format!(
-                "OpenEXR first layer has channels [{}], not R, G and B",
-                names.join(", ")
+                "no level {level}: it holds {levels} level{}",
+                if levels == 1 { "" } else { "s" }
             ),
         ));
+    }
+    let size = planes::level_size(header, (level, level));
+    opts.limits.check(path, size.0 as u64, size.1 as u64)?;
+    let channel = |n: &str| header.channels.list.iter().find(|c| c.name.eq(n));
+    let rgb = channel("R").is_some() && channel("G").is_some() && channel("B").is_some();
+    if !rgb && channel("Y").is_none() {
+        return Err(Error::file(path, select::no_colour(header, part)));
     }
     if meta.headers.iter().any(|h| h.deep) {
         return Err(fail("deep data is not supported".into()));
     }
     // The samples decompressed: at most 16 four-byte channels per pixel the limit allows.
-    let raw = (size.0 as u64)
-        .saturating_mul(size.1 as u64)
+    let raw = (header.layer_size.0 as u64)
+        .saturating_mul(header.layer_size.1 as u64)
         .saturating_mul(header.channels.bytes_per_pixel as u64);
-    if raw > limits.max_pixels.saturating_mul(64) {
+    if raw > opts.limits.max_pixels.saturating_mul(64) {
         return Err(fail(format!(
-            "the first layer's {} channels hold {raw} bytes of samples, too many for {}x{} pixels",
+            "part {part}'s {} channels hold {raw} bytes of samples, too many for {}x{} pixels",
             header.channels.list.len(),
-            size.0,
-            size.1
+            header.layer_size.0,
+            header.layer_size.1
         )));
     }
     let pixel_format = pixel_format(header, channel("A").is_some(), zstd);
     let chunks = read_chunks(bytes, &meta, table_start).map_err(fail)?;
+    let subsampled = header
+        .channels
+        .list
+        .iter()
+        .any(|c| c.sampling != Vec2(1, 1));
+    let common = part == 0 && level == 0 && rgb && !subsampled;
     let (image, replaced_values) = match fast_layout(&meta) {
-        Some(layout) => blocks::decode_blocks(&meta, &layout, chunks, sanitize, zstd),
-        None => read_layer(&meta, chunks, zstd).map(|mut img| {
-            let n = if sanitize { img.sanitize() } else { 0 };
-            (img, n)
-        }),
+        Some(layout) if common => blocks::decode_blocks(&meta, &layout, chunks, sanitize, zstd),
+        _ => {
+            let read = if common {
+                read_layer(&meta, chunks, zstd)
+            } else {
+                select::image(&meta, part, level, &chunks, zstd, rgb)
+            };
+            read.map(|mut img| {
+                let n = if sanitize { img.sanitize() } else { 0 };
+                (img, n)
+            })
+        }
     }
     .map_err(fail)?;
     // OpenEXR's own environment maps, read by their definitions (see `envmap`).
@@ -115,34 +141,45 @@ pub(crate) fn decode_with(
         color_space: ColorSpace::Linear,
         hdr: true,
         replaced_values,
-        stored_levels: 1,
+        stored_levels: levels,
         declared,
+        part: select::part_note(&meta, part, opts.exr_part.is_some()),
     };
     Ok((decoded, meta))
 }
 
-/// How `info` names the first layer's samples and compression: "RGBA16F (ZIP, 16 lines)", and
-/// each channel's type where they differ ("R16F G16F B32F").
+/// How `info` names the part's samples and compression: "RGBA16F (ZIP, 16 lines)", each
+/// channel's type where they differ ("R16F G16F B32F"), luminance and chroma as "Y16F" or
+/// "Y RY BY16F, chroma 2x2".
 fn pixel_format(header: &exr::meta::header::Header, alpha: bool, zstd: bool) -> String {
     let kind = |t: SampleType| match t {
         SampleType::F16 => "16F",
         SampleType::U32 => "32UI",
         SampleType::F32 => "32F",
     };
-    let names: &[&str] = if alpha {
-        &["R", "G", "B", "A"]
+    let has = |n: &str| header.channels.list.iter().find(|c| c.name.eq(n));
+    let mut names: Vec<&str> = if has("R").is_some() {
+        vec!["R", "G", "B"]
     } else {
-        &["R", "G", "B"]
+        ["Y", "RY", "BY"]
+            .into_iter()
+            .filter(|n| has(n).is_some())
+            .collect()
     };
+    if alpha {
+        names.push("A");
+    }
+    let luma = names[0] == "Y";
     let types: Vec<SampleType> = names
         .iter()
-        .filter_map(|n| header.channels.list.iter().find(|c| c.name.eq(n)))
+        .filter_map(|n| has(n))
         .map(|c| c.sample_type)
         .collect();
-    let samples = if types.windows(2).all(|w| w[0] == w[1]) {
+    let glue = if luma { " " } else { "" };
+    let mut samples = if types.windows(2).all(|w| w[0] == w[1]) {
         format!(
             "{}{}",
-            names.concat(),
+            names.join(glue),
             types.first().map_or("", |&t| kind(t))
         )
     } else {
@@ -153,8 +190,20 @@ fn pixel_format(header: &exr::meta::header::Header, alpha: bool, zstd: bool) -> 
             .collect();
         each.join(" ")
     };
-    let compression = match header.compression {
-        _ if zstd => "ZSTD".to_string(),
+    if let Some(c) = has("RY").filter(|c| luma && c.sampling != Vec2(1, 1)) {
+        samples += &format!(", chroma {}x{}", c.sampling.0, c.sampling.1);
+    }
+    let compression = if zstd {
+        "ZSTD".to_string()
+    } else {
+        compression_name(header.compression)
+    };
+    format!("{samples} ({compression})")
+}
+
+/// A compression as OpenEXR names it ("ZIP, 16 lines", "DWAB, level 45").
+fn compression_name(compression: Compression) -> String {
+    match compression {
         Compression::Uncompressed => "uncompressed".to_string(),
         Compression::RLE => "RLE".into(),
         Compression::ZIP1 => "ZIPS, 1 line".into(),
@@ -167,8 +216,7 @@ fn pixel_format(header: &exr::meta::header::Header, alpha: bool, zstd: bool) -> 
         Compression::DWAB(level) => dwa("DWAB", level),
         #[allow(unreachable_patterns)]
         other => format!("{other:?}"),
-    };
-    format!("{samples} ({compression})")
+    }
 }
 
 /// A DWA compression's name, with its level where the file states one.

@@ -394,6 +394,7 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Deco
         replaced_values: 0,
         stored_levels: k.levels,
         declared: None,
+        part: None,
     };
     Ok((k.texture, meta))
 }

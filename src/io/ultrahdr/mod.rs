@@ -409,6 +409,7 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<(Decoded,
         replaced_values: 0,
         stored_levels: 1,
         declared: None,
+        part: None,
     };
     Ok((Decoded::Image(img), meta))
 }

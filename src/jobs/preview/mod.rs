@@ -129,6 +129,7 @@ impl PreviewJob {
             limits: self.limits,
             linear: false,
             as_stored: false,
+            ..Default::default()
         }
     }
 
