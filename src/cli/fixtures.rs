@@ -1,4 +1,5 @@
-//! Writes the project's own fixtures: the demo sky the README's set-up and examples read.
+//! Writes the project's own fixtures: the demo sky the README's set-up and examples read, and
+//! a two-part OpenEXR file of it (as renderers write their passes) for `--part`.
 
 use cubeforge::io::{self, WriteOptions};
 use cubeforge::layout::Projection;
@@ -8,7 +9,8 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Folder that receives sky.exr (HDR) and sky.png (LDR), 512 x 256 panoramas.
+    /// Folder that receives sky.exr (HDR) and sky.png (LDR), 512 x 256 panoramas, and
+    /// passes.exr (the sky at 256 x 128 in two parts, "sky" and "dim" at a quarter of it).
     #[arg(default_value = "fixtures")]
     pub dir: PathBuf,
 }
@@ -25,5 +27,39 @@ pub fn run(args: Args) -> Result<()> {
         let bytes = io::encode_image(&path, &img, &WriteOptions::default())?;
         files.push((path, bytes));
     }
+    let small = img.downsample_2x();
+    files.push((args.dir.join("passes.exr"), passes(&small)?));
     super::write_files(&files)
+}
+
+/// `img` as a two-part OpenEXR file: part "sky", and part "dim" at a quarter of it (half
+/// floats, ZIP), through the exr crate.
+fn passes(img: &cubeforge::image::Image) -> Result<Vec<u8>> {
+    use exr::prelude::*;
+    let part = |name: &str, scale: f32| {
+        let plane = |c: usize| {
+            let samples = img
+                .pixels
+                .iter()
+                .map(|p| f16::from_f32(p[c] * scale))
+                .collect();
+            AnyChannel::new(["R", "G", "B"][c], FlatSamples::F16(samples))
+        };
+        let channels = AnyChannels::sort(SmallVec::from_vec(vec![plane(0), plane(1), plane(2)]));
+        Layer::new(
+            (img.width, img.height),
+            LayerAttributes::named(name),
+            Encoding::SMALL_LOSSLESS,
+            channels,
+        )
+    };
+    let layers = vec![part("sky", 1.0), part("dim", 0.25)];
+    let bounds = IntegerBounds::from_dimensions((img.width, img.height));
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    exr::image::Image::from_layers(ImageAttributes::new(bounds), layers)
+        .write()
+        .non_parallel()
+        .to_buffered(&mut bytes)
+        .map_err(|e| cubeforge::Error::usage(format!("cannot write passes.exr: {e}")))?;
+    Ok(bytes.into_inner())
 }
