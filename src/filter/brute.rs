@@ -31,6 +31,15 @@ pub fn convolve(src: &CubeMap, lobe: Lobe, size: usize) -> [Image; 6] {
     convolve_with_progress(src, lobe, size, &|_| {})
 }
 
+/// The exact reference of a prefiltered chain's level of edge `size`: [`convolve`], where a
+/// level smaller than 16 texels is convolved at its size doubled until it is at least 16 and
+/// each texel is then the solid-angle-weighted mean of those it covers, as
+/// [`super::prefilter`] makes such levels.
+pub fn convolve_level(src: &CubeMap, lobe: Lobe, size: usize) -> [Image; 6] {
+    let fine = super::fine_size(size);
+    super::reduce_to(convolve(src, lobe, fine), size)
+}
+
 /// [`convolve`], calling `progress(1)` as each of the 6 x `size` output rows is done.
 pub(crate) fn convolve_with_progress(
     src: &CubeMap,

@@ -9,6 +9,7 @@ mod atomic_writes;
 mod batch;
 mod batched;
 mod careless;
+mod chain_flux;
 mod cli_errors;
 mod cli_options;
 mod containers;

@@ -76,7 +76,7 @@ fn ggx_cosine_and_charlie_match_brute_force() {
             let Some(lobe) = stated_lobe(filter, info) else {
                 continue;
             };
-            let reference = brute::convolve(&base, lobe, info.size);
+            let reference = brute::convolve_level(&base, lobe, info.size);
             let e = mean_rel_error(&out.levels[m], &reference);
             eprintln!(
                 "{filter:?} level {m} size {} : mean relative error {:.4}",
@@ -97,7 +97,7 @@ fn glossy_ggx_levels_match_brute_force() {
     let (out, infos) = chain(FilterKind::Ggx, &base, filter::DEFAULT_SAMPLES);
     for (m, info) in infos.iter().enumerate().skip(1).take(3) {
         let lobe = stated_lobe(FilterKind::Ggx, info).unwrap();
-        let reference = brute::convolve(&base, lobe, info.size);
+        let reference = brute::convolve_level(&base, lobe, info.size);
         let e = mean_rel_error(&out.levels[m], &reference);
         eprintln!(
             "GGX 128 level {m} ({} px, {:?} samples): mean relative error {e:.4}",
@@ -152,7 +152,7 @@ fn gaussian_levels_have_the_stated_sigma() {
         let err = |s: f32| {
             mean_rel_error(
                 &out.levels[m],
-                &brute::convolve(&base, Lobe::Gaussian { sigma: s }, info.size),
+                &brute::convolve_level(&base, Lobe::Gaussian { sigma: s }, info.size),
             )
         };
         let (e, narrow, wide) = (err(sigma), err(0.8 * sigma), err(1.2 * sigma));
@@ -196,7 +196,7 @@ fn no_fireflies_next_to_an_hdr_sun() {
         let (out, infos) = chain(filter, &base, filter::DEFAULT_SAMPLES);
         for (m, info) in infos.iter().enumerate().skip(1) {
             let lobe = stated_lobe(filter, info).unwrap();
-            let reference = brute::convolve(&base, lobe, info.size);
+            let reference = brute::convolve_level(&base, lobe, info.size);
             let peak = |faces: &[Image; 6]| {
                 faces
                     .iter()
