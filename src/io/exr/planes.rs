@@ -81,22 +81,10 @@ pub(super) fn read_planes(
         let b = &chunk.bounds;
         // The crate's block bounds are relative to the data window.
         let (x0, y0) = (b.position.0 as usize, b.position.1 as usize);
-        let (bw, bh) = (b.size.0, b.size.1);
-        // Samples per (line, channel), as OpenEXR packs them.
-        let count = |line: usize, i: usize| {
-            let c = &channels[i];
-            let (sx, sy) = (c.sampling.0.max(1), c.sampling.1.max(1));
-            let y = b.position.1 as i64 + line as i64;
-            if y.rem_euclid(sy as i64) == 0 {
-                bw / sx
-            } else {
-                0
-            }
-        };
-        let expected: usize = (0..bh)
-            .flat_map(|l| (0..channels.len()).map(move |i| (l, i)))
-            .map(|(l, i)| count(l, i) * channels[i].sample_type.bytes_per_sample())
-            .sum();
+        let bh = b.size.1;
+        // Samples and their bytes per (line, channel), as OpenEXR packs them.
+        let rows = super::zstd::rows(header, b);
+        let expected: usize = rows.iter().map(|(n, bytes)| n * bytes).sum();
         let data = chunk.data;
         let owned;
         let plain: &[u8] = if zstd {
@@ -147,8 +135,8 @@ pub(super) fn read_planes(
         let mut at = 0;
         for line in 0..bh {
             for (i, c) in channels.iter().enumerate() {
-                let n = count(line, i);
-                let size = n * c.sample_type.bytes_per_sample();
+                let (n, bytes_per_sample) = rows[line * channels.len() + i];
+                let size = n * bytes_per_sample;
                 let row = &plain[at..at + size];
                 at += size;
                 let Some(p) = planes[i].as_mut().filter(|_| n > 0) else {

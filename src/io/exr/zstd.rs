@@ -19,9 +19,10 @@ const PREFIX: usize = 24;
 /// Format 2's flag: each sorted channel row is stored as differences.
 const DELTA: u32 = 1;
 
-/// Each (line, channel) row of a chunk: its sample count and bytes per sample, as OpenEXR
-/// packs them (a subsampled channel has samples only on lines its y sampling keeps).
-fn rows(header: &Header, bounds: &IntegerBounds) -> Vec<(usize, usize)> {
+/// Each (line, channel) row of a chunk, line by line: its sample count and bytes per sample,
+/// as OpenEXR packs them (a subsampled channel has samples only on lines its y sampling
+/// keeps). Shared with `planes`, which scatters the rows this layout holds.
+pub(super) fn rows(header: &Header, bounds: &IntegerBounds) -> Vec<(usize, usize)> {
     let (w, h) = (bounds.size.0, bounds.size.1);
     let mut rows = Vec::with_capacity(h * header.channels.list.len());
     for line in 0..h {
