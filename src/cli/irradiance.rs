@@ -1,5 +1,6 @@
-//! `cubeforge irradiance`: the diffuse side: an irradiance cube map and 9 SH coefficients.
+//! `cubeforge irradiance`: the diffuse side: an irradiance cube map and SH coefficients.
 
+use cubeforge::filter::sh_bands::ShWindow;
 use cubeforge::filter::IrradianceMethod;
 use cubeforge::io::{FileFormat, GpuFormat, MapKind};
 use cubeforge::output;
@@ -22,12 +23,19 @@ pub struct Args {
     /// Face edge of the irradiance map (it holds no detail: 32 is plenty).
     #[arg(long, default_value_t = 32)]
     pub size: usize,
-    /// Also write the 9 SH coefficients (radiance, irradiance, irradiance / pi) as JSON.
+    /// Also write the SH coefficients (radiance, irradiance, irradiance / pi) as JSON.
     #[arg(long)]
     pub sh: Option<PathBuf>,
-    /// brute: exact integral (default; right next to HDR suns); sh: from the 9 coefficients.
+    /// brute: exact integral (default; right next to HDR suns); sh: from the SH coefficients.
     #[arg(long, value_enum, default_value_t = IrradianceMethod::Brute)]
     pub method: IrradianceMethod,
+    /// SH bands, 1 to 5 (as cmgen --sh=N): 3 is 9 coefficients per channel, 5 is 25 (cmft's).
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    pub sh_bands: usize,
+    /// cmgen's windowing against ringing: no (default), auto (the mildest sinc^4 taper under
+    /// which the irradiance is nowhere negative), or the cutoff band where it reaches zero.
+    #[arg(long, default_value = "no", value_name = "no|auto|CUTOFF")]
+    pub sh_window: ShWindow,
     /// File type of face images (default exr).
     #[arg(long, default_value = "exr")]
     pub format: String,
@@ -50,6 +58,8 @@ const EXAMPLES: &str = "\
 Examples:
   # a 32 px irradiance cube map (KTX2) and the 9 SH coefficients as JSON
   cubeforge irradiance panorama.hdr -o irradiance.ktx2 --sh sh.json
+  # cmft's 25 coefficients, windowed as cmgen's auto does
+  cubeforge irradiance panorama.hdr -o irradiance25.ktx2 --sh sh25.json --sh-bands 5 --sh-window auto
   # six 16 px EXR faces
   cubeforge irradiance panorama.hdr -o irradiance/ --size 16";
 
@@ -66,6 +76,8 @@ pub fn job(a: Args) -> Result<IrradianceJob> {
         size: a.size,
         sh: a.sh,
         method: a.method,
+        sh_bands: a.sh_bands,
+        sh_window: a.sh_window,
         face_format,
         gpu_format: a.gpu_format,
         zstd: a.zstd.zstd,

@@ -10,6 +10,7 @@ mod hybrid;
 pub mod lobe;
 mod roughness;
 pub mod sh;
+pub mod sh_bands;
 pub mod sh_engines;
 mod shape;
 mod window;

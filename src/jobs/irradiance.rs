@@ -4,6 +4,7 @@ use super::{Job, Progress, Quality, Report, Text, Warning, Warnings};
 use crate::chain;
 use crate::convert::{self, Loaded, Output};
 use crate::error::{param, Error, Result};
+use crate::filter::sh_bands::{self, ShSet, ShWindow};
 use crate::filter::{self, sh, IrradianceMethod};
 use crate::io::{
     self, Container, ExrFloat, FileFormat, GpuFormat, MapKind, ReadOptions, WriteOptions,
@@ -36,8 +37,12 @@ pub struct IrradianceJob {
     pub size: usize,
     /// Where the SH coefficients go (None: not written).
     pub sh: Option<PathBuf>,
-    /// Exact integral or the 9 coefficients.
+    /// Exact integral or the SH coefficients.
     pub method: IrradianceMethod,
+    /// Bands of the SH coefficients, 1 to 5 (3, nine coefficients, by default).
+    pub sh_bands: usize,
+    /// cmgen's windowing of the coefficients (none by default).
+    pub sh_window: ShWindow,
     /// File type of face images.
     pub face_format: FileFormat,
     /// Texel format of KTX2 and DDS output.
@@ -63,6 +68,8 @@ impl IrradianceJob {
             size: 32,
             sh: None,
             method: IrradianceMethod::Brute,
+            sh_bands: 3,
+            sh_window: ShWindow::None,
             face_format: FileFormat::Exr,
             gpu_format: GpuFormat::Rgba16f,
             zstd: None,
@@ -136,6 +143,24 @@ impl Job for IrradianceJob {
             _ => {}
         }
         warnings.extend(tone_warning.map(Warning::new));
+        if !(1..=sh_bands::MAX_BANDS).contains(&self.sh_bands) {
+            return Err(Error::usage(format!(
+                "{} {}: use 1 to {}",
+                param("sh_bands"),
+                self.sh_bands,
+                sh_bands::MAX_BANDS
+            )));
+        }
+        let sh_default = self.sh_bands == 3 && self.sh_window == ShWindow::None;
+        if !sh_default && self.sh.is_none() && self.method != IrradianceMethod::Sh {
+            warnings.push(Warning::new(format!(
+                "{} and {} shape the SH coefficients, and nothing uses them: add {} FILE.json or {} sh",
+                param("sh_bands"),
+                param("sh_window"),
+                param("sh"),
+                param("method")
+            )));
+        }
         if self.size == 0 || self.size > MOST {
             return Err(Error::usage(format!(
                 "{} {}: use 1 to {MOST}",
@@ -175,9 +200,19 @@ impl Job for IrradianceJob {
         let base = convert::to_cube(&loaded, base_size, &Resampler::default());
         progress.stage("resample");
         progress.start(6 * self.size as u64, &format!("irradiance {}", self.size));
-        let (irr, coeffs) = filter::irradiance_with_progress(&base, self.size, self.method, &|n| {
-            progress.advance(n)
-        });
+        let set = ShSet::project(&base.levels[0], self.sh_bands)?.windowed(self.sh_window);
+        let irr = match self.method {
+            IrradianceMethod::Brute => {
+                filter::irradiance_with_progress(&base, self.size, self.method, &|n| {
+                    progress.advance(n)
+                })
+                .0
+            }
+            IrradianceMethod::Sh => {
+                let over_pi = set.irradiance_over_pi();
+                crate::cube::CubeMap::from_fn(self.size, |d| sh_bands::eval(&over_pi, d))
+            }
+        };
         progress.finish();
         progress.stage("filter");
 
@@ -201,29 +236,36 @@ impl Job for IrradianceJob {
         let mut files = encoded.into_files();
         // The exposure scales the map as it is written, and the coefficients here.
         let k = f64::from(self.tone.0).exp2();
-        let coeffs = coeffs.map(|c| c.map(|v| v * k));
+        let set = set.scaled(k);
         if let Some(p) = &self.sh {
-            let json = serde_json::to_vec_pretty(&sh::ShFile::new(&coeffs))
+            let json = serde_json::to_vec_pretty(&sh::ShFile::from_set(&set))
                 .map_err(|e| Error::usage(e.to_string()))?;
             files.files.push((p.clone(), json));
         }
         progress.stage("encode");
         output::deliver(&files, &self.output, &loaded.files)?;
         progress.stage("write");
-        let dc = coeffs[0].map(|v| v * sh::BASIS[0].3);
+        let dc = set.radiance[0].map(|v| v * sh::BASIS[0].3);
         Ok(Report {
             written: files.paths(),
             warnings: warnings.into_vec(),
             summary: vec![Text::new(format!(
-                "irradiance {} px ({}); mean radiance {:.4} {:.4} {:.4}",
+                "irradiance {} px ({}); mean radiance {:.4} {:.4} {:.4}{}",
                 self.size,
                 match self.method {
-                    filter::IrradianceMethod::Brute => "exact sum over the texels",
-                    filter::IrradianceMethod::Sh => "from 9 SH coefficients",
+                    filter::IrradianceMethod::Brute => "exact sum over the texels".to_string(),
+                    filter::IrradianceMethod::Sh =>
+                        format!("from {} SH coefficients", set.radiance.len()),
                 },
                 dc[0],
                 dc[1],
-                dc[2]
+                dc[2],
+                match (&self.sh, set.cutoff) {
+                    (None, None) => String::new(),
+                    (_, Some(c)) =>
+                        format!("; SH {} bands, windowed to zero at band {c:.2}", set.bands),
+                    (Some(_), None) => format!("; SH {} bands", set.bands),
+                }
             ))],
             quality,
         })

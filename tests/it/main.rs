@@ -41,6 +41,7 @@ mod preview_pbr;
 mod readme;
 mod real_images;
 mod rgbe;
+mod sh_bands;
 mod simd;
 mod ultrahdr;
 mod view;
