@@ -326,6 +326,14 @@ pub fn encode(
 ) -> Result<crate::output::Encoded> {
     let refuse = |p: &[PathBuf]| crate::output::refuse_inputs(p, inputs);
     let container = FileFormat::from_extension(path).filter(|f| f.is_container());
+    let moved;
+    let chain = match write.edge_fixup {
+        crate::cube::EdgeFixup::None => chain,
+        mode => {
+            moved = crate::cube::fixup::apply_cube(chain.clone(), mode);
+            &moved
+        }
+    };
     let opts = WriteOptions {
         gpu_format,
         ..*write

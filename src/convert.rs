@@ -4,7 +4,7 @@
 #![warn(missing_docs)]
 
 use crate::cube::{
-    face_of_stem, faces_from_images, CubeMap, CubeSampler, Environment, FaceNaming,
+    face_of_stem, faces_from_images, CubeMap, CubeSampler, EdgeFixup, Environment, FaceNaming,
     FACE_LONG_NAMES, FACE_NAMES, SKYBOX_WORDS,
 };
 use crate::error::{Error, Result};
@@ -513,8 +513,25 @@ pub enum Output {
 /// Renders layout `to` at face edge `size`: a cube map for faces, an image for the others. A
 /// container holds faces ([`MapKind::layout`]).
 pub fn convert(loaded: &Loaded, to: Kind, size: usize, resampler: &Resampler) -> Output {
-    match to {
-        Kind::Faces => Output::Cube(to_cube(loaded, size, resampler)),
+    convert_fixed(loaded, to, size, resampler, EdgeFixup::None)
+}
+
+/// [`convert`] with the faces of a cross or strip moved by an edge fixup (cube outputs get
+/// theirs as they are encoded, every level: [`crate::output::Target::encode`]).
+pub fn convert_fixed(
+    loaded: &Loaded,
+    to: Kind,
+    size: usize,
+    resampler: &Resampler,
+    fixup: EdgeFixup,
+) -> Output {
+    match (to, to.cells()) {
+        (Kind::Faces, _) => Output::Cube(to_cube(loaded, size, resampler)),
+        (_, Some(cells)) if fixup != EdgeFixup::None => {
+            let faces =
+                crate::cube::fixup::apply(&to_cube(loaded, size, resampler).levels[0], fixup);
+            Output::Image(cross::assemble(cells, &faces))
+        }
         _ => Output::Image(to_image(loaded, to, size, resampler)),
     }
 }

@@ -71,6 +71,8 @@ pub struct Args {
     #[command(flatten)]
     pub tone: super::ToneArgs,
     #[command(flatten)]
+    pub fixup: super::out::EdgeFixupArg,
+    #[command(flatten)]
     pub input: super::InputArgs,
 }
 
@@ -115,6 +117,7 @@ pub fn job(a: Args) -> Result<ConvertJob> {
         },
         png16: a.png16,
         ultrahdr: a.ultrahdr,
+        edge_fixup: a.fixup.edge_fixup,
         gpu_format: a.gpu_format,
         zstd: a.zstd.zstd,
         levels: a.levels,

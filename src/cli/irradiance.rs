@@ -49,6 +49,8 @@ pub struct Args {
     #[command(flatten)]
     pub tone: super::ToneArgs,
     #[command(flatten)]
+    pub fixup: super::out::EdgeFixupArg,
+    #[command(flatten)]
     pub input: super::InputArgs,
 }
 
@@ -78,6 +80,7 @@ pub fn job(a: Args) -> Result<IrradianceJob> {
         method: a.method,
         sh_bands: a.sh_bands,
         sh_window: a.sh_window,
+        edge_fixup: a.fixup.edge_fixup,
         face_format,
         gpu_format: a.gpu_format,
         zstd: a.zstd.zstd,

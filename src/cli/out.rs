@@ -50,3 +50,14 @@ pub fn write_files(files: &[(std::path::PathBuf, Vec<u8>)]) -> cubeforge::Result
         &[],
     )
 }
+
+/// `--edge-fixup`, shared by the commands that write cube maps.
+#[derive(clap::Args, Debug)]
+pub struct EdgeFixupArg {
+    /// For samplers without seamless cube filtering (GLES 2, WebGL 1, DX9): warp (cmft's:
+    /// texel centres pulled out by t + a t^3, a = n^2/(n-1)^3) or stretch (spread edge to
+    /// edge; shaders scale the lookup's minor axes by (n-1)/n), every level; see
+    /// docs/conventions.md.
+    #[arg(long, value_enum, default_value_t = cubeforge::cube::EdgeFixup::None)]
+    pub edge_fixup: cubeforge::cube::EdgeFixup,
+}

@@ -58,6 +58,8 @@ pub struct Args {
     #[command(flatten)]
     pub exposure: super::ExposureArg,
     #[command(flatten)]
+    pub fixup: super::out::EdgeFixupArg,
+    #[command(flatten)]
     pub input: super::InputArgs,
 }
 
@@ -102,6 +104,7 @@ pub fn job(a: Args) -> Result<PrefilterJob> {
         zstd: a.zstd.zstd,
         exr_float: a.exr.exr_float,
         exposure: a.exposure.exposure,
+        edge_fixup: a.fixup.edge_fixup,
         read: a.input.read_options(&a.inputs)?,
         ..PrefilterJob::new(a.inputs, output)
     };

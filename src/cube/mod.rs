@@ -8,6 +8,7 @@
 // public items are re-exported here: callers name `cube::X`.
 mod environment;
 mod face;
+pub mod fixup;
 mod map;
 mod sampler;
 
@@ -18,6 +19,7 @@ pub use face::{
     FACE_NAMES,
 };
 pub(crate) use face::{texel_angle, texel_density, texel_footprint, texel_solid_angle};
+pub use fixup::EdgeFixup;
 pub(crate) use map::{box_reduce_face, faces_from_images, try_faces};
 pub use map::{CubeMap, Faces};
 pub use sampler::CubeSampler;

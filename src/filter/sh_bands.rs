@@ -15,6 +15,7 @@
 use crate::cube::{solid_angle_table, texel_dir, Faces};
 use crate::error::{Error, Result};
 use glam::{Vec3, Vec4};
+use serde::Serialize;
 use std::f64::consts::PI;
 
 /// Bands a set may hold: cmft's five (up to l = 4).
@@ -412,6 +413,105 @@ pub fn eval(coeffs: &[[f64; 3]], d: Vec3) -> Vec4 {
         }
     }
     Vec4::new(out[0] as f32, out[1] as f32, out[2] as f32, 1.0)
+}
+
+/// What `--sh FILE.json` holds.
+#[derive(Serialize)]
+pub struct ShFile {
+    /// Highest band: 2 (nine coefficients) by default, up to 4 (25).
+    pub order: u32,
+    /// Bands, `order + 1`: `bands * bands` coefficients per channel.
+    pub bands: u32,
+    /// Which basis and coordinate frame the coefficients are in.
+    pub basis: &'static str,
+    /// (l, m) of each coefficient, in the order of the coefficient lists.
+    pub ordering: Vec<[i32; 2]>,
+    /// How to evaluate each basis function, in the same order.
+    pub constants: Vec<ShConstant>,
+    /// cmgen's sinc^4 window, when one was applied: its cutoff band and each band's weight
+    /// (already multiplied into every list below).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window: Option<ShWindowFile>,
+    /// Coefficients of the radiance L(d) = sum c_i Y_i(d), per channel [r, g, b].
+    pub radiance: Vec<[f64; 3]>,
+    /// Coefficients of the irradiance E(n) = sum c_i Y_i(n) (band factors pi, 2pi/3, pi/4,
+    /// 0, -pi/24).
+    pub irradiance: Vec<[f64; 3]>,
+    /// Irradiance divided by pi: the value the irradiance cube map stores, and what a shader
+    /// multiplies by the diffuse albedo.
+    pub irradiance_over_pi: Vec<[f64; 3]>,
+    /// How a shader uses the coefficients.
+    pub note: &'static str,
+}
+
+/// The window of an [`ShFile`].
+#[derive(Serialize)]
+pub struct ShWindowFile {
+    /// The band at which the taper reaches zero.
+    pub cutoff: f64,
+    /// Weight of each band, 0 first: (sin x / x)^4, x = pi l / cutoff.
+    pub weights: Vec<f64>,
+}
+
+/// One basis function Y_l^m: its polynomial in (x, y, z) and constant factor.
+#[derive(Serialize)]
+pub struct ShConstant {
+    /// Band, 0 to 4.
+    pub l: i32,
+    /// Index within the band, -l to l.
+    pub m: i32,
+    /// Y as the constant times a polynomial in the direction's x, y, z.
+    pub formula: &'static str,
+    /// The constant's value.
+    pub value: f64,
+}
+
+impl ShFile {
+    /// The file for order-2 radiance coefficients (per channel, [`super::sh::BASIS`] order).
+    pub fn new(radiance: &[[f64; 3]; 9]) -> ShFile {
+        ShFile::from_set(&ShSet {
+            bands: 3,
+            radiance: radiance.to_vec(),
+            cutoff: None,
+        })
+    }
+
+    /// The file for a set of any band count, its window noted.
+    pub fn from_set(set: &ShSet) -> ShFile {
+        let count = set.radiance.len();
+        ShFile {
+            order: set.bands as u32 - 1,
+            bands: set.bands as u32,
+            basis: "real spherical harmonics, directions in cube-map space (x, y, z) unit length",
+            ordering: (0..count)
+                .map(|i| {
+                    let b = describe(i);
+                    [b.1, b.2]
+                })
+                .collect(),
+            constants: (0..count)
+                .map(|i| {
+                    let b = describe(i);
+                    ShConstant {
+                        l: b.1,
+                        m: b.2,
+                        formula: b.0,
+                        value: b.3,
+                    }
+                })
+                .collect(),
+            window: set.cutoff.map(|cutoff| ShWindowFile {
+                cutoff,
+                weights: (0..set.bands)
+                    .map(|l| window_weight(l, cutoff))
+                    .collect(),
+            }),
+            radiance: set.radiance.clone(),
+            irradiance: set.irradiance(),
+            irradiance_over_pi: set.irradiance_over_pi(),
+            note: "shader: color = albedo * sum_i irradiance_over_pi[i] * Y_i(n), Y_i = constant * polynomial above",
+        }
+    }
 }
 
 #[cfg(test)]

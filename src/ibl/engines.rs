@@ -5,7 +5,7 @@ use crate::chain::LevelsFile;
 use crate::convert::Loaded;
 use crate::cube::CubeMap;
 use crate::error::Result;
-use crate::filter::{sh, ChainOptions};
+use crate::filter::ChainOptions;
 use crate::image::Image;
 use crate::io::{self, FileFormat, GpuFormat};
 use crate::resample::Orientation;
@@ -566,7 +566,8 @@ fn generic(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     } = ktx2_pair(l, ctx, "_specular.ktx2", "_diffuse.ktx2")?;
     let shp = ctx.path("_sh.json");
     let dfg = ctx.path("_dfg.png");
-    let sh_json = serde_json::to_vec_pretty(&sh::ShFile::new(&l.sh)).unwrap_or_default();
+    let sh_json =
+        serde_json::to_vec_pretty(&crate::filter::sh_bands::ShFile::new(&l.sh)).unwrap_or_default();
     files.push((shp.clone(), sh_json));
     files.push((dfg.clone(), lut_png(&dfg, false)?));
     let snippet = format!(

@@ -409,6 +409,9 @@ pub struct WriteOptions {
     /// JPEG outputs as UltraHDR (a gain map over an SDR picture made by this curve; `None`
     /// means ACES there): radiance kept, not clipped.
     pub gain_map: Option<crate::tonemap::Tonemap>,
+    /// Texel centres moved for per-face samplers (cube outputs; KTX2 records it under
+    /// [`ktx2::EDGE_FIXUP_KEY`]).
+    pub edge_fixup: crate::cube::EdgeFixup,
 }
 
 /// The sample type of EXR output: half floats (what tools expect, largest 65504) or 32-bit
@@ -476,8 +479,15 @@ pub fn encode_cube_with(
     extra: &[(&str, &[u8])],
 ) -> Result<Vec<u8>> {
     match FileFormat::from_extension(path) {
-        Some(FileFormat::Ktx2) => ktx2::encode_cube_with(cube, opts.gpu_format, opts.zstd, extra)
-            .map_err(|e| Error::file(path, e)),
+        Some(FileFormat::Ktx2) => {
+            let fixup = opts.edge_fixup.name().as_bytes();
+            let mut kv = extra.to_vec();
+            if opts.edge_fixup != crate::cube::EdgeFixup::None {
+                kv.push((ktx2::EDGE_FIXUP_KEY, fixup));
+            }
+            ktx2::encode_cube_with(cube, opts.gpu_format, opts.zstd, &kv)
+                .map_err(|e| Error::file(path, e))
+        }
         Some(FileFormat::Dds | FileFormat::Ktx1 | FileFormat::Env) if opts.zstd.is_some() => {
             Err(zstd_needs_ktx2(path))
         }

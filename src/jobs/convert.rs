@@ -63,6 +63,8 @@ pub struct ConvertJob {
     pub tone: (f32, Tonemap),
     /// A JPEG output as UltraHDR: an SDR picture and a gain map that keeps the radiance.
     pub ultrahdr: bool,
+    /// Texel centres moved for per-face (non-seamless) samplers: cube outputs, every level.
+    pub edge_fixup: crate::cube::EdgeFixup,
     /// Limits and colour handling of the inputs (`linear` applies to the output too).
     pub read: ReadOptions,
 }
@@ -86,6 +88,7 @@ impl ConvertJob {
             level: 0,
             tone: (0.0, Tonemap::None),
             ultrahdr: false,
+            edge_fixup: crate::cube::EdgeFixup::None,
             read: ReadOptions::default(),
         }
     }
@@ -131,7 +134,9 @@ impl Job for ConvertJob {
         let target = self.target()?;
         let to = target.kind;
         let name = self.output.name();
-        let mut warnings = Vec::new();
+        let mut warnings: Vec<Warning> = super::fixup_ignored(to, self.edge_fixup)
+            .into_iter()
+            .collect();
         let mut warn = |s: String| warnings.push(Warning::new(s));
         let jpeg = match to {
             MapKind::Layout(Kind::Faces) => self.face_format == Some(FileFormat::Jpeg),
@@ -282,6 +287,7 @@ impl Job for ConvertJob {
             zstd: self.zstd.filter(|_| container),
             exr_float: self.exr_float,
             gain_map: self.ultrahdr.then_some(self.tone.1),
+            edge_fixup: self.edge_fixup,
         };
         target.levels = self.levels;
         let (tone, tone_warning) = output::tone_for(&target, self.tone.0, self.tone.1);
@@ -290,7 +296,7 @@ impl Job for ConvertJob {
             warnings.push(w);
         }
 
-        let out = convert::convert(&loaded, to, size, &self.resampler);
+        let out = convert::convert_fixed(&loaded, to, size, &self.resampler, self.edge_fixup);
         progress.stage("resample");
         let encoded = target.encode(out, &loaded.files)?;
         if let Some(w) = &encoded.clamped {

@@ -2,7 +2,7 @@
 
 use super::{Job, Progress, Quality, Report, Text, Warning, Warnings};
 use crate::chain;
-use crate::convert::{self, Loaded, Output};
+use crate::convert::{self, Loaded};
 use crate::error::{param, Error, Result};
 use crate::filter::sh_bands::{self, ShSet, ShWindow};
 use crate::filter::{self, sh, IrradianceMethod};
@@ -43,6 +43,8 @@ pub struct IrradianceJob {
     pub sh_bands: usize,
     /// cmgen's windowing of the coefficients (none by default).
     pub sh_window: ShWindow,
+    /// Texel centres moved for per-face (non-seamless) samplers.
+    pub edge_fixup: crate::cube::EdgeFixup,
     /// File type of face images.
     pub face_format: FileFormat,
     /// Texel format of KTX2 and DDS output.
@@ -70,6 +72,7 @@ impl IrradianceJob {
             method: IrradianceMethod::Brute,
             sh_bands: 3,
             sh_window: ShWindow::None,
+            edge_fixup: crate::cube::EdgeFixup::None,
             face_format: FileFormat::Exr,
             gpu_format: GpuFormat::Rgba16f,
             zstd: None,
@@ -90,6 +93,7 @@ impl IrradianceJob {
             gpu_format: self.gpu_format,
             zstd: self.zstd,
             exr_float: self.exr_float,
+            edge_fixup: self.edge_fixup,
             ..WriteOptions::default()
         };
         target.levels = Some(1);
@@ -132,7 +136,9 @@ impl Job for IrradianceJob {
         if let Some(c) = target.kind.container() {
             io::check_gpu_format(&name, c.format(), self.gpu_format)?;
         }
-        let mut warnings = Vec::new();
+        let mut warnings: Vec<Warning> = super::fixup_ignored(target.kind, self.edge_fixup)
+            .into_iter()
+            .collect();
         match target.kind.container() {
             Some(Container::Ktx2) => {}
             Some(Container::Dds) if self.zstd.is_some() => return Err(io::zstd_needs_ktx2(&name)),
@@ -216,15 +222,13 @@ impl Job for IrradianceJob {
         progress.finish();
         progress.stage("filter");
 
-        let out = match target.kind.layout() {
-            Kind::Faces => Output::Cube(irr),
-            to => Output::Image(convert::to_image(
-                &Loaded::from_cube(irr),
-                to,
-                self.size,
-                &Resampler::default(),
-            )),
-        };
+        let out = convert::convert_fixed(
+            &Loaded::from_cube(irr),
+            target.kind.layout(),
+            self.size,
+            &Resampler::default(),
+            self.edge_fixup,
+        );
         let encoded = target.encode(out, &loaded.files)?;
         if let Some(w) = &encoded.clamped {
             warnings.push(w);
@@ -238,7 +242,7 @@ impl Job for IrradianceJob {
         let k = f64::from(self.tone.0).exp2();
         let set = set.scaled(k);
         if let Some(p) = &self.sh {
-            let json = serde_json::to_vec_pretty(&sh::ShFile::from_set(&set))
+            let json = serde_json::to_vec_pretty(&sh_bands::ShFile::from_set(&set))
                 .map_err(|e| Error::usage(e.to_string()))?;
             files.files.push((p.clone(), json));
         }

@@ -60,6 +60,8 @@ pub struct PrefilterJob {
     pub exr_float: ExrFloat,
     /// Scale the radiance by 2^EV before filtering (0 keeps it).
     pub exposure: f32,
+    /// Texel centres moved for per-face (non-seamless) samplers, every level on its own grid.
+    pub edge_fixup: crate::cube::EdgeFixup,
     /// Limits and colour handling of the inputs.
     pub read: ReadOptions,
 }
@@ -90,6 +92,7 @@ impl PrefilterJob {
             zstd: None,
             exr_float: ExrFloat::Half,
             exposure: 0.0,
+            edge_fixup: crate::cube::EdgeFixup::None,
             read: ReadOptions::default(),
         }
     }
@@ -226,6 +229,7 @@ impl Job for PrefilterJob {
             linear: self.read.linear,
             zstd: self.zstd.filter(|_| container == Some(FileFormat::Ktx2)),
             exr_float: self.exr_float,
+            edge_fixup: self.edge_fixup,
             ..WriteOptions::default()
         };
         let encoded = chain::encode(

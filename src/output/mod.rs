@@ -5,7 +5,7 @@
 #![warn(missing_docs)]
 
 use crate::convert::Output;
-use crate::cube::{CubeMap, Faces, FACE_NAMES};
+use crate::cube::{fixup, CubeMap, Faces, FACE_NAMES};
 use crate::error::{param, Error, Result};
 use crate::image::Image;
 use crate::io::{self, Container, FileFormat, MapKind, WriteOptions};
@@ -157,6 +157,7 @@ impl Target {
         let files = match out {
             Output::Cube(cube) if faces => {
                 refuse_folder(&self.path, inputs)?;
+                let cube = fixup::apply_cube(cube, self.write.edge_fixup);
                 encode_faces(
                     &self.path,
                     &cube.levels[0],
@@ -173,7 +174,9 @@ impl Target {
                 } else {
                     self.levels
                 };
-                let cube: CubeMap = cube.with_box_mips(levels);
+                // Each level moved on its own grid, after the mips are made from the unmoved one.
+                let cube: CubeMap =
+                    fixup::apply_cube(cube.with_box_mips(levels), self.write.edge_fixup);
                 let bytes = io::encode_cube_with(&self.path, &cube, &self.write, &[])?;
                 if self.write.gpu_format.is_lossy() {
                     let faces: Vec<&Image> = cube.levels[0].iter().collect();

@@ -16,6 +16,7 @@ mod containers;
 mod control;
 mod conversions;
 mod doc_pictures;
+mod edge_fixup;
 mod engine_containers;
 mod exr_envmap;
 mod exr_openexr;

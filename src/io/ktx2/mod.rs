@@ -65,6 +65,10 @@ fn align_up(v: usize, a: usize) -> usize {
 /// Key of the levels description a prefiltered chain carries (JSON, NUL-terminated).
 pub const LEVELS_KEY: &str = "cubeforge.levels";
 
+/// Key of the edge fixup a cube map was written with (`warp` or `stretch`; absent: none):
+/// its texel centres are not where seamless samplers expect them.
+pub const EDGE_FIXUP_KEY: &str = "cubeforge.edgeFixup";
+
 /// Key/value data: the `KTXwriter` entry and any `extra` ones, sorted by key as the spec asks,
 /// each padded to 4 bytes. Values are written NUL-terminated.
 fn key_value_data(extra: &[(&str, &[u8])]) -> Vec<u8> {
