@@ -70,6 +70,7 @@ pub fn render_lit<E: Environment + ?Sized>(
     if let Some(s) = split_sum {
         shader = shader.with_split_sum(s);
     }
+    shader = shader.with_refraction(opts.refraction);
     let offsets = sample_offsets(opts.samples);
     let s = offsets.len();
     let inv_s = 1.0 / s as f32;
@@ -94,6 +95,9 @@ pub fn render_lit<E: Environment + ?Sized>(
         } else {
             Vec2::ZERO
         };
+        if shader.exact {
+            return shader.exact(p, nrm, uv);
+        }
         let var = shader.vertex(p, nrm, uv);
         if !shader.lod_on {
             return shader.fragment(&var, None);
