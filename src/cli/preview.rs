@@ -53,6 +53,7 @@ pub struct Args {
     /// Refract and dispersion materials: the texts' one refraction at the front (texts), or
     /// the solid sphere's path, in at the front and out at the back with the Fresnel split at
     /// each surface and the bounces inside, per channel for dispersion (exact; per fragment).
+    /// A material file's `refraction = "texts"|"exact"` wins over it.
     #[arg(long, value_enum, default_value_t = Refraction::Texts)]
     pub refraction: Refraction,
     /// Latitude bands of the per-vertex sphere (longitude segments: twice as many).

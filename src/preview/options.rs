@@ -18,7 +18,8 @@ pub enum Shading {
 }
 
 /// How the `refract` and `dispersion` materials bend light (the others ignore it).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Refraction {
     /// The texts' programs: one refraction at the front surface, looked up at once.
@@ -116,7 +117,8 @@ pub struct Options {
     pub samples: usize,
     /// What fills the pixels that miss the sphere.
     pub background: Background,
-    /// The texts' single refraction or the solid sphere's exact path (per fragment only).
+    /// The texts' single refraction or the solid sphere's exact path (per fragment only), for
+    /// materials whose file does not say.
     pub refraction: Refraction,
 }
 

@@ -5,13 +5,13 @@
 
 use super::camera::{sample_offsets, Camera};
 use super::material::{self, Material};
-use super::options::{Background, Options, Shading};
+use super::options::{Background, Options, Refraction, Shading};
 use super::pbr::SplitSum;
 use super::raster::{setup_raster, Frag, NO_TRI};
 use super::shader::{Shader, Surface};
 use super::sphere;
 use crate::cube::Environment;
-use crate::error::{Error, Result};
+use crate::error::{param, Error, Result};
 use crate::image::Image;
 use glam::{Vec2, Vec3, Vec4};
 
@@ -55,6 +55,19 @@ pub fn render_lit<E: Environment + ?Sized>(
         return Err(Error::usage(format!(
             "material \"{}\" is pbr: it needs split-sum lighting (preview::render_lit with a preview::pbr::SplitSum)",
             material.name
+        )));
+    }
+    if opts.shading == Shading::PerVertex
+        && material.refraction == Some(Refraction::Exact)
+        && matches!(
+            material.model,
+            material::Model::Refract | material::Model::Dispersion
+        )
+    {
+        return Err(Error::usage(format!(
+            "material \"{}\" asks for refraction exact, which traces each fragment's path: it needs {} per-fragment",
+            material.name,
+            param("shading")
         )));
     }
     let n = opts.size;

@@ -108,9 +108,10 @@ impl<'a, E: Environment + ?Sized> Shader<'a, E> {
         }
     }
 
-    /// How refract and dispersion materials bend light; the other models ignore it.
+    /// How refract and dispersion materials bend light, unless the material says; the other
+    /// models ignore it.
     pub fn with_refraction(mut self, refraction: Refraction) -> Self {
-        self.exact = refraction == Refraction::Exact
+        self.exact = self.mat.refraction.unwrap_or(refraction) == Refraction::Exact
             && matches!(self.mat.model, Model::Refract | Model::Dispersion);
         self
     }

@@ -297,3 +297,49 @@ fn the_flag_runs_through_the_job_and_the_command_line() {
         "{e}"
     );
 }
+
+#[test]
+fn material_files_may_ask_for_exact_refraction() {
+    let p = Path::new("mats/ball.toml");
+    let m = material::parse_toml(
+        "model = \"refract\"\neta_ratio = 0.6667\nrefraction = \"exact\"\n",
+        p,
+    )
+    .unwrap();
+    assert_eq!(m.refraction, Some(Refraction::Exact));
+    let back = material::parse_toml(&material::to_toml(&m), p).unwrap();
+    assert_eq!(back.refraction, Some(Refraction::Exact));
+    // The file's word wins over the option, either way.
+    let glass = Material {
+        eta_ratio: Vec3::splat(0.6667),
+        ..material::preset("glass").unwrap()
+    };
+    assert_eq!(render(&m, &opts(32)), render(&glass, &exact_view(32)));
+    let texts = Material {
+        refraction: Some(Refraction::Texts),
+        ..glass.clone()
+    };
+    assert_eq!(render(&texts, &exact_view(32)), render(&glass, &opts(32)));
+    // Only where it means something, and never per vertex.
+    for (text, needle) in [
+        ("model = \"reflect\"\nrefraction = \"exact\"\n", "line 2"),
+        (
+            "model = \"refract\"\neta_ratio = 0.7\nrefraction = \"twice\"\n",
+            "line 3",
+        ),
+    ] {
+        let e = material::parse_toml(text, p).unwrap_err().to_string();
+        assert!(
+            e.starts_with("mats/ball.toml: ") && e.contains(needle),
+            "{e}"
+        );
+    }
+    let per_vertex = Options {
+        shading: Shading::PerVertex,
+        ..opts(16)
+    };
+    let e = preview::render(&smooth_env(), &m, &Surface::default(), &per_vertex)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("per-fragment"), "{e}");
+}
