@@ -34,6 +34,11 @@ cf preview "$work/sky_gaussian.ktx2" -o "$out/preview_bias.png" --yaw 180 --size
     --grid-bias 0,1,2,3
 cf preview fixtures/sky.exr -o "$out/preview_per_vertex.png" --yaw 180 --size 384 \
     --shading per-vertex --tessellation 8
+# Glass as the texts refract it (once, at the front) and exactly (the solid sphere: a lens).
+cf preview fixtures/sky.exr -o "$out/preview_glass_texts.png" --yaw 180 --size 192 \
+    --grid glass,diamond,crystal
+cf preview fixtures/sky.exr -o "$out/preview_glass_exact.png" --yaw 180 --size 192 \
+    --grid glass,diamond,crystal --refraction exact
 
 # The viewer (cubeforge view) in headless Chromium: the page with its panel. Needs node,
 # chromium and puppeteer-core (target/tools, as .ci/run installs them).

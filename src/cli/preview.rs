@@ -6,7 +6,7 @@ use cubeforge::image::srgb_to_linear;
 use cubeforge::io::FileFormat;
 use cubeforge::layout::Kind;
 use cubeforge::preview::material;
-use cubeforge::preview::{Background, Options, Parallax, ParallaxMode, Shading};
+use cubeforge::preview::{Background, Options, Parallax, ParallaxMode, Refraction, Shading};
 use cubeforge::tonemap::Tonemap;
 use cubeforge::{Error, PreviewJob, Result};
 use glam::{Vec3, Vec4};
@@ -50,6 +50,12 @@ pub struct Args {
     /// (interpolated by the rasterizer, as section 7.2.5 compares).
     #[arg(long, value_enum, default_value_t = Shading::PerFragment)]
     pub shading: Shading,
+    /// Refract and dispersion materials: the texts' one refraction at the front (texts), or
+    /// the solid sphere's path, in at the front and out at the back with the Fresnel split at
+    /// each surface and the bounces inside, per channel for dispersion (exact; per fragment).
+    /// A material file's `refraction = "texts"|"exact"` wins over it.
+    #[arg(long, value_enum, default_value_t = Refraction::Texts)]
+    pub refraction: Refraction,
     /// Latitude bands of the per-vertex sphere (longitude segments: twice as many).
     #[arg(long, default_value_t = 16)]
     pub tessellation: usize,
@@ -129,6 +135,8 @@ Examples:
   cubeforge preview panorama.hdr -o chrome.png
   # three of the Cg Tutorial's materials side by side
   cubeforge preview panorama.hdr -o sheet.png --grid chrome,glass,crystal
+  # a solid glass ball: refracted in and out, reflections and bounces inside (a lens)
+  cubeforge preview panorama.hdr -o glass.png -m glass --refraction exact
   # glTF metallic-roughness (split-sum GGX) at three roughness values
   cubeforge preview panorama.hdr -o pbr.png -m pbr --grid-roughness 0,0.5,1";
 
@@ -209,6 +217,7 @@ pub fn job(a: Args) -> Result<PreviewJob> {
             .samples
             .unwrap_or_else(|| PreviewJob::default_samples(&output)),
         background: parse_background(&a.background)?,
+        refraction: a.refraction,
     };
     let job = PreviewJob {
         from: a.from,

@@ -11,6 +11,9 @@
 //! tessellated sphere and interpolates its outputs perspective-correctly across each
 //! triangle, as a rasterizer does, so section 7.2.5's artefacts appear.
 //!
+//! `Refraction::Exact` replaces the texts' single refraction of the `refract` and
+//! `dispersion` materials with the path through the solid sphere ([`glass`]), per fragment.
+//!
 //! The `pbr` material is not the texts': glTF's metallic-roughness parameters shaded with the
 //! split-sum approximation engines use ([`pbr`]), its level chosen by roughness.
 //!
@@ -22,6 +25,7 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod glass;
 pub mod grid;
 pub mod material;
 pub mod pbr;
@@ -39,6 +43,6 @@ mod shader;
 
 pub(crate) use load::control_sidecar;
 pub use load::{load_environment, read_control, read_texture, LoadedEnv};
-pub use options::{Background, Options, Parallax, ParallaxMode, Shading};
+pub use options::{Background, Options, Parallax, ParallaxMode, Refraction, Shading};
 pub use render::{render, render_lit, render_with_progress};
 pub use shader::{Control, Shader, Surface, Varyings};

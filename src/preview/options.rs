@@ -17,6 +17,19 @@ pub enum Shading {
     PerVertex,
 }
 
+/// How the `refract` and `dispersion` materials bend light (the others ignore it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+pub enum Refraction {
+    /// The texts' programs: one refraction at the front surface, looked up at once.
+    #[default]
+    Texts,
+    /// A solid sphere: Fresnel split at the front, refraction in and out at the back, the
+    /// internal bounces summed (per channel for dispersion); see `preview::glass`.
+    Exact,
+}
+
 /// Brennan's correction for an environment at finite distance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
@@ -104,6 +117,9 @@ pub struct Options {
     pub samples: usize,
     /// What fills the pixels that miss the sphere.
     pub background: Background,
+    /// The texts' single refraction or the solid sphere's exact path (per fragment only), for
+    /// materials whose file does not say.
+    pub refraction: Refraction,
 }
 
 impl Default for Options {
@@ -120,6 +136,7 @@ impl Default for Options {
             parallax: None,
             samples: 1,
             background: Background::Env,
+            refraction: Refraction::Texts,
         }
     }
 }
@@ -169,6 +186,13 @@ impl Options {
                 "{} must be 2 to 1024 (got {})",
                 param("tessellation"),
                 self.tessellation
+            ));
+        }
+        if self.refraction == Refraction::Exact && self.shading == Shading::PerVertex {
+            return bad(format!(
+                "{} exact traces each fragment's path through the sphere: it needs {} per-fragment",
+                param("refraction"),
+                param("shading")
             ));
         }
         if let Some(p) = self.parallax {

@@ -5,13 +5,13 @@
 
 use super::camera::{sample_offsets, Camera};
 use super::material::{self, Material};
-use super::options::{Background, Options, Shading};
+use super::options::{Background, Options, Refraction, Shading};
 use super::pbr::SplitSum;
 use super::raster::{setup_raster, Frag, NO_TRI};
 use super::shader::{Shader, Surface};
 use super::sphere;
 use crate::cube::Environment;
-use crate::error::{Error, Result};
+use crate::error::{param, Error, Result};
 use crate::image::Image;
 use glam::{Vec2, Vec3, Vec4};
 
@@ -57,6 +57,19 @@ pub fn render_lit<E: Environment + ?Sized>(
             material.name
         )));
     }
+    if opts.shading == Shading::PerVertex
+        && material.refraction == Some(Refraction::Exact)
+        && matches!(
+            material.model,
+            material::Model::Refract | material::Model::Dispersion
+        )
+    {
+        return Err(Error::usage(format!(
+            "material \"{}\" asks for refraction exact, which traces each fragment's path: it needs {} per-fragment",
+            material.name,
+            param("shading")
+        )));
+    }
     let n = opts.size;
     let cam = Camera::new(opts.distance, opts.fov, opts.yaw, opts.pitch, n, n);
     let mut shader = Shader::new(
@@ -70,6 +83,7 @@ pub fn render_lit<E: Environment + ?Sized>(
     if let Some(s) = split_sum {
         shader = shader.with_split_sum(s);
     }
+    shader = shader.with_refraction(opts.refraction);
     let offsets = sample_offsets(opts.samples);
     let s = offsets.len();
     let inv_s = 1.0 / s as f32;
@@ -94,6 +108,9 @@ pub fn render_lit<E: Environment + ?Sized>(
         } else {
             Vec2::ZERO
         };
+        if shader.exact {
+            return shader.exact(p, nrm, uv);
+        }
         let var = shader.vertex(p, nrm, uv);
         if !shader.lod_on {
             return shader.fragment(&var, None);

@@ -3,8 +3,9 @@
 
 #![warn(missing_docs)]
 
+use super::glass;
 use super::material::{fresnel, reflect, refract, Material, Model};
-use super::options::Parallax;
+use super::options::{Parallax, Refraction};
 use super::pbr::SplitSum;
 use crate::cube::Environment;
 use crate::image::Image;
@@ -75,6 +76,8 @@ pub struct Shader<'a, E: Environment + ?Sized> {
     pub(super) uses_uv: bool,
     /// What a `pbr` material reads besides the chain.
     split_sum: Option<&'a SplitSum>,
+    /// A refract or dispersion material traced through the solid sphere ([`Shader::exact`]).
+    pub(super) exact: bool,
 }
 
 impl<'a, E: Environment + ?Sized> Shader<'a, E> {
@@ -101,7 +104,16 @@ impl<'a, E: Environment + ?Sized> Shader<'a, E> {
             lookups: if mat.model == Model::Dispersion { 4 } else { 1 },
             uses_uv: surface.decal.is_some() || surface.control.is_some(),
             split_sum: None,
+            exact: false,
         }
+    }
+
+    /// How refract and dispersion materials bend light, unless the material says; the other
+    /// models ignore it.
+    pub fn with_refraction(mut self, refraction: Refraction) -> Self {
+        self.exact = self.mat.refraction.unwrap_or(refraction) == Refraction::Exact
+            && matches!(self.mat.model, Model::Refract | Model::Dispersion);
+        self
     }
 
     /// Binds the split-sum lighting a `pbr` material needs (its level mapping, irradiance and
@@ -167,14 +179,7 @@ impl<'a, E: Environment + ?Sized> Shader<'a, E> {
     #[inline]
     pub fn fragment(&self, var: &Varyings, neighbours: Option<(&Varyings, &Varyings)>) -> Vec4 {
         let m = self.mat;
-        // Control map: reflectivity, transmittance, blur, Fresnel mask.
-        let (reflectivity, transmittance, blur, mask) = match &self.surface.control {
-            Some(c) => {
-                let t = tex2d(c.map, var.uv);
-                (t.x, t.y, t.z * c.max_lod_bias, t.w)
-            }
-            None => (m.reflectivity, m.transmittance, 0.0, 1.0),
-        };
+        let (reflectivity, transmittance, blur, mask) = self.controls(var.uv);
         let mut lods = [0.0f32; 4];
         if self.lod_on {
             let bias = self.lod_bias + blur;
@@ -186,10 +191,7 @@ impl<'a, E: Environment + ?Sized> Shader<'a, E> {
                 *lod = base + bias;
             }
         }
-        let decal = || match self.surface.decal {
-            Some(img) => tex2d(img, var.uv),
-            None => m.decal_color.extend(1.0),
-        };
+        let decal = || self.decal(var.uv);
         if m.model == Model::Pbr {
             // The decal is glTF's baseColorTexture: it multiplies the base colour.
             let base = match self.surface.decal {
@@ -225,6 +227,75 @@ impl<'a, E: Environment + ?Sized> Shader<'a, E> {
                 refracted.lerp(reflected, factor)
             }
             Model::Pbr => Vec4::ZERO,
+        };
+        c.truncate().extend(1.0)
+    }
+}
+
+impl<E: Environment + ?Sized> Shader<'_, E> {
+    /// The control map's reflectivity, transmittance, blur (as a LOD bias) and Fresnel mask
+    /// at `uv`, or the material's own values.
+    #[inline]
+    fn controls(&self, uv: Vec2) -> (f32, f32, f32, f32) {
+        match &self.surface.control {
+            Some(c) => {
+                let t = tex2d(c.map, uv);
+                (t.x, t.y, t.z * c.max_lod_bias, t.w)
+            }
+            None => (self.mat.reflectivity, self.mat.transmittance, 0.0, 1.0),
+        }
+    }
+
+    #[inline]
+    fn decal(&self, uv: Vec2) -> Vec4 {
+        match self.surface.decal {
+            Some(img) => tex2d(img, uv),
+            None => self.mat.decal_color.extend(1.0),
+        }
+    }
+
+    /// `Refraction::Exact` at world point `p` of the sphere with unit normal `n`: the light
+    /// of every ray [`glass::trace`] makes of the eye ray, weighted. `refract` blends it with
+    /// the decal by `transmittance` as C7E4f does; `dispersion` traces each channel with its
+    /// own eta and sums, the exact Fresnel split replacing the texts' empirical bias, scale
+    /// and power (and a control map's reflectivity and mask). The lookups read level 0 plus
+    /// the LOD bias and the control map's blur: a lens's footprint differs at every bounce.
+    /// Other models run the texts' programs.
+    #[inline]
+    pub fn exact(&self, p: Vec3, n: Vec3, uv: Vec2) -> Vec4 {
+        let m = self.mat;
+        let (_, transmittance, blur, _) = self.controls(uv);
+        let lod = if self.lod_on {
+            self.lod_bias + blur
+        } else {
+            0.0
+        };
+        let i = (p - self.eye).normalize();
+        let look = |r: &glass::Ray| self.tex_cube(self.correct(r.dir, r.origin), lod);
+        let c = match m.model {
+            Model::Refract => {
+                let mut c = Vec4::ZERO;
+                for r in glass::trace(p, i, m.eta_ratio.x).rays() {
+                    c += look(r) * r.weight;
+                }
+                self.decal(uv).lerp(c, transmittance)
+            }
+            Model::Dispersion => {
+                // The front reflection goes the same way for every channel: one lookup.
+                let reflected = self.tex_cube(self.correct(reflect(i, n), p), lod);
+                let mut c = Vec4::ZERO;
+                for ch in 0..3 {
+                    let path = glass::trace(p, i, m.eta_ratio[ch]);
+                    let (front, exits) = path.rays().split_at(1);
+                    let mut v = front[0].weight * reflected[ch];
+                    for r in exits {
+                        v += look(r)[ch] * r.weight;
+                    }
+                    c[ch] = v;
+                }
+                c
+            }
+            _ => return self.fragment(&self.vertex(p, n, uv), None),
         };
         c.truncate().extend(1.0)
     }

@@ -5,6 +5,7 @@
 
 use super::{check, preset, presets, Material, Model};
 use crate::error::{Error, Result};
+use crate::preview::Refraction;
 use glam::Vec3;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -23,6 +24,13 @@ pub fn to_toml(m: &Material) -> String {
     };
     let rgb = |v: Vec3| format!("[{}, {}, {}]", f(v.x), f(v.y), f(v.z));
     let mut s = format!("model = \"{}\"\n", m.model.name());
+    if let Some(r) = m.refraction {
+        let name = match r {
+            Refraction::Texts => "texts",
+            Refraction::Exact => "exact",
+        };
+        s.push_str(&format!("refraction = \"{name}\"\n"));
+    }
     match m.model {
         Model::Reflect => {
             s.push_str(&format!("reflectivity = {}\n", f(m.reflectivity)));
@@ -83,6 +91,7 @@ struct MaterialFile {
     metallic: Option<Spanned<f32>>,
     roughness: Option<Spanned<f32>>,
     ior: Option<Spanned<f32>>,
+    refraction: Option<Spanned<Refraction>>,
 }
 
 /// The keys of the texts' models, which `pbr` does not take.
@@ -119,6 +128,7 @@ impl MaterialFile {
             ("metallic", at(&self.metallic)),
             ("roughness", at(&self.roughness)),
             ("ior", at(&self.ior)),
+            ("refraction", at(&self.refraction)),
         ]
         .into_iter()
         .filter_map(|(k, s)| s.map(|s| (k, s)))
@@ -158,6 +168,13 @@ pub fn parse_toml(text: &str, path: &Path) -> Result<Material> {
         }
         if model != Model::Pbr && PBR_KEYS.contains(key) {
             return Err(bad(key, format!("{key} applies to model \"pbr\" only")));
+        }
+        if *key == "refraction" && !matches!(model, Model::Refract | Model::Dispersion) {
+            return Err(bad(
+                key,
+                "refraction (texts or exact) applies to models \"refract\" and \"dispersion\""
+                    .into(),
+            ));
         }
     }
     let d = Material::default();
@@ -217,6 +234,7 @@ pub fn parse_toml(text: &str, path: &Path) -> Result<Material> {
         metallic: num(&file.metallic, d.metallic),
         roughness: num(&file.roughness, d.roughness),
         ior: num(&file.ior, d.ior),
+        refraction: file.refraction.map(Spanned::into_inner),
     };
     check(&m).map_err(|(key, msg)| bad(key, msg))?;
     Ok(m)

@@ -19,6 +19,7 @@ mod file;
 
 pub use file::{parse_toml, resolve, to_toml};
 
+use super::Refraction;
 use crate::error::{Error, Result};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -86,6 +87,9 @@ pub struct Material {
     /// `pbr`: index of refraction of the dielectric (KHR_materials_ior; 1.5 gives glTF's
     /// F0 = 0.04): F0 = ((ior - 1) / (ior + 1))^2.
     pub ior: f32,
+    /// `refract` and `dispersion`: a material file's `refraction`, which wins over the
+    /// preview's option (None: the option decides).
+    pub refraction: Option<Refraction>,
 }
 
 impl Material {
@@ -113,6 +117,7 @@ impl Default for Material {
             metallic: 0.0,
             roughness: 0.5,
             ior: 1.5,
+            refraction: None,
         }
     }
 }

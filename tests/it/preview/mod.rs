@@ -1,13 +1,15 @@
 //! `cubeforge preview`: every model against the source texts' formulas evaluated here,
 //! independently, in double precision, for 1-sample renders of analytic environments; total
 //! internal reflection, the Fresnel clamp, per-vertex converging to per-fragment, both
-//! parallax modes, LOD bias, control maps, orientation, determinism and the command line.
+//! parallax modes, LOD bias, control maps, orientation, determinism and the command line; and
+//! `--refraction exact` against a double-precision trace of the solid sphere.
 //!
 //! This module holds the reference geometry and formulas every part compares against; the
 //! tests are split by topic below it.
 
 mod command_line;
 mod control_maps;
+mod exact_glass;
 mod lod;
 mod models;
 mod orientation;
