@@ -73,6 +73,8 @@ pub struct Args {
     #[command(flatten)]
     pub fixup: super::out::EdgeFixupArg,
     #[command(flatten)]
+    pub hdr8: super::out::HdrEncodingArg,
+    #[command(flatten)]
     pub input: super::InputArgs,
 }
 
@@ -118,6 +120,7 @@ pub fn job(a: Args) -> Result<ConvertJob> {
         png16: a.png16,
         ultrahdr: a.ultrahdr,
         edge_fixup: a.fixup.edge_fixup,
+        hdr_encoding: a.hdr8.hdr_encoding,
         gpu_format: a.gpu_format,
         zstd: a.zstd.zstd,
         levels: a.levels,

@@ -24,6 +24,8 @@ pub struct Args {
     #[command(flatten)]
     pub part: super::PartArg,
     #[command(flatten)]
+    pub decode: super::read::DecodeArg,
+    #[command(flatten)]
     pub limits: super::LimitArgs,
 }
 
@@ -45,6 +47,7 @@ pub fn run(args: Args) -> Result<()> {
         as_stored: true,
         exr_part: args.part.index(&args.files)?,
         exr_level: 0,
+        hdr_encoding: args.decode.decode,
     };
     let mut reports = Vec::new();
     let mut failed = 0;

@@ -51,6 +51,8 @@ pub struct Args {
     #[command(flatten)]
     pub fixup: super::out::EdgeFixupArg,
     #[command(flatten)]
+    pub hdr8: super::out::HdrEncodingArg,
+    #[command(flatten)]
     pub input: super::InputArgs,
 }
 
@@ -81,6 +83,7 @@ pub fn job(a: Args) -> Result<IrradianceJob> {
         sh_bands: a.sh_bands,
         sh_window: a.sh_window,
         edge_fixup: a.fixup.edge_fixup,
+        hdr_encoding: a.hdr8.hdr_encoding,
         face_format,
         gpu_format: a.gpu_format,
         zstd: a.zstd.zstd,

@@ -14,6 +14,7 @@ mod observer;
 mod out;
 mod prefilter;
 mod preview;
+mod read;
 mod serve;
 mod view;
 
@@ -22,6 +23,7 @@ use cubeforge::tonemap::Tonemap;
 pub use observer::Observer;
 pub use out::{destination, write_files};
 use out::{write_stdout, DATA_ON_STDOUT};
+pub use read::PartArg;
 use std::time::Instant;
 
 #[derive(Parser, Debug)]
@@ -114,33 +116,9 @@ pub struct InputArgs {
     #[command(flatten)]
     pub part: PartArg,
     #[command(flatten)]
+    pub decode: read::DecodeArg,
+    #[command(flatten)]
     pub limits: LimitArgs,
-}
-
-/// Which part of a multi-part OpenEXR input to read.
-#[derive(clap::Args, Debug)]
-pub struct PartArg {
-    /// Which part of a multi-part OpenEXR file to read: its index (0 is the first) or its
-    /// name. Without it the first is read, and a warning says so.
-    #[arg(long, value_name = "N|NAME")]
-    pub part: Option<String>,
-}
-
-impl PartArg {
-    /// The part's index, a name looked up in `inputs` (one OpenEXR file).
-    pub fn index(&self, inputs: &[std::path::PathBuf]) -> cubeforge::Result<Option<usize>> {
-        let Some(choice) = &self.part else {
-            return Ok(None);
-        };
-        match inputs {
-            [file] => cubeforge::io::exr_part(file, choice).map(Some),
-            _ => choice.parse().map(Some).map_err(|_| {
-                cubeforge::Error::usage(format!(
-                    "--part {choice:?}: a part's name needs one OpenEXR input"
-                ))
-            }),
-        }
-    }
 }
 
 impl InputArgs {
@@ -159,6 +137,7 @@ impl InputArgs {
             as_stored: false,
             exr_part: self.part.index(inputs)?,
             exr_level: 0,
+            hdr_encoding: self.decode.decode,
         })
     }
 }

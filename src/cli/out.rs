@@ -61,3 +61,13 @@ pub struct EdgeFixupArg {
     #[arg(long, value_enum, default_value_t = cubeforge::cube::EdgeFixup::None)]
     pub edge_fixup: cubeforge::cube::EdgeFixup,
 }
+
+/// `--hdr-encoding`, shared by the commands that write maps.
+#[derive(clap::Args, Debug)]
+pub struct HdrEncodingArg {
+    /// HDR in 8 bits: RGBM (L = rgb a 6 or 8, as cmft writes and three.js/Unity decode) or
+    /// Babylon's RGBD (L = rgb^2.2 / a, up to 255), into an 8-bit PNG or a KTX2/DDS with
+    /// --gpu-format rgba8; read back with --decode (KTX2s say so themselves).
+    #[arg(long, value_enum, value_name = "ENCODING")]
+    pub hdr_encoding: Option<cubeforge::io::HdrEncoding>,
+}

@@ -60,6 +60,8 @@ pub struct Args {
     #[command(flatten)]
     pub fixup: super::out::EdgeFixupArg,
     #[command(flatten)]
+    pub hdr8: super::out::HdrEncodingArg,
+    #[command(flatten)]
     pub input: super::InputArgs,
 }
 
@@ -105,6 +107,7 @@ pub fn job(a: Args) -> Result<PrefilterJob> {
         exr_float: a.exr.exr_float,
         exposure: a.exposure.exposure,
         edge_fixup: a.fixup.edge_fixup,
+        hdr_encoding: a.hdr8.hdr_encoding,
         read: a.input.read_options(&a.inputs)?,
         ..PrefilterJob::new(a.inputs, output)
     };

@@ -25,21 +25,20 @@ use crate::cube::CubeMap;
 use crate::error::{Error, Result};
 use crate::image::{ColorSpace, Image};
 use ::image::{codecs::png, ColorType, ExtendedColorType, ImageDecoder, ImageEncoder};
-use glam::{Vec3, Vec4};
+use glam::Vec4;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The 8 bytes every `.env` file starts with.
 pub const MAGIC: [u8; 8] = [0x86, 0x16, 0x87, 0x96, 0xF6, 0xD6, 0x96, 0x36];
 /// The largest value RGBD stores (D = 1/255).
-pub const RGBD_MAX: f32 = 255.0;
+pub const RGBD_MAX: f32 = super::hdr8::RGBD_MAX;
 /// Babylon's default `lodGenerationScale` (also what it assumes when a file has none).
 pub const DEFAULT_LOD_GENERATION_SCALE: f64 = crate::filter::BABYLON_LOD_GENERATION_SCALE;
 /// The manifest version written (Babylon reads 1 and 2).
 pub const VERSION: u32 = 2;
-/// Babylon's approximate sRGB curve (`toGammaSpace` without exact conversions).
-const GAMMA: f32 = 2.2;
 
+use super::hdr8::HdrEncoding;
 pub use crate::filter::sh_engines::SphericalPolynomial;
 
 /// One image's place in the file: bytes from the end of the manifest.
@@ -71,19 +70,12 @@ struct Manifest {
 
 /// One linear texel in RGBD, as Babylon's `toRGBD` and its 8-bit dump make it.
 fn rgbd(c: Vec4) -> [u8; 4] {
-    let c = c.truncate().max(Vec3::ZERO);
-    let max = c.max_element().max(1e-7);
-    let d = ((RGBD_MAX / max).max(1.0).floor() / 255.0).clamp(0.0, 1.0);
-    let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-    let g = |v: f32| q((v * d).powf(1.0 / GAMMA));
-    [g(c.x), g(c.y), g(c.z), q(d)]
+    HdrEncoding::Rgbd.encode(c)
 }
 
-/// One RGBD texel back to linear (an alpha of 0, which Babylon never writes, is read as 1/255).
+/// One RGBD texel back to linear.
 fn from_rgbd(t: &[u8]) -> Vec4 {
-    let a = t[3].max(1) as f32 / 255.0;
-    let l = |v: u8| (v as f32 / 255.0).powf(GAMMA) / a;
-    Vec4::new(l(t[0]), l(t[1]), l(t[2]), 1.0)
+    HdrEncoding::Rgbd.decode([t[0], t[1], t[2], t[3]])
 }
 
 /// A face as a PNG of its RGBD texels, rows flipped (Babylon's Y-inverted upload).
@@ -378,6 +370,7 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Deco
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
 
     #[test]
     fn rgbd_follows_babylon_and_round_trips() {

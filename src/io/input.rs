@@ -193,6 +193,33 @@ fn decode_bytes(
             "not a recognised image file (cubeforge reads PNG, JPEG, TGA, HDR, EXR, KTX2, DDS, KTX and Babylon env)",
         )),
     };
+    let encoding = match format {
+        FileFormat::Ktx2 => opts
+            .hdr_encoding
+            .or_else(|| super::hdr8::ktx2_encoding(bytes)),
+        _ => opts.hdr_encoding,
+    };
+    if let Some(e) = encoding {
+        // The bytes as stored, then the encoding undone.
+        let raw = ReadOptions {
+            linear: true,
+            hdr_encoding: None,
+            ..*opts
+        };
+        let (decoded, meta) = decode_format(bytes, format, path, &raw, sanitize)?;
+        return super::hdr8::decode(path, e, decoded, meta);
+    }
+    decode_format(bytes, format, path, opts, sanitize)
+}
+
+/// Decodes bytes known to be `format`.
+fn decode_format(
+    bytes: &[u8],
+    format: FileFormat,
+    path: &Path,
+    opts: &ReadOptions,
+    sanitize: bool,
+) -> Result<(Decoded, Meta)> {
     match format {
         FileFormat::Exr => exr::decode_with(bytes, path, opts, sanitize),
         FileFormat::Ktx2 => ktx2::decode(bytes, path, &opts.limits),

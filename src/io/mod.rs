@@ -10,6 +10,7 @@ pub mod dds;
 pub mod exr;
 pub mod gpu;
 mod guard;
+pub mod hdr8;
 mod input;
 pub mod ktx1;
 pub mod ktx2;
@@ -31,6 +32,7 @@ pub use atomic::{
     Staged,
 };
 pub use gpu::{finite, unorm8, GpuFormat, HALF_MAX};
+pub use hdr8::HdrEncoding;
 mod range;
 pub use input::claim;
 use input::read_with;
@@ -293,13 +295,15 @@ pub struct ReadOptions {
     pub exr_part: Option<usize>,
     /// Which stored level of a mip-mapped OpenEXR file to read (0: the full size).
     pub exr_level: usize,
+    /// An 8-bit file's RGBM or RGBD, decoded to radiance (None: plain, or what a KTX2 says).
+    pub hdr_encoding: Option<HdrEncoding>,
 }
 
 impl ReadOptions {
     /// Whether this reads a file's usual image (no EXR part or level chosen): the reads a
     /// session keeps.
     fn usual(&self) -> bool {
-        self.exr_part.is_none() && self.exr_level == 0
+        self.exr_part.is_none() && self.exr_level == 0 && self.hdr_encoding.is_none()
     }
 }
 
@@ -412,6 +416,8 @@ pub struct WriteOptions {
     /// Texel centres moved for per-face samplers (cube outputs; KTX2 records it under
     /// [`ktx2::EDGE_FIXUP_KEY`]).
     pub edge_fixup: crate::cube::EdgeFixup,
+    /// 8-bit PNG or RGBA8 KTX2/DDS texels as RGBM or RGBD: HDR in 8 bits.
+    pub hdr_encoding: Option<HdrEncoding>,
 }
 
 /// The sample type of EXR output: half floats (what tools expect, largest 65504) or 32-bit
@@ -429,6 +435,10 @@ pub enum ExrFloat {
 /// Encodes an image in the format its name asks for.
 pub fn encode_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<Vec<u8>> {
     let format = FileFormat::from_extension(path).ok_or_else(|| unknown_ext(path))?;
+    if let Some(e) = opts.hdr_encoding {
+        let plain = hdr8::check(path, format, opts)?;
+        return encode_image(path, &e.encode_image(img), &plain);
+    }
     match format {
         FileFormat::Exr => {
             exr::encode(img, opts.exr_float == ExrFloat::F32).map_err(|e| Error::file(path, e))
@@ -478,6 +488,13 @@ pub fn encode_cube_with(
     opts: &WriteOptions,
     extra: &[(&str, &[u8])],
 ) -> Result<Vec<u8>> {
+    if let Some(e) = opts.hdr_encoding {
+        let format = FileFormat::from_extension(path).ok_or_else(|| unknown_ext(path))?;
+        let plain = hdr8::check(path, format, opts)?;
+        let mut kv = extra.to_vec();
+        kv.push((hdr8::KTX2_KEY, e.name().as_bytes()));
+        return encode_cube_with(path, &hdr8::encode_cube(cube, e), &plain, &kv);
+    }
     match FileFormat::from_extension(path) {
         Some(FileFormat::Ktx2) => {
             let fixup = opts.edge_fixup.name().as_bytes();

@@ -80,8 +80,9 @@ pub fn clamp_warning_with<'a>(
 ) -> Option<String> {
     use crate::error::param;
     let gpu = write.gpu_format;
-    let max = match (format, write.exr_float) {
-        (FileFormat::Exr, ExrFloat::F32) => f32::MAX,
+    let max = match (format, write.exr_float, write.hdr_encoding) {
+        (_, _, Some(e)) => e.largest(),
+        (FileFormat::Exr, ExrFloat::F32, _) => f32::MAX,
         _ => largest_value(format, gpu)?,
     };
     let unsigned = format.is_container() && gpu.is_unsigned_float();
@@ -112,6 +113,15 @@ pub fn clamp_warning_with<'a>(
         )
     });
     let wider = match format {
+        _ if write.hdr_encoding.is_some() => Some(format!(
+            "{}a float format ({} rgba16f, EXR) keeps them all",
+            if max < babylon_env::RGBD_MAX {
+                "rgbd keeps up to 255; "
+            } else {
+                ""
+            },
+            param("gpu_format")
+        )),
         FileFormat::Exr if max == HALF_MAX => {
             Some(format!("{} f32 keeps them", param("exr_float")))
         }
@@ -126,7 +136,13 @@ pub fn clamp_warning_with<'a>(
     } else {
         format!(": {}", hint.join("; "))
     };
-    Some(if unsigned {
+    Some(if let Some(e) = write.hdr_encoding {
+        format!(
+            "{}: {n} values beyond {max} (the largest {}) written as that value{hint}",
+            crate::error::shown(path),
+            e.name().to_uppercase()
+        )
+    } else if unsigned {
         format!(
             "{}: {n} values negative or beyond {max} (the range of {}) written as 0 or that value{hint}",
             crate::error::shown(path),

@@ -65,6 +65,8 @@ pub struct ConvertJob {
     pub ultrahdr: bool,
     /// Texel centres moved for per-face (non-seamless) samplers: cube outputs, every level.
     pub edge_fixup: crate::cube::EdgeFixup,
+    /// 8-bit outputs as RGBM or RGBD (PNG, or KTX2/DDS of rgba8): HDR kept in 8 bits.
+    pub hdr_encoding: Option<crate::io::HdrEncoding>,
     /// Limits and colour handling of the inputs (`linear` applies to the output too).
     pub read: ReadOptions,
 }
@@ -89,6 +91,7 @@ impl ConvertJob {
             tone: (0.0, Tonemap::None),
             ultrahdr: false,
             edge_fixup: crate::cube::EdgeFixup::None,
+            hdr_encoding: None,
             read: ReadOptions::default(),
         }
     }
@@ -288,6 +291,7 @@ impl Job for ConvertJob {
             exr_float: self.exr_float,
             gain_map: self.ultrahdr.then_some(self.tone.1),
             edge_fixup: self.edge_fixup,
+            hdr_encoding: self.hdr_encoding,
         };
         target.levels = self.levels;
         let (tone, tone_warning) = output::tone_for(&target, self.tone.0, self.tone.1);

@@ -45,6 +45,8 @@ pub struct IrradianceJob {
     pub sh_window: ShWindow,
     /// Texel centres moved for per-face (non-seamless) samplers.
     pub edge_fixup: crate::cube::EdgeFixup,
+    /// 8-bit outputs as RGBM or RGBD (PNG, or KTX2/DDS of rgba8): HDR kept in 8 bits.
+    pub hdr_encoding: Option<crate::io::HdrEncoding>,
     /// File type of face images.
     pub face_format: FileFormat,
     /// Texel format of KTX2 and DDS output.
@@ -73,6 +75,7 @@ impl IrradianceJob {
             sh_bands: 3,
             sh_window: ShWindow::None,
             edge_fixup: crate::cube::EdgeFixup::None,
+            hdr_encoding: None,
             face_format: FileFormat::Exr,
             gpu_format: GpuFormat::Rgba16f,
             zstd: None,
@@ -94,6 +97,7 @@ impl IrradianceJob {
             zstd: self.zstd,
             exr_float: self.exr_float,
             edge_fixup: self.edge_fixup,
+            hdr_encoding: self.hdr_encoding,
             ..WriteOptions::default()
         };
         target.levels = Some(1);

@@ -62,6 +62,8 @@ pub struct PrefilterJob {
     pub exposure: f32,
     /// Texel centres moved for per-face (non-seamless) samplers, every level on its own grid.
     pub edge_fixup: crate::cube::EdgeFixup,
+    /// 8-bit outputs as RGBM or RGBD (PNG, or KTX2/DDS of rgba8): HDR kept in 8 bits.
+    pub hdr_encoding: Option<crate::io::HdrEncoding>,
     /// Limits and colour handling of the inputs.
     pub read: ReadOptions,
 }
@@ -93,6 +95,7 @@ impl PrefilterJob {
             exr_float: ExrFloat::Half,
             exposure: 0.0,
             edge_fixup: crate::cube::EdgeFixup::None,
+            hdr_encoding: None,
             read: ReadOptions::default(),
         }
     }
@@ -230,6 +233,7 @@ impl Job for PrefilterJob {
             zstd: self.zstd.filter(|_| container == Some(FileFormat::Ktx2)),
             exr_float: self.exr_float,
             edge_fixup: self.edge_fixup,
+            hdr_encoding: self.hdr_encoding,
             ..WriteOptions::default()
         };
         let encoded = chain::encode(

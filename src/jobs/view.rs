@@ -80,6 +80,7 @@ impl ViewJob {
             as_stored: false,
             exr_part: self.exr_part,
             exr_level: 0,
+            hdr_encoding: None,
         }
     }
 }

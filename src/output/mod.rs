@@ -121,7 +121,8 @@ impl Target {
             Output::Image(img) => vec![img],
         };
         let (exposure, curve) = self.tone.unwrap_or((0.0, Tonemap::None));
-        let eight_bit = self.is_8bit();
+        // RGBM and RGBD hold radiance: no tone curve, no clipping at 1.
+        let eight_bit = self.is_8bit() && self.write.hdr_encoding.is_none();
         let clipped = if eight_bit {
             let (n, top) = crate::tonemap::clipped(images.iter().map(|i| &**i), curve, exposure);
             (n > 0).then(|| clip_warning(&self.path, n, top, exposure, true))

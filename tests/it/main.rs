@@ -27,6 +27,7 @@ mod first_hour;
 mod flux;
 mod formats;
 mod gpu_formats;
+mod hdr8;
 mod help_examples;
 mod hostile_exr;
 mod ibl;

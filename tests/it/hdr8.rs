@@ -1,0 +1,230 @@
+//! RGBM (range 6 and 8) and RGBD in 8-bit PNGs and RGBA8 KTX2/DDS: written by
+//! `--hdr-encoding`, their bytes decoded here by the published formulas, and read back by
+//! `--decode` (a KTX2 by its metadata alone).
+
+use crate::common::{read_image, run, stderr};
+use cubeforge::image::Image;
+use cubeforge::io::{self, Decoded, ReadOptions};
+use glam::Vec4;
+use std::path::Path;
+
+/// A panorama with radiance from 0.001 to 200: the demo sky scaled, a sun added.
+fn source(dir: &Path) -> std::path::PathBuf {
+    let mut img = read_image(Path::new("fixtures/sky.exr"));
+    let w = img.width;
+    for (i, p) in img.pixels.iter_mut().enumerate() {
+        let (x, y) = (i % w, i / w);
+        *p = (p.truncate() * 1.5).extend(1.0);
+        if (x as i32 - 40).abs() < 3 && (y as i32 - 20).abs() < 3 {
+            *p = Vec4::new(200.0, 180.0, 150.0, 1.0);
+        }
+    }
+    let path = dir.join("src.exr");
+    let bytes = io::encode_image(
+        &path,
+        &img,
+        &io::WriteOptions {
+            exr_float: io::ExrFloat::F32,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+/// The formulas as published: three.js's RGBMToLinear (rgb * a * range) and Babylon's
+/// fromRGBD (pow(rgb, 2.2) / a), over bytes read by the `image` crate.
+fn published(path: &Path, encoding: &str) -> Image {
+    let png = image::open(path).unwrap().to_rgba8();
+    let (w, h) = png.dimensions();
+    let mut out = Image::new(w as usize, h as usize);
+    for (o, p) in out.pixels.iter_mut().zip(png.pixels()) {
+        let [r, g, b, a] = p.0.map(|v| v as f32 / 255.0);
+        *o = match encoding {
+            "rgbm6" => Vec4::new(r, g, b, 0.0) * a * 6.0,
+            "rgbm8" => Vec4::new(r, g, b, 0.0) * a * 8.0,
+            _ => Vec4::new(r.powf(2.2), g.powf(2.2), b.powf(2.2), 0.0) / a.max(1.0 / 255.0),
+        }
+        .truncate()
+        .extend(1.0);
+    }
+    out
+}
+
+fn read_as(path: &Path, decode: Option<io::HdrEncoding>) -> Decoded {
+    let opts = ReadOptions {
+        hdr_encoding: decode,
+        ..Default::default()
+    };
+    io::read(path, &opts).unwrap().0
+}
+
+/// Largest error relative to max(value, floor), over texels within the encoding's range.
+fn rel_error(got: &Image, want: &Image, range: f32, floor: f32) -> f32 {
+    let mut worst = 0.0f32;
+    for (g, w) in got.pixels.iter().zip(&want.pixels) {
+        let top = w.truncate().max_element();
+        if top > range {
+            continue;
+        }
+        let e = (g - w).truncate().abs().max_element() / top.max(floor);
+        worst = worst.max(e);
+    }
+    worst
+}
+
+#[test]
+fn pngs_decode_by_the_published_formulas_and_read_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = source(dir.path());
+    let float = dir.path().join("ref.exr");
+    let r = run([
+        "convert",
+        src.to_str().unwrap(),
+        "-o",
+        float.to_str().unwrap(),
+        "--to",
+        "equirect",
+        "--size",
+        "64",
+    ]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let reference = read_image(&float);
+    for (encoding, range, bound) in [
+        ("rgbm6", 6.0, 0.03),
+        ("rgbm8", 8.0, 0.03),
+        ("rgbd", 255.0, 0.03),
+    ] {
+        let png = dir.path().join(format!("{encoding}.png"));
+        let r = run([
+            "convert",
+            src.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+            "--to",
+            "equirect",
+            "--size",
+            "64",
+            "--hdr-encoding",
+            encoding,
+        ]);
+        assert!(r.status.success(), "{}", stderr(&r));
+        if range < 200.0 {
+            // The sun is beyond RGBM's range: counted, with the way to keep it.
+            assert!(
+                stderr(&r).contains(&format!("beyond {range}")),
+                "{}",
+                stderr(&r)
+            );
+        }
+        let by_formula = published(&png, encoding);
+        let e = io::HdrEncoding::ALL
+            .into_iter()
+            .find(|e| e.name() == encoding)
+            .unwrap();
+        let Decoded::Image(ours) = read_as(&png, Some(e)) else {
+            panic!("an image")
+        };
+        // cubeforge's decode is the published one.
+        let same = rel_error(&ours, &by_formula, f32::MAX, 1e-3);
+        assert!(same < 1e-5, "{encoding}: decode differs by {same}");
+        // And the bytes hold the radiance: within the 8-bit grid of the largest channel
+        // (relative to values of at least 1/16; darker ones hold less precision).
+        let err = rel_error(&ours, &reference, range, 1.0 / 16.0);
+        eprintln!(
+            "{encoding}: largest error {:.2}% within its range",
+            100.0 * err
+        );
+        assert!(err < bound, "{encoding}: {err}");
+    }
+    // The sun comes back from RGBD (up to 255), not from RGBM (clamped to 6 or 8).
+    let Decoded::Image(d) = read_as(&dir.path().join("rgbd.png"), Some(io::HdrEncoding::Rgbd))
+    else {
+        panic!("an image")
+    };
+    let top = d.pixels.iter().map(|p| p.x).fold(0.0, f32::max);
+    assert!(top > 150.0, "RGBD keeps the sun: {top}");
+}
+
+#[test]
+fn rgba8_containers_carry_their_encoding() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = source(dir.path());
+    for (name, encoding) in [("m.ktx2", "rgbm6"), ("d.ktx2", "rgbd"), ("m.dds", "rgbm8")] {
+        let out = dir.path().join(name);
+        let r = run([
+            "convert",
+            src.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--size",
+            "32",
+            "--hdr-encoding",
+            encoding,
+            "--gpu-format",
+            "rgba8",
+        ]);
+        assert!(r.status.success(), "{name}: {}", stderr(&r));
+        let e = io::HdrEncoding::ALL
+            .into_iter()
+            .find(|e| e.name() == encoding)
+            .unwrap();
+        // A KTX2 says what it holds; a DDS has no room and needs --decode.
+        let decode = name.ends_with(".dds").then_some(e);
+        let Decoded::Cube(cube) = read_as(&out, decode) else {
+            panic!("a cube")
+        };
+        let top = cube.levels[0]
+            .iter()
+            .flat_map(|f| f.pixels.iter())
+            .map(|p| p.truncate().max_element())
+            .fold(0.0, f32::max);
+        assert!(
+            top > 1.5 && top <= e.largest() + 1e-3,
+            "{name}: brightest {top}"
+        );
+        assert!(cube.levels.len() > 1, "{name}: its mips");
+        let info = run(["info", out.to_str().unwrap()]);
+        let text = String::from_utf8_lossy(&info.stdout).to_string();
+        if decode.is_none() {
+            assert!(
+                text.contains(&format!("as {}", encoding.to_uppercase())),
+                "{text}"
+            );
+        }
+    }
+}
+
+#[test]
+fn files_that_cannot_hold_an_encoding_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = source(dir.path());
+    for (out, extra) in [
+        ("a.exr", None),
+        ("b.ktx2", None),
+        ("c.png", Some("--png16")),
+    ] {
+        let path = dir.path().join(out);
+        let mut args = vec![
+            "convert",
+            src.to_str().unwrap(),
+            "-o",
+            path.to_str().unwrap(),
+        ];
+        args.extend(["--size", "16", "--hdr-encoding", "rgbm6"]);
+        args.extend(extra);
+        let r = run(&args);
+        assert!(!r.status.success(), "{out}");
+        assert!(
+            stderr(&r).contains("--hdr-encoding rgbm6"),
+            "{}",
+            stderr(&r)
+        );
+        assert!(!path.exists(), "{out}: no partial output");
+    }
+    // Decoding a float file is refused in one line.
+    let r = run(["info", src.to_str().unwrap(), "--decode", "rgbd"]);
+    assert!(!r.status.success());
+    assert!(stderr(&r).contains("--decode rgbd"), "{}", stderr(&r));
+}
