@@ -39,6 +39,14 @@ pub enum EdgeFixup {
 }
 
 impl EdgeFixup {
+    /// The fixup a KTX2's metadata value names (None: unknown).
+    pub fn from_name(name: &[u8]) -> Option<EdgeFixup> {
+        let name = name.strip_suffix(&[0]).unwrap_or(name);
+        [EdgeFixup::Warp, EdgeFixup::Stretch]
+            .into_iter()
+            .find(|m| m.name().as_bytes() == name)
+    }
+
     /// The name on the command line and in files' metadata.
     pub fn name(self) -> &'static str {
         match self {
@@ -124,6 +132,43 @@ pub fn apply(faces: &Faces, mode: EdgeFixup) -> Faces {
     })
 }
 
+/// `faces` written with `mode` brought back to the usual texel centres: each texel is read,
+/// per face and clamped (exactly how the fixup meant the faces to be sampled), where `mode`
+/// stored its direction ([`EdgeFixup::lookup`]). What reading such a file does.
+pub fn undo(faces: &Faces, mode: EdgeFixup) -> Faces {
+    use rayon::prelude::*;
+    let n = faces[0].width;
+    if mode == EdgeFixup::None || n < 2 {
+        return faces.clone();
+    }
+    // Each column's (and row's) place in the stored grid, and its bilinear weights.
+    let taps: Vec<(usize, usize, f32)> = (0..n)
+        .map(|i| {
+            let t = (2 * i + 1) as f64 / n as f64 - 1.0;
+            let g = ((mode.lookup(t, n) + 1.0) * 0.5 * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
+            let i0 = g.floor() as usize;
+            (i0, (i0 + 1).min(n - 1), (g - i0 as f64) as f32)
+        })
+        .collect();
+    std::array::from_fn(|face| {
+        let src = &faces[face];
+        let mut img = Image::new(n, n);
+        img.pixels
+            .par_chunks_mut(n)
+            .enumerate()
+            .for_each(|(y, row)| {
+                let (y0, y1, fy) = taps[y];
+                for (x, texel) in row.iter_mut().enumerate() {
+                    let (x0, x1, fx) = taps[x];
+                    let top = src.get(x0, y0).lerp(src.get(x1, y0), fx);
+                    let bottom = src.get(x0, y1).lerp(src.get(x1, y1), fx);
+                    *texel = top.lerp(bottom, fy);
+                }
+            });
+        img
+    })
+}
+
 /// Every level of `cube` through [`apply`], each on its own grid (level k's edge is its n);
 /// `None` hands the cube back untouched, no copy made.
 pub fn apply_cube(cube: CubeMap, mode: EdgeFixup) -> CubeMap {
@@ -153,6 +198,31 @@ mod tests {
                     assert!((mode.coordinate(t, n) - s).abs() < 1e-6, "{mode:?} {n} {s}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn undo_brings_a_fixed_map_back() {
+        use glam::Vec4;
+        let n = 32;
+        let f = |d: glam::Vec3| {
+            Vec4::new(
+                1.0 + 0.5 * (2.0 * d.x).sin() + 0.3 * d.y * d.z,
+                1.0,
+                1.0,
+                1.0,
+            )
+        };
+        let plain = CubeMap::from_fn(n, f).levels.remove(0);
+        for mode in [EdgeFixup::Warp, EdgeFixup::Stretch] {
+            let back = undo(&apply(&plain, mode), mode);
+            let mut worst = 0.0f32;
+            for (b, p) in back.iter().zip(&plain) {
+                for (x, y) in b.pixels.iter().zip(&p.pixels) {
+                    worst = worst.max((*x - *y).abs().max_element());
+                }
+            }
+            assert!(worst < 0.01, "{mode:?}: {worst}");
         }
     }
 }
