@@ -60,6 +60,7 @@ pub fn job(a: Args) -> Result<ViewJob> {
         target: a.target,
         limits: a.input_args.limits(),
         exr_part: a.input_args.part.index(std::slice::from_ref(&a.input))?,
+        hdr_encoding: a.input_args.decode.decode,
         ..ViewJob::new(a.input, a.output)
     })
 }

@@ -44,6 +44,8 @@ pub struct ViewJob {
     pub limits: Limits,
     /// Which part of a multi-part OpenEXR input to show (None: the first).
     pub exr_part: Option<usize>,
+    /// An 8-bit input's RGBM or RGBD (None: plain, or what a KTX2 says).
+    pub hdr_encoding: Option<crate::io::HdrEncoding>,
 }
 
 impl ViewJob {
@@ -60,6 +62,7 @@ impl ViewJob {
             target: None,
             limits: Limits::default(),
             exr_part: None,
+            hdr_encoding: None,
         }
     }
 
@@ -80,7 +83,7 @@ impl ViewJob {
             as_stored: false,
             exr_part: self.exr_part,
             exr_level: 0,
-            hdr_encoding: None,
+            hdr_encoding: self.hdr_encoding,
         }
     }
 }
