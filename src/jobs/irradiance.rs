@@ -111,7 +111,10 @@ impl IrradianceJob {
     fn plan_bytes(&self, input_face: Option<usize>, input: u64) -> u64 {
         let base = input_face.unwrap_or(BASE).min(BASE) as u64;
         let face = |n: u64| 6 * 16 * n * n;
-        (2 * face(base) + 3 * face(self.size as u64)).saturating_add(input)
+        // An edge fixup or an 8-bit encoding writes from a moved or encoded copy.
+        let copy = self.edge_fixup != crate::cube::EdgeFixup::None || self.hdr_encoding.is_some();
+        let maps = if copy { 5 } else { 3 };
+        (2 * face(base) + maps * face(self.size as u64)).saturating_add(input)
     }
 }
 

@@ -106,14 +106,21 @@ impl PrefilterJob {
 
     /// The base faces, the chain (4/3 of them), a bordered sampler copy and the encoding,
     /// beside the input's texels and pyramid (`input` bytes).
-    fn plan_bytes(size: usize, input: u64) -> u64 {
-        (6 * 16 * 4 * (size as u64).pow(2)).saturating_add(input)
+    fn plan_bytes(&self, size: usize, input: u64) -> u64 {
+        // An edge fixup or an 8-bit encoding writes from a moved or encoded copy of the chain.
+        let copies =
+            if self.edge_fixup != crate::cube::EdgeFixup::None || self.hdr_encoding.is_some() {
+                6
+            } else {
+                4
+            };
+        (6 * 16 * copies * (size as u64).pow(2)).saturating_add(input)
     }
 
     fn check_memory(&self, size: usize, input: u64) -> Result<()> {
         self.read.limits.check_memory(
             format_args!("{} {size}", param("size")),
-            Self::plan_bytes(size, input),
+            self.plan_bytes(size, input),
         )
     }
 
@@ -182,7 +189,7 @@ impl Job for PrefilterJob {
     fn memory_estimate(&self) -> Result<u64> {
         let plan = chain::plan(&self.inputs, self.from, &self.read)?;
         Ok(match self.size.or(plan.face_size) {
-            Some(size) => Self::plan_bytes(size, plan.working_bytes()),
+            Some(size) => self.plan_bytes(size, plan.working_bytes()),
             None => plan.working_bytes(),
         })
     }
