@@ -141,13 +141,11 @@ pub fn undo(faces: &Faces, mode: EdgeFixup) -> Faces {
     if mode == EdgeFixup::None || n < 2 {
         return faces.clone();
     }
-    // Each column's (and row's) place in the stored grid, and its bilinear weights.
-    let taps: Vec<(usize, usize, f32)> = (0..n)
+    // Each column's (and row's) place in the stored grid, in pixel units (centres at i + 0.5).
+    let at: Vec<f32> = (0..n)
         .map(|i| {
             let t = (2 * i + 1) as f64 / n as f64 - 1.0;
-            let g = ((mode.lookup(t, n) + 1.0) * 0.5 * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
-            let i0 = g.floor() as usize;
-            (i0, (i0 + 1).min(n - 1), (g - i0 as f64) as f32)
+            ((mode.lookup(t, n) + 1.0) * 0.5 * n as f64) as f32
         })
         .collect();
     std::array::from_fn(|face| {
@@ -157,12 +155,9 @@ pub fn undo(faces: &Faces, mode: EdgeFixup) -> Faces {
             .par_chunks_mut(n)
             .enumerate()
             .for_each(|(y, row)| {
-                let (y0, y1, fy) = taps[y];
                 for (x, texel) in row.iter_mut().enumerate() {
-                    let (x0, x1, fx) = taps[x];
-                    let top = src.get(x0, y0).lerp(src.get(x1, y0), fx);
-                    let bottom = src.get(x0, y1).lerp(src.get(x1, y1), fx);
-                    *texel = top.lerp(bottom, fy);
+                    // The image's own bilinear lookup clamps at the face's edges.
+                    *texel = src.bilinear(at[x], at[y], false);
                 }
             });
         img
