@@ -54,7 +54,9 @@ pub struct Args {
     pub ultrahdr: bool,
     /// Texel format of KTX2 and DDS output (default rgba16f; bc6h and bc7 are block
     /// compressed, rgb9e5 and rg11b10 packed HDR in 4 bytes; astc-hdr-4x4 and astc-hdr-6x6,
-    /// KTX2 only, are HDR blocks for phones, in builds with the cargo feature astc).
+    /// KTX2 only, are HDR blocks for phones, in builds with the cargo feature astc;
+    /// uastc-hdr-4x4, KTX2 only, is one file for every device, transcoded to BC6H where ASTC
+    /// HDR is missing, in builds with the feature uastc).
     #[arg(long, value_enum)]
     pub gpu_format: Option<GpuFormat>,
     #[command(flatten)]

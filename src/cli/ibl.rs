@@ -33,7 +33,8 @@ pub struct Args {
     #[arg(value_parser = clap::value_parser!(u32).range(1..=65536), long)]
     pub samples: Option<u32>,
     /// Texel format of the KTX2 files (default: the target's; astc-hdr-4x4 for phones with
-    /// bevy, gltf, generic and godot, whose panorama it writes as a 2D KTX2).
+    /// bevy, gltf, generic and godot, whose panorama it writes as a 2D KTX2; uastc-hdr-4x4
+    /// adds a 2D KTX2 panorama to three's files, for its KTX2Loader).
     #[arg(long, value_enum)]
     pub gpu_format: Option<GpuFormat>,
     #[command(flatten)]

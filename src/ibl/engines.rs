@@ -9,7 +9,6 @@ use crate::filter::ChainOptions;
 use crate::image::Image;
 use crate::io::{self, FileFormat, GpuFormat};
 use crate::resample::Orientation;
-use crate::tonemap::Tonemap;
 use std::path::{Path, PathBuf};
 
 /// Where and under which name an engine's files go.
@@ -29,7 +28,7 @@ pub struct Context<'a> {
 }
 
 impl Context<'_> {
-    fn path(&self, suffix: &str) -> PathBuf {
+    pub(super) fn path(&self, suffix: &str) -> PathBuf {
         self.out.join(format!("{}{suffix}", self.name))
     }
 
@@ -124,139 +123,6 @@ pub fn defaults(engine: Engine) -> Defaults {
     }
 }
 
-/// Engines that import a panorama and prefilter it themselves.
-pub fn filters_itself(engine: Engine) -> bool {
-    matches!(
-        engine,
-        Engine::Godot | Engine::Unity | Engine::Unreal | Engine::Three
-    )
-}
-
-/// The panorama an engine that filters for itself imports, with the import settings to pick.
-pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<Delivery> {
-    use crate::layout::Kind;
-    if engine == Engine::Three {
-        return three(ctx, size);
-    }
-    let (ext, snippet) = match engine {
-        Engine::Godot => (
-            "exr",
-            "Godot 4: WorldEnvironment > Environment > Sky > PanoramaSkyMaterial, panorama = {f}\n\
-             (Sky: Radiance Size 256 or more, Process Mode Automatic or High Quality Incremental).\n\
-             The panorama's centre faces world +Z (behind the default camera, which looks along -Z).",
-        ),
-        Engine::Unity => (
-            "exr",
-            "Unity: import {f} with Texture Shape = Cube, Mapping = Latitude-Longitude Layout\n\
-             (Cylindrical), Convolution Type = Specular (Glossy Reflection); use it as the skybox\n\
-             (Skybox/Cubemap material) or a Reflection Probe's custom cubemap.",
-        ),
-        _ => (
-            "hdr",
-            "Unreal: import {f}: a long-lat .hdr becomes a TextureCube; set it as the Sky Light's\n\
-             Cubemap (Source Type: SLS Specified Cubemap) and in an HDRI Backdrop. The panorama's\n\
-             centre faces world -Y.",
-        ),
-    };
-    let face = size
-        .unwrap_or_else(|| ctx.loaded.face_size())
-        .clamp(1, 8192);
-    let img = crate::convert::to_image(ctx.loaded, Kind::Equirect, face, &ctx.resampler());
-    if let (Engine::Godot, Some(format)) = (engine, ctx.opts.gpu_format) {
-        return godot_ktx2(ctx, img, format);
-    }
-    let path = ctx.path(&format!(".{ext}"));
-    let write = io::WriteOptions {
-        exr_float: ctx.opts.exr_float,
-        ..Default::default()
-    };
-    let bytes = io::encode_image(&path, &img, &write)?;
-    let clamped = io::clamp_warning_with(
-        &path,
-        FileFormat::from_ext_str(ext).unwrap_or(FileFormat::Exr),
-        &write,
-        [&img],
-    );
-    let snippet = snippet.replace("{f}", &file_name(&path));
-    Ok(Delivery::new(vec![(path, bytes)], snippet, clamped))
-}
-
-/// Godot with a GPU format (mobile builds: ASTC HDR 4x4): the panorama as a 2D KTX2 texture
-/// with its solid-angle-weighted mips, in `format`, which Godot's KTX loader uploads as stored.
-fn godot_ktx2(ctx: &Context, img: Image, format: GpuFormat) -> Result<Delivery> {
-    let path = ctx.path(".ktx2");
-    let mut levels = vec![img];
-    while let Some(last) = levels.last().filter(|l| l.height > 1) {
-        let weights = crate::layout::equirect::row_weights(last.width, last.height);
-        let next = last.downsample_2x_rows(&weights, glam::Vec4::INFINITY);
-        levels.push(next);
-    }
-    let bytes = io::ktx2::encode_2d_with(&levels, format, ctx.opts.zstd)
-        .map_err(|e| crate::Error::file(&path, e))?;
-    let write = io::WriteOptions {
-        gpu_format: format,
-        ..Default::default()
-    };
-    let clamped = io::clamp_warning_with(&path, FileFormat::Ktx2, &write, [&levels[0]]);
-    let psnr = format
-        .is_lossy()
-        .then(|| io::container_psnr(&bytes, format, &[&levels[0]]))
-        .flatten();
-    let snippet = format!(
-        "Godot 4: WorldEnvironment > Environment > Sky > PanoramaSkyMaterial, panorama = {f}\n\
-         ({levels} levels of {name}, read by Godot's KTX loader and uploaded as stored; a device \
-         without the format cannot show it).\n\
-         The panorama's centre faces world +Z (behind the default camera, which looks along -Z).",
-        f = file_name(&path),
-        levels = levels.len(),
-        name = format.name(),
-    );
-    let mut delivery = Delivery::new(vec![(path, bytes)], snippet, clamped);
-    delivery.psnr = psnr;
-    Ok(delivery)
-}
-
-/// three.js: `NAME.jpg`, UltraHDR with its gain map fitted to `UltraHDRLoader`'s arithmetic,
-/// and `NAME.hdr` for older three.js; 4 faces wide, the face a power of two (256 to 4096, from
-/// the input's or `size`), which PMREM takes whole.
-fn three(ctx: &Context, size: Option<usize>) -> Result<Delivery> {
-    use crate::io::ultrahdr::{self, Reader};
-    let face = size
-        .unwrap_or_else(|| ctx.loaded.face_size().next_power_of_two())
-        .clamp(256, 4096);
-    let face = 1 << face.ilog2();
-    let img = crate::convert::to_image(
-        ctx.loaded,
-        crate::layout::Kind::Equirect,
-        face,
-        &ctx.resampler(),
-    );
-    let (jpg, hdr) = (ctx.path(".jpg"), ctx.path(".hdr"));
-    let (bytes, stats) = ultrahdr::encode(&img, Tonemap::Aces, Reader::Three, true)
-        .map_err(|e| crate::error::Error::file(&jpg, e))?;
-    let fallback = io::encode_image(&hdr, &img, &io::WriteOptions::default())?;
-    let snippet = format!(
-        "{}
-three.js (r17x and later): the panorama lights and backs the scene; PMREM filters it.
-         import {{ UltraHDRLoader }} from 'three/addons/loaders/UltraHDRLoader.js';
-         new UltraHDRLoader().load('{j}', (texture) => {{
-           texture.mapping = THREE.EquirectangularReflectionMapping;
-           scene.environment = texture;
-           scene.background = texture;
-         }});
-         Without UltraHDR: HDRLoader (RGBELoader before r179) with '{h}', the same lines.\n\
-         The panorama's centre faces world +Z (behind the default camera, which looks along -Z).",
-        stats.summary(),
-        j = file_name(&jpg),
-        h = file_name(&hdr),
-    );
-    Ok(Delivery::new(
-        vec![(jpg, bytes), (hdr, fallback)],
-        snippet,
-        None,
-    ))
-}
-
 /// Packs the computed lighting as `engine` loads it.
 pub fn pack(engine: Engine, l: &Lighting, ctx: &Context) -> Result<Delivery> {
     let mut delivery = match engine {
@@ -265,8 +131,12 @@ pub fn pack(engine: Engine, l: &Lighting, ctx: &Context) -> Result<Delivery> {
         Engine::Filament => filament(l, ctx)?,
         Engine::Babylon => babylon(l, ctx)?,
         Engine::Generic => generic(l, ctx)?,
+        // Their panorama is all they take (`super::panorama`), made before any lighting.
         Engine::Godot | Engine::Unity | Engine::Unreal | Engine::Three => {
-            return panorama(engine, ctx, Some(l.specular.size()))
+            return Err(crate::Error::usage(format!(
+                "{} filters its panorama itself: there is no lighting to pack",
+                engine.name()
+            )))
         }
     };
     // What a lossy format (BC6H) kept of the mirror level, as convert -v reports it.
@@ -587,7 +457,7 @@ fn generic(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     ))
 }
 
-fn file_name(p: &Path) -> String {
+pub(super) fn file_name(p: &Path) -> String {
     p.file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default()

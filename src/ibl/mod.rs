@@ -9,6 +9,7 @@
 #![warn(missing_docs)]
 
 pub mod engines;
+pub mod panorama;
 
 use crate::convert::{self, Loaded};
 use crate::cube::CubeMap;
@@ -214,8 +215,8 @@ pub fn deliver(
         loaded,
         orientation: combine(opts.yaw, d.orientation),
     };
-    let delivery = if engines::filters_itself(engine) {
-        engines::panorama(engine, &ctx, opts.specular_size)?
+    let delivery = if panorama::filters_itself(engine) {
+        panorama::panorama(engine, &ctx, opts.specular_size)?
     } else {
         let lighting = compute(
             loaded,

@@ -48,7 +48,7 @@ fn dxgi_format(format: GpuFormat) -> Option<DxgiFormat> {
         GpuFormat::Bc7Srgb => DxgiFormat::BC7_UNorm_sRGB,
         GpuFormat::Rgb9e5 => DxgiFormat::R9G9B9E5_SharedExp,
         GpuFormat::Rg11b10 => DxgiFormat::R11G11B10_Float,
-        GpuFormat::AstcHdr4x4 | GpuFormat::AstcHdr6x6 => return None,
+        GpuFormat::AstcHdr4x4 | GpuFormat::AstcHdr6x6 | GpuFormat::UastcHdr4x4 => return None,
     })
 }
 

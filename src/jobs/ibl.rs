@@ -74,7 +74,7 @@ impl IblJob {
             [one] => one.display().to_string(),
             files => format!("{} files", files.len()),
         };
-        let made = if ibl::engines::filters_itself(self.engine) {
+        let made = if ibl::panorama::filters_itself(self.engine) {
             "a panorama the engine prefilters itself".to_owned()
         } else {
             let (size, min, diffuse) = ibl::sizes(self.engine, options);
@@ -118,7 +118,15 @@ impl IblJob {
         let flag = param("gpu_format");
         let target = self.engine.name();
         match self.engine {
-            Engine::Unity | Engine::Unreal | Engine::Three => Err(Error::usage(format!(
+            // three.js's KTX2Loader transcodes UASTC HDR to what the device has.
+            Engine::Three if format == GpuFormat::UastcHdr4x4 => {
+                format.check_built().map_err(Error::usage)
+            }
+            Engine::Three => Err(Error::usage(format!(
+                "{flag} {}: three.js's KTX2Loader is given UASTC HDR (uastc-hdr-4x4), which it transcodes for each device",
+                format.name()
+            ))),
+            Engine::Unity | Engine::Unreal => Err(Error::usage(format!(
                 "{flag}: {target} is given a panorama that it filters itself, no KTX2: leave out {flag}"
             ))),
             Engine::Babylon => Err(Error::usage(format!(
@@ -128,10 +136,13 @@ impl IblJob {
                 .map(|_| ())
                 .map_err(Error::usage),
             // Godot's images know ASTC HDR in 4x4 and 8x8 blocks only.
-            Engine::Godot if format == GpuFormat::AstcHdr6x6 => Err(Error::usage(format!(
-                "{flag} {}: Godot reads ASTC HDR in 4x4 blocks (astc-hdr-4x4)",
-                format.name()
-            ))),
+            // UASTC HDR is written for transcoders, and Godot's KTX loader is not one.
+            Engine::Godot if matches!(format, GpuFormat::AstcHdr6x6 | GpuFormat::UastcHdr4x4) => {
+                Err(Error::usage(format!(
+                    "{flag} {}: Godot reads ASTC HDR in 4x4 blocks (astc-hdr-4x4)",
+                    format.name()
+                )))
+            }
             _ => format.check_built().map_err(Error::usage),
         }
     }
@@ -185,7 +196,7 @@ impl Job for IblJob {
         let face = loaded.face_size();
         let mut options = self.options.clone();
         let mut notes = Vec::new();
-        if !ibl::engines::filters_itself(self.engine) {
+        if !ibl::panorama::filters_itself(self.engine) {
             let size = self.specular_size(Some(face));
             let default = ibl::engines::defaults(self.engine).specular_size;
             if self.options.specular_size.is_none() && size < default {

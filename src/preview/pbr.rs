@@ -276,7 +276,7 @@ fn list(r: &[f32]) -> String {
 /// memory, with `target`'s mapping or the linear one ([`PbrSetup::chain`]).
 pub fn prepare(env: &LoadedEnv, name: &Path, target: Option<Engine>) -> Result<PbrSetup> {
     let engine_mapping = match target {
-        Some(e) if ibl::engines::filters_itself(e) => {
+        Some(e) if ibl::panorama::filters_itself(e) => {
             return Err(Error::usage(format!(
                 "{} {}: that engine prefilters the panorama itself, with a mapping of its own; use bevy, gltf, babylon, filament or generic",
                 crate::error::param("target"),

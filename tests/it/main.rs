@@ -45,5 +45,6 @@ mod real_images;
 mod rgbe;
 mod sh_bands;
 mod simd;
+mod uastc;
 mod ultrahdr;
 mod view;

@@ -10,7 +10,8 @@
 //! `../shared`; lines that read `../shared/fixtures/real` are skipped without it. Each file runs
 //! in a fresh folder of its own. Each example must exit 0, and no example may write an output
 //! (`-o`, `--sh`) that an earlier one of its file wrote. Examples with an ASTC format
-//! (`astc-...`) are skipped in a build without the cargo feature `astc`.
+//! (`astc-...`) are skipped in a build without the cargo feature `astc`, and UASTC lines
+//! (`uastc-...`) without `uastc`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -207,8 +208,11 @@ fn readme_and_docs_examples_run_in_order_on_a_fresh_copy() {
                 .unwrap();
         }
         for ex in &examples {
-            // ASTC needs the cargo feature `astc` (CI builds it): skipped in a build without.
-            if ex.text.contains("astc-") && !cfg!(feature = "astc") {
+            // ASTC needs the cargo feature `astc`, UASTC `uastc` (CI builds both): skipped in
+            // a build without.
+            if (ex.text.contains("astc-") && !cfg!(feature = "astc"))
+                || (ex.text.contains("uastc-") && !cfg!(feature = "uastc"))
+            {
                 skipped += 1;
                 continue;
             }

@@ -49,6 +49,8 @@ pub(super) fn decode(_bytes: &[u8], _w: usize, _h: usize, _dim: usize) -> Result
 
 #[cfg(feature = "astc")]
 pub(super) use with_astcenc::{decode, encode};
+#[cfg(feature = "uastc")]
+pub(super) use with_astcenc::{keep_light, texel};
 
 #[cfg(feature = "astc")]
 mod with_astcenc {
@@ -72,7 +74,7 @@ mod with_astcenc {
     /// A texel as the encoder takes it: negatives and NaN as 0, values past the largest half
     /// float clamped (HDR endpoints are unsigned half-float-like values), alpha in [0, 1].
     #[inline]
-    fn texel(p: Vec4, scale: [f32; 3]) -> [f32; 4] {
+    pub(in super::super) fn texel(p: Vec4, scale: [f32; 3]) -> [f32; 4] {
         let c = |v: f32, k: f32| unsigned(unsigned(v, HALF_MAX) * k, HALF_MAX);
         [
             c(p.x, scale[0]),
@@ -148,9 +150,28 @@ mod with_astcenc {
                         .map_err(|e| format!("astcenc failed: {e}"))
                 })
             })?;
-        keep_light(img, dim, &mut out)?;
+        keep_light(img, dim, &mut out, &|texels| encode_block(dim, texels))?;
         Ok(out)
     }
+
+    /// One block of `dim` x `dim` texels (RGBA f32, row by row) as astcenc encodes it.
+    fn encode_block(dim: usize, texels: &mut [f32]) -> Result<[u8; 16], String> {
+        let mut block = [0u8; 16];
+        let mut slot = texels.as_mut_ptr().cast::<std::ffi::c_void>();
+        let mut src = image(&mut slot, dim, dim);
+        with_context(dim, |ctx| {
+            let done = ctx.compress(&mut src, Swizzle::IDENTITY, &mut block);
+            ctx.compress_reset()
+                .and(done)
+                .map_err(|e| format!("astcenc failed: {e}"))
+        })?;
+        Ok(block)
+    }
+
+    /// Encodes one block of `dim` x `dim` texels (RGBA f32, rows top to bottom; the encoder
+    /// may change them).
+    pub(in super::super) type BlockEncoder<'a> =
+        dyn Fn(&mut [f32]) -> Result<[u8; 16], String> + Sync + 'a;
 
     /// Per-channel light (sums) of the in-image texels of block `b` of `img`, read through
     /// `texel` as the encoder took them.
@@ -168,8 +189,14 @@ mod with_astcenc {
     }
 
     /// Refits the blocks of `blocks` (the encoding of `img`) whose light is off by more than
-    /// [`LIGHT_SHARE`] of the image's, each on its own, in parallel.
-    fn keep_light(img: &Image, dim: usize, blocks: &mut [u8]) -> Result<(), String> {
+    /// [`LIGHT_SHARE`] of the image's, each on its own by `encode`, in parallel. Any encoder
+    /// of ASTC HDR blocks can use it (astcenc's, basis_universal's UASTC HDR).
+    pub(in super::super) fn keep_light(
+        img: &Image,
+        dim: usize,
+        blocks: &mut [u8],
+        encode: &BlockEncoder,
+    ) -> Result<(), String> {
         let back = decode(blocks, img.width, img.height, dim)?;
         let row_blocks = img.width.div_ceil(dim);
         let count = row_blocks * img.height.div_ceil(dim);
@@ -199,6 +226,7 @@ mod with_astcenc {
                         at(b),
                         [*s, *d, total],
                         &blocks[b * 16..b * 16 + 16],
+                        encode,
                     )
                 } else {
                     Ok(None)
@@ -224,6 +252,7 @@ mod with_astcenc {
         b: (usize, usize),
         light: [[f64; 3]; 3],
         first: &[u8],
+        encode: &BlockEncoder,
     ) -> Result<Option<[u8; 16]>, String> {
         let [source, mut got, total] = light;
         let error = |d: &[f64; 3]| {
@@ -234,7 +263,6 @@ mod with_astcenc {
         let mut best = (error(&got), None);
         let mut scale = [1f32; 3];
         let mut texels = vec![0f32; dim * dim * 4];
-        let mut decoded = vec![0f32; dim * dim * 4];
         for _ in 0..REFIT_ROUNDS {
             for c in 0..3 {
                 if got[c] > 0.0 && source[c] > 0.0 {
@@ -250,25 +278,14 @@ mod with_astcenc {
                     texels[(y * dim + x) * 4..][..4].copy_from_slice(&t);
                 }
             }
-            let mut block = [0u8; 16];
-            let mut slot = texels.as_mut_ptr().cast::<std::ffi::c_void>();
-            let mut src = image(&mut slot, dim, dim);
-            let mut out_slot = decoded.as_mut_ptr().cast::<std::ffi::c_void>();
-            let mut dst = image(&mut out_slot, dim, dim);
-            with_context(dim, |ctx| {
-                let done = ctx.compress(&mut src, Swizzle::IDENTITY, &mut block);
-                ctx.compress_reset()
-                    .and(done)
-                    .and_then(|_| ctx.decompress(&block, &mut dst, Swizzle::IDENTITY))
-                    .and(ctx.decompress_reset())
-                    .map_err(|e| format!("astcenc failed: {e}"))
-            })?;
+            let block = encode(&mut texels)?;
+            let decoded = decode(&block, dim, dim, dim)?;
             got = [0.0; 3];
             for y in 0..dim.min(img.height - b.1 * dim) {
                 for x in 0..dim.min(img.width - b.0 * dim) {
+                    let v = decoded.pixels[y * dim + x];
                     for c in 0..3 {
-                        let v = decoded[(y * dim + x) * 4 + c];
-                        got[c] += if v.is_finite() { v as f64 } else { 0.0 };
+                        got[c] += v[c] as f64;
                     }
                 }
             }

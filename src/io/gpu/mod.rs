@@ -20,6 +20,7 @@
 
 mod astc;
 mod packed;
+mod uastc;
 
 use crate::image::{linear_to_srgb, srgb_to_linear, Image};
 use glam::Vec4;
@@ -59,6 +60,11 @@ pub enum GpuFormat {
     #[serde(rename = "astc-hdr-6x6")]
     #[cfg_attr(feature = "cli", value(name = "astc-hdr-6x6"))]
     AstcHdr6x6,
+    /// UASTC HDR 4x4 (basis_universal): ASTC HDR 4x4 blocks that transcoders turn into BC6H
+    /// where ASTC HDR is missing (three.js's KTX2Loader); cargo feature `uastc`.
+    #[serde(rename = "uastc-hdr-4x4")]
+    #[cfg_attr(feature = "cli", value(name = "uastc-hdr-4x4"))]
+    UastcHdr4x4,
 }
 
 /// The largest half float: values above it would be written as infinity.
@@ -72,7 +78,7 @@ const UF11_MAX: f32 = 65024.0;
 
 impl GpuFormat {
     /// Every format, in the order help lists them.
-    pub const ALL: [GpuFormat; 11] = [
+    pub const ALL: [GpuFormat; 12] = [
         GpuFormat::Rgba16f,
         GpuFormat::Rgba32f,
         GpuFormat::Rgba8Srgb,
@@ -84,6 +90,7 @@ impl GpuFormat {
         GpuFormat::Rg11b10,
         GpuFormat::AstcHdr4x4,
         GpuFormat::AstcHdr6x6,
+        GpuFormat::UastcHdr4x4,
     ];
 
     /// Edge of the format's texel block: 4 for BC6H, BC7 and ASTC 4x4, 6 for ASTC 6x6, 1 for
@@ -96,18 +103,22 @@ impl GpuFormat {
         }
     }
 
-    /// Whether this build encodes and decodes the format: ASTC needs the cargo feature `astc`.
+    /// Whether this build encodes and decodes the format: ASTC needs the cargo feature `astc`,
+    /// UASTC HDR the feature `uastc` (which takes `astc` with it).
     pub fn check_built(self) -> Result<(), String> {
-        if self.is_astc() {
-            astc::check_built()
-        } else {
-            Ok(())
+        match self {
+            GpuFormat::UastcHdr4x4 => uastc::check_built(),
+            f if f.is_astc() => astc::check_built(),
+            _ => Ok(()),
         }
     }
 
-    /// ASTC blocks (decoded and encoded by astcenc, behind the cargo feature `astc`).
+    /// ASTC blocks (decoded by astcenc, behind the cargo feature `astc`): UASTC HDR 4x4 too.
     pub fn is_astc(self) -> bool {
-        matches!(self, GpuFormat::AstcHdr4x4 | GpuFormat::AstcHdr6x6)
+        matches!(
+            self,
+            GpuFormat::AstcHdr4x4 | GpuFormat::AstcHdr6x6 | GpuFormat::UastcHdr4x4
+        )
     }
 
     /// Bytes of one texel block (one texel for the uncompressed formats).
@@ -120,7 +131,8 @@ impl GpuFormat {
             | GpuFormat::Bc7
             | GpuFormat::Bc7Srgb
             | GpuFormat::AstcHdr4x4
-            | GpuFormat::AstcHdr6x6 => 16,
+            | GpuFormat::AstcHdr6x6
+            | GpuFormat::UastcHdr4x4 => 16,
         }
     }
 
@@ -175,7 +187,8 @@ impl GpuFormat {
             GpuFormat::Rgba16f
             | GpuFormat::Bc6h
             | GpuFormat::AstcHdr4x4
-            | GpuFormat::AstcHdr6x6 => Some(HALF_MAX),
+            | GpuFormat::AstcHdr6x6
+            | GpuFormat::UastcHdr4x4 => Some(HALF_MAX),
             GpuFormat::Rgba32f => Some(f32::MAX),
             GpuFormat::Rgb9e5 => Some(RGB9E5_MAX),
             GpuFormat::Rg11b10 => Some(UF10_MAX),
@@ -197,6 +210,7 @@ impl GpuFormat {
             GpuFormat::Rg11b10 => "B10G11R11 UFLOAT",
             GpuFormat::AstcHdr4x4 => "ASTC 4x4 HDR",
             GpuFormat::AstcHdr6x6 => "ASTC 6x6 HDR",
+            GpuFormat::UastcHdr4x4 => "UASTC HDR 4x4",
         }
     }
 
@@ -215,6 +229,7 @@ impl GpuFormat {
             GpuFormat::Bc6h => encode_bc6h(img),
             GpuFormat::Bc7 | GpuFormat::Bc7Srgb => encode_bc7(img, self.is_srgb()),
             GpuFormat::AstcHdr4x4 | GpuFormat::AstcHdr6x6 => astc::encode(img, self.block_dim())?,
+            GpuFormat::UastcHdr4x4 => uastc::encode(img)?,
             _ => {
                 let bpt = self.block_bytes();
                 let mut out = vec![0u8; img.width * img.height * bpt];

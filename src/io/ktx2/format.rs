@@ -27,6 +27,9 @@ pub(super) const KHR_DF_MODEL_RGBSDA: u32 = 1;
 pub(super) const KHR_DF_MODEL_BC6H: u32 = 133;
 pub(super) const KHR_DF_MODEL_BC7: u32 = 134;
 pub(super) const KHR_DF_MODEL_ASTC: u32 = 162;
+/// basis_universal's colour model for UASTC HDR 4x4: ASTC 4x4 HDR blocks in its subset
+/// (three.js's KTX2Loader looks for it beside the ASTC vkFormat).
+pub(super) const KHR_DF_MODEL_UASTC_HDR_4X4: u32 = 167;
 pub(super) const KHR_DF_PRIMARIES_BT709: u32 = 1;
 pub(super) const KHR_DF_TRANSFER_LINEAR: u32 = 1;
 pub(super) const KHR_DF_TRANSFER_SRGB: u32 = 2;
@@ -54,13 +57,18 @@ pub(super) fn vk_format(format: GpuFormat) -> u32 {
         GpuFormat::Bc7Srgb => VK_FORMAT_BC7_SRGB_BLOCK,
         GpuFormat::Rgb9e5 => VK_FORMAT_E5B9G9R9_UFLOAT_PACK32,
         GpuFormat::Rg11b10 => VK_FORMAT_B10G11R11_UFLOAT_PACK32,
-        GpuFormat::AstcHdr4x4 => VK_FORMAT_ASTC_4X4_SFLOAT_BLOCK,
+        GpuFormat::AstcHdr4x4 | GpuFormat::UastcHdr4x4 => VK_FORMAT_ASTC_4X4_SFLOAT_BLOCK,
         GpuFormat::AstcHdr6x6 => VK_FORMAT_ASTC_6X6_SFLOAT_BLOCK,
     }
 }
 
-pub(super) fn from_vk_format(vk: u32) -> Option<GpuFormat> {
+/// The format of a file's vkFormat and the colour model of its DFD: UASTC HDR 4x4 shares
+/// ASTC 4x4's vkFormat and names itself by its colour model.
+pub(super) fn from_vk_format(vk: u32, color_model: Option<u32>) -> Option<GpuFormat> {
     Some(match vk {
+        VK_FORMAT_ASTC_4X4_SFLOAT_BLOCK if color_model == Some(KHR_DF_MODEL_UASTC_HDR_4X4) => {
+            GpuFormat::UastcHdr4x4
+        }
         VK_FORMAT_R16G16B16A16_SFLOAT => GpuFormat::Rgba16f,
         VK_FORMAT_R32G32B32A32_SFLOAT => GpuFormat::Rgba32f,
         VK_FORMAT_R8G8B8A8_SRGB => GpuFormat::Rgba8Srgb,
@@ -78,7 +86,7 @@ pub(super) fn from_vk_format(vk: u32) -> Option<GpuFormat> {
 
 /// What the reader takes, for messages.
 pub(super) const SUPPORTED: &str =
-    "cubeforge reads RGBA16F, RGBA32F, RGBA8 sRGB/UNORM, BC6H UFLOAT, BC7 sRGB/UNORM, E5B9G9R9, B10G11R11 and ASTC 4x4/6x6 SFLOAT (HDR)";
+    "cubeforge reads RGBA16F, RGBA32F, RGBA8 sRGB/UNORM, BC6H UFLOAT, BC7 sRGB/UNORM, E5B9G9R9, B10G11R11 and ASTC 4x4/6x6 SFLOAT (HDR, UASTC HDR 4x4 among them)";
 
 /// typeSize: the size of the data type for endian conversion (1 for block formats, 4 for
 /// the packed 32-bit ones).
@@ -177,6 +185,8 @@ pub(super) fn data_format_descriptor(format: GpuFormat) -> Vec<u8> {
             KHR_DF_MODEL_ASTC,
             vec![(0, 128, signed_float, MINUS_ONE, ONE)],
         ),
+        // As basis_universal writes it: unsigned float, from 0 to 1.
+        GpuFormat::UastcHdr4x4 => (KHR_DF_MODEL_UASTC_HDR_4X4, vec![(0, 128, float, 0, ONE)]),
     };
     let block_size = DFD_BLOCK_HEADER_LEN + samples.len() as u32 * DFD_SAMPLE_LEN;
     let dim = format.block_dim() as u32 - 1;

@@ -384,7 +384,13 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             "supercompressed KTX2 (scheme {scheme}, {name}) is not supported: cubeforge reads plain and Zstandard (scheme 2) levels"
         )));
     }
-    let format = from_vk_format(vk)
+    // The colour model of the DFD's basic block (its fourth word), where the DFD is that long:
+    // it tells UASTC HDR 4x4 from plain ASTC 4x4 (their bounds are checked below).
+    let color_model = (dfd_len >= 16)
+        .then(|| le_u32(bytes, dfd_offset as usize + 12))
+        .flatten()
+        .map(|word| word & 0xFF);
+    let format = from_vk_format(vk, color_model)
         .ok_or_else(|| err(format!("unsupported vkFormat {vk} ({SUPPORTED})")))?;
     if type_size_field != type_size(format) {
         return Err(err(format!(

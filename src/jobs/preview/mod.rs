@@ -165,7 +165,7 @@ impl PreviewJob {
                     param("target")
                 )));
             }
-            if ibl::engines::filters_itself(e) {
+            if ibl::panorama::filters_itself(e) {
                 return Err(Error::usage(format!(
                     "{} {}: that engine prefilters the panorama itself, with a mapping of its own; use bevy, gltf, babylon, filament or generic",
                     param("target"),
