@@ -61,6 +61,7 @@ pub fn job(a: Args) -> Result<ViewJob> {
         limits: a.input_args.limits(),
         exr_part: a.input_args.part.index(std::slice::from_ref(&a.input))?,
         hdr_encoding: a.input_args.decode.decode,
+        linear: a.input_args.linear,
         ..ViewJob::new(a.input, a.output)
     })
 }

@@ -46,6 +46,8 @@ pub struct ViewJob {
     pub exr_part: Option<usize>,
     /// An 8-bit input's RGBM or RGBD (None: plain, or what a KTX2 says).
     pub hdr_encoding: Option<crate::io::HdrEncoding>,
+    /// An 8- or 16-bit input holds data, not colour: no sRGB decode (`--linear`).
+    pub linear: bool,
 }
 
 impl ViewJob {
@@ -63,6 +65,7 @@ impl ViewJob {
             limits: Limits::default(),
             exr_part: None,
             hdr_encoding: None,
+            linear: false,
         }
     }
 
@@ -79,7 +82,7 @@ impl ViewJob {
     fn read(&self) -> ReadOptions {
         ReadOptions {
             limits: self.limits,
-            linear: false,
+            linear: self.linear,
             as_stored: false,
             exr_part: self.exr_part,
             exr_level: 0,

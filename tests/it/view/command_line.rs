@@ -150,3 +150,20 @@ fn outputs_view_refuses() {
     assert!(!Path::new(&dir).join("x.html").exists());
     done(&dir);
 }
+
+/// `--linear` reaches the page: the 8-bit demo sky read as data (no sRGB decode) is other
+/// data than read as colour (the flag was once dropped on the way to the job).
+#[test]
+fn linear_reads_an_8_bit_input_as_data() {
+    let dir = work("linear");
+    let png = super::SKY_PNG;
+    for (out, extra) in [("colour", None), ("data", Some("--linear"))] {
+        let mut args = vec!["view", png, "-o", out];
+        args.extend(extra);
+        let o = run(&args, &dir);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let data = |out: &str| std::fs::read(dir.join(out).join("data.js")).unwrap();
+    assert!(data("colour") != data("data"), "--linear changed nothing");
+    done(&dir);
+}
