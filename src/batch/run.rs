@@ -8,7 +8,12 @@ use crate::io::Session;
 use std::collections::{BTreeMap, HashSet};
 use std::path::PathBuf;
 use std::sync::{Condvar, Mutex};
-use std::time::Instant;
+use std::time::{Duration, Instant};
+
+/// The state file is written again, while jobs run, at most this often: an interrupted batch
+/// (a signal, a killed CI step) keeps what it finished up to this long before, and a batch of
+/// many small jobs does not spend its time rewriting the file.
+const SAVE_EVERY: Duration = Duration::from_secs(1);
 
 /// The jobs of one input, by index.
 type Group = Vec<usize>;
@@ -133,7 +138,46 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
             todo.push(run);
         }
     }
-    let records: Mutex<Vec<(String, Option<Record>)>> = Mutex::new(Vec::new());
+    // The state the batch keeps: jobs gone from the batch dropped, each finished job's record
+    // put in as it ends, and the file rewritten as it goes (see SAVE_EVERY) and at the end.
+    let keep = batch.state.clone().filter(|_| !batch.dry_run);
+    let known: HashSet<&String> = ids.iter().collect();
+    state.jobs.retain(|id, _| known.contains(id));
+    let live = Mutex::new(Live {
+        state,
+        dirty: false,
+        running: true,
+    });
+    let wake = Condvar::new();
+    let keep_record = |id: &str, record: Option<Record>| {
+        if keep.is_none() {
+            return;
+        }
+        let mut live = live.lock().unwrap_or_else(|e| e.into_inner());
+        match record {
+            Some(r) => live.state.jobs.insert(id.to_string(), r),
+            None => live.state.jobs.remove(id),
+        };
+        live.dirty = true;
+    };
+    // Writes the state file when a job has ended since it last did, every SAVE_EVERY, until
+    // the workers are done. A failure here is reported by the save at the end.
+    let saver = || {
+        let Some(path) = &keep else {
+            return;
+        };
+        let mut l = live.lock().unwrap_or_else(|e| e.into_inner());
+        while l.running {
+            l = wake
+                .wait_timeout(l, SAVE_EVERY)
+                .unwrap_or_else(|e| e.into_inner())
+                .0;
+            if l.running && l.dirty {
+                let _ = save(path, &l.state);
+                l.dirty = false;
+            }
+        }
+    };
     let depfiles = batch.depfiles;
     let jobs: Vec<Mutex<Option<BatchJob>>> = batch
         .jobs
@@ -163,86 +207,98 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
     let freed = Condvar::new();
     let workers = rayon::current_num_threads().clamp(1, todo.len().max(1));
     std::thread::scope(|scope| {
-        for _ in 0..workers {
-            scope.spawn(|| loop {
-                let (g, held) = {
-                    let mut q = queue.lock().unwrap_or_else(|e| e.into_inner());
-                    loop {
-                        if q.0 >= todo.len() {
-                            return;
+        scope.spawn(saver);
+        let handles: Vec<_> = (0..workers)
+            .map(|_| {
+                scope.spawn(|| loop {
+                    let (g, held) = {
+                        let mut q = queue.lock().unwrap_or_else(|e| e.into_inner());
+                        loop {
+                            if q.0 >= todo.len() {
+                                return;
+                            }
+                            let b = bytes[q.0];
+                            if q.1 == 0 || q.1.saturating_add(b) <= batch.max_memory {
+                                q.0 += 1;
+                                q.1 = q.1.saturating_add(b);
+                                break (q.0 - 1, b);
+                            }
+                            q = freed.wait(q).unwrap_or_else(|e| e.into_inner());
                         }
-                        let b = bytes[q.0];
-                        if q.1 == 0 || q.1.saturating_add(b) <= batch.max_memory {
-                            q.0 += 1;
-                            q.1 = q.1.saturating_add(b);
-                            break (q.0 - 1, b);
-                        }
-                        q = freed.wait(q).unwrap_or_else(|e| e.into_inner());
+                    };
+                    let guard = if todo[g].len() > 1 {
+                        Session::open_shared()
+                    } else {
+                        Session::open()
+                    };
+                    for &i in &todo[g] {
+                        let Some(mut bj) = jobs[i].lock().unwrap_or_else(|e| e.into_inner()).take()
+                        else {
+                            continue;
+                        };
+                        share(bj.job.as_mut(), guard.session());
+                        let start = Instant::now();
+                        let ran = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                            bj.job.run(&())
+                        }))
+                        .unwrap_or_else(|_| {
+                            Err(Error::usage("the job stopped on an internal error"))
+                        });
+                        let reads = guard.session().take_reads();
+                        let ran = ran.and_then(|report| {
+                            for p in &report.written {
+                                hashes.forget(p);
+                            }
+                            if depfiles {
+                                let d = depfile::beside(&outputs[i]);
+                                depfile::write(&d, &outputs[i], &reads)?;
+                            }
+                            Ok(report)
+                        });
+                        let (outcome, record) = match ran {
+                            Ok(report) => {
+                                let r =
+                                    state::record(&ids[i], reads, report.written.clone(), &hashes);
+                                let why = whys[i].clone().flatten().unwrap_or(Why::NeverRan);
+                                (Outcome::Ran(why, report), r)
+                            }
+                            Err(e) => (Outcome::Failed(e), None),
+                        };
+                        keep_record(&ids[i], record);
+                        finish(i, outcome, start.elapsed().as_secs_f64());
                     }
-                };
-                let guard = if todo[g].len() > 1 {
-                    Session::open_shared()
-                } else {
-                    Session::open()
-                };
-                for &i in &todo[g] {
-                    let Some(mut bj) = jobs[i].lock().unwrap_or_else(|e| e.into_inner()).take()
-                    else {
-                        continue;
-                    };
-                    share(bj.job.as_mut(), guard.session());
-                    let start = Instant::now();
-                    let ran =
-                        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bj.job.run(&())))
-                            .unwrap_or_else(|_| {
-                                Err(Error::usage("the job stopped on an internal error"))
-                            });
-                    let reads = guard.session().take_reads();
-                    let ran = ran.and_then(|report| {
-                        for p in &report.written {
-                            hashes.forget(p);
-                        }
-                        if depfiles {
-                            let d = depfile::beside(&outputs[i]);
-                            depfile::write(&d, &outputs[i], &reads)?;
-                        }
-                        Ok(report)
-                    });
-                    let (outcome, record) = match ran {
-                        Ok(report) => {
-                            let r = state::record(&ids[i], reads, report.written.clone(), &hashes);
-                            let why = whys[i].clone().flatten().unwrap_or(Why::NeverRan);
-                            (Outcome::Ran(why, report), r)
-                        }
-                        Err(e) => (Outcome::Failed(e), None),
-                    };
-                    records
-                        .lock()
-                        .unwrap_or_else(|e| e.into_inner())
-                        .push((ids[i].clone(), record));
-                    finish(i, outcome, start.elapsed().as_secs_f64());
-                }
-                drop(guard);
-                let mut q = queue.lock().unwrap_or_else(|e| e.into_inner());
-                q.1 = q.1.saturating_sub(held);
-                freed.notify_all();
-            });
+                    drop(guard);
+                    let mut q = queue.lock().unwrap_or_else(|e| e.into_inner());
+                    q.1 = q.1.saturating_sub(held);
+                    freed.notify_all();
+                })
+            })
+            .collect();
+        // Join the workers, stop the saver, then pass on a worker's panic, if any.
+        let ended: Vec<_> = handles.into_iter().map(|h| h.join()).collect();
+        live.lock().unwrap_or_else(|e| e.into_inner()).running = false;
+        wake.notify_all();
+        if let Some(e) = ended.into_iter().find_map(|r| r.err()) {
+            std::panic::resume_unwind(e);
         }
     });
     report.jobs = slots
         .into_iter()
         .filter_map(|s| s.into_inner().unwrap_or_else(|e| e.into_inner()))
         .collect();
-    if let (Some(path), false) = (&batch.state, batch.dry_run) {
-        for (id, record) in records.into_inner().unwrap_or_else(|e| e.into_inner()) {
-            match record {
-                Some(r) => state.jobs.insert(id, r),
-                None => state.jobs.remove(&id),
-            };
-        }
-        let known: HashSet<&String> = ids.iter().collect();
-        state.jobs.retain(|id, _| known.contains(id));
-        save(path, &state)?;
+    if let Some(path) = &keep {
+        save(
+            path,
+            &live.into_inner().unwrap_or_else(|e| e.into_inner()).state,
+        )?;
     }
     Ok(report)
+}
+
+/// The state while jobs run: whether it changed since the file was last written, and whether
+/// any worker still runs.
+struct Live {
+    state: State,
+    dirty: bool,
+    running: bool,
 }

@@ -122,3 +122,57 @@ fn a_rerun_does_only_what_changed() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+/// A batch stopped by a signal keeps what it finished: the state file is written as jobs end
+/// (within a second), so a rerun does not redo a job that ended before the signal.
+#[test]
+fn an_interrupted_batch_keeps_the_jobs_it_finished() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    std::fs::create_dir_all(d.join("proj/hdri")).unwrap();
+    for name in ["quick.exr", "slow.exr"] {
+        std::fs::copy(super::SKY_EXR, d.join("proj/hdri").join(name)).unwrap();
+    }
+    // One quick job, and one that takes many seconds (a 512 px GGX chain of 16384 samples).
+    std::fs::write(
+        d.join("proj/m.toml"),
+        r#"
+[[job]]
+inputs = ["hdri/quick.exr"]
+command = "convert"
+args = ["--to", "hcross"]
+output = "build/quick.exr"
+
+[[job]]
+inputs = ["hdri/slow.exr"]
+command = "prefilter"
+args = ["--filter", "ggx", "--size", "512", "--samples", "16384"]
+output = "build/slow.ktx2"
+"#,
+    )
+    .unwrap();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_cubeforge"))
+        .args(["batch", "proj/m.toml"])
+        .current_dir(d)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let state = d.join("proj/m.state.json");
+    let start = std::time::Instant::now();
+    while !state.exists() && start.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    assert!(state.exists(), "no state file while the batch runs");
+    // SAFETY: kill only sends a signal to the child we started.
+    unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+    let status = child.wait().unwrap();
+    assert!(!status.success(), "the slow job ended before the signal");
+    assert!(!d.join("proj/build/slow.ktx2").exists());
+    let dry = stdout(&batch(d, &["--dry-run"]));
+    assert!(
+        dry.contains("batch: 2 jobs: 1 would run, 1 up to date"),
+        "{dry}"
+    );
+    assert!(dry.contains("would run   cubeforge prefilter"), "{dry}");
+}
