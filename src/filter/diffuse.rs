@@ -61,7 +61,7 @@ pub fn irradiance_with_progress(
     // A box-reduced copy keeps the integral, and the SH of it is what the map holds.
     let src = reduced(&base.levels[0], SH_SOURCE_SIZE);
     let coeffs = sh::project_faces(&src);
-    let mut faces = match method {
+    let faces = match method {
         IrradianceMethod::Brute => brute_force(&src, size, progress),
         IrradianceMethod::Sh => {
             let e = sh::irradiance(&coeffs);
@@ -72,17 +72,30 @@ pub fn irradiance_with_progress(
                 .remove(0)
         }
     };
+    (opaque(faces), coeffs)
+}
+
+/// The brute-force irradiance map of [`irradiance_with_progress`] without the 9 SH
+/// coefficients, for callers that project their own set (`irradiance --sh-bands`).
+pub fn brute_irradiance_with_progress(
+    base: &CubeMap,
+    size: usize,
+    progress: &(dyn Fn(u64) + Sync),
+) -> CubeMap {
+    let src = reduced(&base.levels[0], SH_SOURCE_SIZE);
+    opaque(brute_force(&src, size, progress))
+}
+
+/// `faces` as a one-level cube map, alpha 1.
+fn opaque(mut faces: Faces) -> CubeMap {
     for face in &mut faces {
         for p in &mut face.pixels {
             p.w = 1.0;
         }
     }
-    (
-        CubeMap {
-            levels: vec![faces],
-        },
-        coeffs,
-    )
+    CubeMap {
+        levels: vec![faces],
+    }
 }
 
 /// `faces` box-reduced (solid-angle weighted, as [`CubeMap::with_box_mips`]) until their edge

@@ -15,7 +15,9 @@ pub mod sh_engines;
 mod shape;
 mod window;
 
-pub use diffuse::{irradiance, irradiance_with_progress, IrradianceMethod};
+pub use diffuse::{
+    brute_irradiance_with_progress, irradiance, irradiance_with_progress, IrradianceMethod,
+};
 pub(crate) use roughness::plan_mapped;
 pub use roughness::{RoughnessMapping, BABYLON_LOD_GENERATION_SCALE};
 

@@ -216,10 +216,7 @@ impl Job for IrradianceJob {
         let set = ShSet::project(&base.levels[0], self.sh_bands)?.windowed(self.sh_window);
         let irr = match self.method {
             IrradianceMethod::Brute => {
-                filter::irradiance_with_progress(&base, self.size, self.method, &|n| {
-                    progress.advance(n)
-                })
-                .0
+                filter::brute_irradiance_with_progress(&base, self.size, &|n| progress.advance(n))
             }
             IrradianceMethod::Sh => {
                 let over_pi = set.irradiance_over_pi();
