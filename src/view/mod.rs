@@ -93,6 +93,11 @@ fn material_json(m: &Material) -> Value {
         "metallic": m.metallic,
         "roughness": m.roughness,
         "f0": m.dielectric_f0(),
+        // A material's own refraction wins over the page's choice, as over preview's flag.
+        "refraction": m.refraction.map(|r| match r {
+            crate::preview::Refraction::Texts => "texts",
+            crate::preview::Refraction::Exact => "exact",
+        }),
     })
 }
 

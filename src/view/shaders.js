@@ -11,7 +11,7 @@ window.cubeforgeShaders = {
 
   // The fragment program without its first line: the renderer puts the version and the
   // variant's constants before it (MODEL 0 reflect, 1 refract, 2 dispersion, 3 pbr;
-  // PER_VERTEX, CROSS and SEAMS 0 or 1), so each variant compiles only what it runs.
+  // PER_VERTEX, CROSS, SEAMS and EXACT 0 or 1), so each variant compiles only what it runs.
   FS: `
   precision highp float;
   precision highp samplerCube;
@@ -177,9 +177,83 @@ window.cubeforgeShaders = {
     float f = mask * factor + (1.0 - mask) * refl;
     return mix(refracted, reflected, f);
   }
+#if EXACT
+  // Glass done exactly (preview's glass.rs): unpolarised Fresnel reflectance of a smooth
+  // interface met at cos ci, eta = n_incident / n_transmitted; 1 beyond the critical angle.
+  float fresnelExact(float ci, float eta) {
+    ci = clamp(ci, 0.0, 1.0);
+    float st2 = eta * eta * (1.0 - ci * ci);
+    if (st2 >= 1.0) return 1.0;
+    float ct = sqrt(1.0 - st2);
+    float rs = (eta * ci - ct) / (eta * ci + ct);
+    float rp = (eta * ct - ci) / (eta * ct + ci);
+    return clamp(0.5 * (rs * rs + rp * rp), 0.0, 1.0);
+  }
+  // Snell's law for unit i meeting unit n (facing i): false on total internal reflection.
+  bool transmitExact(vec3 i, vec3 n, float eta, out vec3 t) {
+    float ci = clamp(-dot(i, n), 0.0, 1.0);
+    float k = 1.0 - eta * eta * (1.0 - ci * ci);
+    t = vec3(0.0);
+    if (k <= 0.0) return false;
+    t = normalize(eta * i + (eta * ci - sqrt(k)) * n);
+    return true;
+  }
+  // The light that comes out of the solid unit sphere for the eye ray i hitting it at p:
+  // refracted in, then at each of up to 32 internal hits the part that leaves, the rest of
+  // the series added to the last exit (glass::trace). The front reflectance in front.
+  vec3 throughGlass(vec3 p, vec3 i, float eta, float lod, out float front) {
+    vec3 n = p;
+    front = fresnelExact(-dot(i, n), eta);
+    float inside = 1.0 - front;
+    vec3 sum = vec3(0.0), last = vec3(0.0), d, o;
+    if (!(inside > 0.0) || !transmitExact(i, n, eta, d)) return sum;
+    vec3 q = n;
+    bool out_ = false;
+    for (int k = 0; k < 32; k++) {
+      float t = -2.0 * dot(q, d);
+      if (t <= 0.0) break;
+      q = normalize(q + d * t);
+      float r = fresnelExact(dot(d, q), 1.0 / eta);
+      if (r < 1.0 && transmitExact(d, -q, 1.0 / eta, o)) {
+        last = texCube(correct(o, q), lod).rgb;
+        sum += last * (inside * (1.0 - r));
+        out_ = true;
+      }
+      inside *= r;
+      d = normalize(reflect(d, q));
+      if (inside < 1e-6) break;
+    }
+    return out_ ? sum + last * inside : sum;
+  }
+  // refract: the weighted rays, blended with the decal by transmittance (C7E4f); dispersion:
+  // each channel traced with its own eta, the exact Fresnel split in place of the texts'
+  // bias, scale and power. Level 0 plus the LOD bias and the control map's blur.
+  vec3 shadeExact(vec3 p, vec2 uv) {
+    float trans = transmittance, blur = 0.0;
+    if (hasControl) {
+      vec4 t = texture(control, uv);
+      trans = t.y; blur = t.z * maxLodBias;
+    }
+    float lod = lodOn ? lodBias + blur : 0.0;
+    vec3 n = normalize(p), i = normalize(p - eye);
+    vec3 reflected = texCube(correct(reflect(i, n), p), lod).rgb;
+    float front;
+    if (MODEL == 1) {
+      vec3 c = throughGlass(n, i, etaRatio.x, lod, front) + reflected * front;
+      vec3 dc = hasDecal ? texture(decal, uv).rgb : decalColor;
+      return mix(dc, c, trans);
+    }
+    vec3 c;
+    for (int ch = 0; ch < 3; ch++) c[ch] = throughGlass(n, i, etaRatio[ch], lod, front)[ch] + front * reflected[ch];
+    return c;
+  }
+#endif
   // Per fragment: the vertex stage at the exact hit, and where the rays one pixel right and
   // below meet the hit's tangent plane.
   vec3 shadeFragment(vec2 s, vec3 p) {
+#if EXACT
+    return shadeExact(p, sphereUv(normalize(p)));
+#else
     vec3 n = normalize(p);
     vec2 uv = sphereUv(n);
     vec3 v[4], vx[4], vy[4]; float factor, f2;
@@ -198,6 +272,7 @@ window.cubeforgeShaders = {
       }
     }
     return fragmentStage(v, factor, uv, vx, vy, ok);
+#endif
   }
 #if PER_VERTEX
   // The per-vertex mesh (preview's sphere::tessellate): vertex (i, j) of bands latitude

@@ -33,7 +33,7 @@ window.cubeforgeUi = function (state, mat, scene, redraw) {
     }
     s.value = value;
     s.onchange = () => {
-      if (k === 'layout' || k === 'shading') {
+      if (k === 'layout' || k === 'shading' || k === 'refraction') {
         remember(k, s.value);
         redraw({ [k]: s.value });
       } else if (k === 'material') {
@@ -41,7 +41,7 @@ window.cubeforgeUi = function (state, mat, scene, redraw) {
         const q = new URLSearchParams();
         q.set('material', s.value);
         for (const key of ['size', 'exposure', 'tonemap', 'lod_bias', 'level', 'yaw', 'pitch', 'samples',
-                           'layout', 'seams', 'sweep', 'shading', 'tessellation']) {
+                           'layout', 'seams', 'sweep', 'shading', 'tessellation', 'refraction']) {
           if (query.has(key)) q.set(key, query.get(key));
         }
         location.search = '?' + q.toString();
@@ -70,6 +70,7 @@ window.cubeforgeUi = function (state, mat, scene, redraw) {
   select('tonemap', ['none', 'reinhard', 'aces'], state.tonemap);
   select('layout', ['sphere', 'cross'], state.layout);
   select('shading', ['per-fragment', 'per-vertex'], state.shading);
+  select('refraction', ['texts', 'exact'], state.refraction);
   function check(k, value) {
     const l = document.createElement('label');
     l.textContent = k;

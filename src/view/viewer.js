@@ -43,6 +43,9 @@
     distance: num('distance', 4),
     samples: Math.max(1, Math.min(16, Math.round(num('samples', 4)))),
     shading: q.get('shading') === 'per-vertex' ? 'per-vertex' : 'per-fragment',
+    // preview's --refraction: the texts' one bend, or the solid sphere's exact path (per
+    // fragment; a material that names its own wins, as in preview).
+    refraction: q.get('refraction') === 'exact' ? 'exact' : 'texts',
     tessellation: Math.max(2, Math.min(256, Math.round(num('tessellation', 16)))),
     parallax: ['approx', 'exact'].includes(q.get('parallax')) ? q.get('parallax') : 'approx',
     env_radius: num('env_radius', 0),
@@ -165,8 +168,11 @@
       gl.activeTexture(gl.TEXTURE1);
       gl.bindTexture(gl.TEXTURE_CUBE_MAP, textures[1][2]);
     }
-    const defs = { MODEL: model, PER_VERTEX: state.shading === 'per-vertex' && !cross ? 1 : 0,
-                   CROSS: cross ? 1 : 0, SEAMS: state.seams ? 1 : 0 };
+    const perVertex = state.shading === 'per-vertex' && !cross;
+    const exact = (mat.refraction || state.refraction) === 'exact' && (model === 1 || model === 2);
+    const defs = { MODEL: model, PER_VERTEX: perVertex ? 1 : 0,
+                   CROSS: cross ? 1 : 0, SEAMS: state.seams ? 1 : 0,
+                   EXACT: exact && !perVertex && !cross ? 1 : 0 };
     const key = JSON.stringify(defs);
     if (!programs[key]) {
       const header = '#version 300 es\n' + Object.entries(defs).map(([k, v]) => '#define ' + k + ' ' + v + '\n').join('');
