@@ -180,6 +180,17 @@ impl Job for ConvertJob {
         if let (Some(c), Some(f)) = (to.container(), self.gpu_format) {
             io::check_gpu_format(&name, c.format(), f)?;
         }
+        let format = match to {
+            MapKind::Layout(Kind::Faces) => self.face_format,
+            _ => FileFormat::from_extension(&name),
+        };
+        let write = WriteOptions {
+            png16: self.png16,
+            gpu_format: self.gpu_format.unwrap_or_default(),
+            hdr_encoding: self.hdr_encoding,
+            ..WriteOptions::default()
+        };
+        crate::output::check_hdr_encoding(&name, format, &write)?;
         if self.levels == Some(0) {
             return Err(Error::usage(format!(
                 "{} 0: a map has at least 1 level",

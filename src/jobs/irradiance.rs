@@ -143,6 +143,7 @@ impl Job for IrradianceJob {
         if let Some(c) = target.kind.container() {
             io::check_gpu_format(&name, c.format(), self.gpu_format)?;
         }
+        output::check_hdr_encoding(&name, target.format(), &target.write)?;
         let mut warnings: Vec<Warning> = super::fixup_ignored(target.kind, self.edge_fixup)
             .into_iter()
             .collect();

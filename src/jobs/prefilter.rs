@@ -159,6 +159,12 @@ impl Job for PrefilterJob {
         if let Some(c) = container {
             io::check_gpu_format(&name, c, self.gpu_format)?;
         }
+        let write = WriteOptions {
+            gpu_format: self.gpu_format,
+            hdr_encoding: self.hdr_encoding,
+            ..WriteOptions::default()
+        };
+        output::check_hdr_encoding(&name, Some(container.unwrap_or(self.face_format)), &write)?;
         let mut warnings = Vec::new();
         match container {
             Some(FileFormat::Ktx2) => {}

@@ -65,6 +65,20 @@ impl Encoded {
     }
 }
 
+/// Refuses an 8-bit HDR encoding (`--hdr-encoding`) for an output of `format` that cannot hold
+/// it, so a job says so in `validate`, before any work (the encoder would refuse it after).
+/// A format not known yet (faces whose type follows the input) is checked when encoded.
+pub fn check_hdr_encoding(
+    path: &Path,
+    format: Option<FileFormat>,
+    write: &WriteOptions,
+) -> Result<()> {
+    match (write.hdr_encoding, format) {
+        (Some(_), Some(f)) => io::hdr8::check(path, f, write).map(|_| ()),
+        _ => Ok(()),
+    }
+}
+
 impl Target {
     /// The output at `path`: layout `to`, or what the name implies (a container for .ktx2 and
     /// .dds, a horizontal cross for other images, six faces for a name with no extension).

@@ -228,3 +228,40 @@ fn files_that_cannot_hold_an_encoding_are_refused() {
     assert!(!r.status.success());
     assert!(stderr(&r).contains("--decode rgbd"), "{}", stderr(&r));
 }
+
+/// The refusal comes from `validate`, before any input is read: the jobs say it of outputs
+/// that cannot hold an encoding even when the input does not exist.
+#[test]
+fn the_jobs_refuse_an_encoding_in_validate() {
+    use cubeforge::io::HdrEncoding;
+    use cubeforge::jobs::{ConvertJob, IrradianceJob, Job, PrefilterJob};
+    use cubeforge::output::Destination;
+    let dir = tempfile::tempdir().unwrap();
+    let missing = vec![dir.path().join("nowhere.exr")];
+    let out = |name: &str| Destination::Path(dir.path().join(name));
+    let e = Some(HdrEncoding::Rgbm6);
+    let jobs: Vec<Box<dyn Job>> = vec![
+        Box::new(ConvertJob {
+            hdr_encoding: e,
+            ..ConvertJob::new(missing.clone(), out("a.exr"))
+        }),
+        Box::new(PrefilterJob {
+            hdr_encoding: e,
+            ..PrefilterJob::new(missing.clone(), out("b.ktx2"))
+        }),
+        Box::new(IrradianceJob {
+            hdr_encoding: e,
+            ..IrradianceJob::new(missing.clone(), out("c.hdr"))
+        }),
+    ];
+    for job in jobs {
+        let err = job.validate().expect_err("refused").to_string();
+        assert!(err.contains("rgbm6 stores four 8-bit channels"), "{err}");
+    }
+    // And what holds one passes.
+    let ok = ConvertJob {
+        hdr_encoding: e,
+        ..ConvertJob::new(missing, out("d.png"))
+    };
+    assert!(ok.validate().is_ok());
+}
