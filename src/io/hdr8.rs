@@ -156,6 +156,46 @@ pub(crate) fn check(path: &Path, format: FileFormat, opts: &WriteOptions) -> Res
     })
 }
 
+/// The PNG text keyword that names an 8-bit PNG's encoding, as [`KTX2_KEY`] does in KTX2: a
+/// marked PNG reads back as radiance with no `--decode`. Other readers show the bytes.
+pub const PNG_KEY: &str = KTX2_KEY;
+
+/// An encoded file of `format` (an encoder's whole output): a PNG gains a tEXt chunk naming
+/// `e` right after its IHDR chunk, where readers look for text before the pixels; other
+/// formats (KTX2 and DDS carry their own metadata, or none) and anything that does not start
+/// as a PNG are unchanged.
+pub(crate) fn marked(format: FileFormat, png: Vec<u8>, e: HdrEncoding) -> Vec<u8> {
+    // The 8-byte signature, then IHDR: length 13, type, 13 bytes, CRC.
+    const IHDR_END: usize = 8 + 4 + 4 + 13 + 4;
+    if format != FileFormat::Png || png.len() < IHDR_END || &png[12..16] != b"IHDR" {
+        return png;
+    }
+    let mut body = b"tEXt".to_vec();
+    body.extend_from_slice(PNG_KEY.as_bytes());
+    body.push(0);
+    body.extend_from_slice(e.name().as_bytes());
+    let mut out = Vec::with_capacity(png.len() + body.len() + 8);
+    out.extend_from_slice(&png[..IHDR_END]);
+    out.extend_from_slice(&((body.len() - 4) as u32).to_be_bytes());
+    out.extend_from_slice(&body);
+    out.extend_from_slice(&crc32fast::hash(&body).to_be_bytes());
+    out.extend_from_slice(&png[IHDR_END..]);
+    out
+}
+
+/// The encoding a PNG's text names ([`PNG_KEY`]), read by the png crate.
+pub(crate) fn png_encoding(bytes: &[u8]) -> Option<HdrEncoding> {
+    let reader = png::Decoder::new(std::io::Cursor::new(bytes))
+        .read_info()
+        .ok()?;
+    reader
+        .info()
+        .uncompressed_latin1_text
+        .iter()
+        .find(|t| t.keyword == PNG_KEY)
+        .and_then(|t| HdrEncoding::from_name(t.text.as_bytes()))
+}
+
 /// Every level of `cube` encoded ([`HdrEncoding::encode_image`]).
 pub(crate) fn encode_cube(cube: &CubeMap, e: HdrEncoding) -> CubeMap {
     CubeMap {

@@ -197,6 +197,9 @@ fn decode_bytes(
         FileFormat::Ktx2 => opts
             .hdr_encoding
             .or_else(|| super::hdr8::ktx2_encoding(bytes)),
+        FileFormat::Png => opts
+            .hdr_encoding
+            .or_else(|| super::hdr8::png_encoding(bytes)),
         _ => opts.hdr_encoding,
     };
     if let Some(e) = encoding {

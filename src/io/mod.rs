@@ -437,7 +437,8 @@ pub fn encode_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<Vec
     let format = FileFormat::from_extension(path).ok_or_else(|| unknown_ext(path))?;
     if let Some(e) = opts.hdr_encoding {
         let plain = hdr8::check(path, format, opts)?;
-        return encode_image(path, &e.encode_image(img), &plain);
+        let bytes = encode_image(path, &e.encode_image(img), &plain)?;
+        return Ok(hdr8::marked(format, bytes, e));
     }
     match format {
         FileFormat::Exr => {

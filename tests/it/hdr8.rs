@@ -1,8 +1,8 @@
 //! RGBM (range 6 and 8) and RGBD in 8-bit PNGs and RGBA8 KTX2/DDS: written by
 //! `--hdr-encoding`, their bytes decoded here by the published formulas, and read back by
-//! `--decode` (a KTX2 by its metadata alone).
+//! `--decode` (a KTX2 by its metadata, a PNG by its text chunk, alone).
 
-use crate::common::{read_image, run, stderr};
+use crate::common::{self, read_image, run, stderr};
 use cubeforge::image::Image;
 use cubeforge::io::{self, Decoded, ReadOptions};
 use glam::Vec4;
@@ -129,6 +129,28 @@ fn pngs_decode_by_the_published_formulas_and_read_back() {
         // cubeforge's decode is the published one.
         let same = rel_error(&ours, &by_formula, f32::MAX, 1e-3);
         assert!(same < 1e-5, "{encoding}: decode differs by {same}");
+        // The PNG names its encoding in a tEXt chunk: read back with no --decode, and Pillow
+        // (an independent reader, checking the chunk's CRC) finds the same text.
+        let Decoded::Image(marked) = read_as(&png, None) else {
+            panic!("an image")
+        };
+        assert!(
+            marked.pixels == ours.pixels,
+            "{encoding}: the marker was not read"
+        );
+        if common::pillow_png() {
+            let o = std::process::Command::new("python3")
+                .args([
+                    "-c",
+                    "import sys; from PIL import Image; im = Image.open(sys.argv[1]); im.load(); \
+                     print(im.info['cubeforge.hdrEncoding'])",
+                    png.to_str().unwrap(),
+                ])
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), encoding);
+        }
         // And the bytes hold the radiance: within the 8-bit grid of the largest channel
         // (relative to values of at least 1/16; darker ones hold less precision).
         let err = rel_error(&ours, &reference, range, 1.0 / 16.0);
