@@ -83,6 +83,15 @@ impl Image {
         })
     }
 
+    /// The image upside down (rows in reverse order): for files stored bottom row first.
+    pub fn flipped_rows(&self) -> Image {
+        let w = self.width.max(1);
+        Image::from_rows(self.width, self.height, |y, row| {
+            let from = self.height - 1 - y;
+            row.copy_from_slice(&self.pixels[from * w..from * w + self.width]);
+        })
+    }
+
     /// Builds an image by letting `f(y, row)` fill each row, rows in parallel: for loops that
     /// keep per-row state (batches, scratch space) instead of working texel by texel. Each
     /// row is cleared just before `f` sees it, by the thread that fills it, not the whole

@@ -68,8 +68,15 @@ pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<De
 
 /// The panorama as a 2D KTX2 texture in `format` with its solid-angle-weighted mips (block
 /// formats cannot be mipmapped by the engine): its path, bytes, level count, the clamp warning
-/// and the PSNR of a lossy format.
-fn panorama_ktx2(ctx: &Context, img: Image, format: GpuFormat) -> Result<PanoramaKtx2> {
+/// and the PSNR of a lossy format. `bottom_up` stores each level's rows bottom first, marked
+/// `KTXorientation` "ru", for engines that upload rows as stored into GL's bottom-up texture
+/// space (three.js: a compressed texture is never flipped).
+fn panorama_ktx2(
+    ctx: &Context,
+    img: Image,
+    format: GpuFormat,
+    bottom_up: bool,
+) -> Result<PanoramaKtx2> {
     let path = ctx.path(".ktx2");
     let mut levels = vec![img];
     while let Some(last) = levels.last().filter(|l| l.height > 1) {
@@ -77,8 +84,14 @@ fn panorama_ktx2(ctx: &Context, img: Image, format: GpuFormat) -> Result<Panoram
         let next = last.downsample_2x_rows(&weights, glam::Vec4::INFINITY);
         levels.push(next);
     }
-    let bytes = io::ktx2::encode_2d_with(&levels, format, ctx.opts.zstd)
-        .map_err(|e| crate::Error::file(&path, e))?;
+    let encoded = if bottom_up {
+        let flipped: Vec<Image> = levels.iter().map(Image::flipped_rows).collect();
+        let ru: &[(&str, &[u8])] = &[(io::ktx2::ORIENTATION_KEY, b"ru")];
+        io::ktx2::encode_2d_with(&flipped, format, ctx.opts.zstd, ru)
+    } else {
+        io::ktx2::encode_2d_with(&levels, format, ctx.opts.zstd, &[])
+    };
+    let bytes = encoded.map_err(|e| crate::Error::file(&path, e))?;
     let write = io::WriteOptions {
         gpu_format: format,
         ..Default::default()
@@ -109,7 +122,7 @@ struct PanoramaKtx2 {
 /// Godot with a GPU format (mobile builds: ASTC HDR 4x4): the panorama as a 2D KTX2 texture
 /// with its mips, which Godot's KTX loader uploads as stored.
 fn godot_ktx2(ctx: &Context, img: Image, format: GpuFormat) -> Result<Delivery> {
-    let k = panorama_ktx2(ctx, img, format)?;
+    let k = panorama_ktx2(ctx, img, format, false)?;
     let snippet = format!(
         "Godot 4: WorldEnvironment > Environment > Sky > PanoramaSkyMaterial, panorama = {f}\n\
          ({levels} levels of {name}, read by Godot's KTX loader and uploaded as stored; a device \
@@ -145,7 +158,7 @@ fn three(ctx: &Context, size: Option<usize>) -> Result<Delivery> {
     let fallback = io::encode_image(&hdr, &img, &io::WriteOptions::default())?;
     // UASTC HDR: the same panorama with its mips, which KTX2Loader transcodes per device.
     let ktx2 = match ctx.opts.gpu_format {
-        Some(format) => Some(panorama_ktx2(ctx, img, format)?),
+        Some(format) => Some(panorama_ktx2(ctx, img, format, true)?),
         None => None,
     };
     let ktx2_lines = ktx2.as_ref().map_or(String::new(), |k| {

@@ -147,7 +147,7 @@ impl Job for ControlJob {
                 if let Some(z) = self.zstd {
                     what.push_str(&format!(", Zstandard level {z}"));
                 }
-                let bytes = ktx2::encode_2d_with(&levels, gpu, self.zstd)
+                let bytes = ktx2::encode_2d_with(&levels, gpu, self.zstd, &[])
                     .map_err(|e| Error::file(&self.output, e))?;
                 if gpu.is_lossy() {
                     quality =

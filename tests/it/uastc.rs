@@ -298,4 +298,59 @@ mod with_uastc {
         );
         assert!(!godot.exists());
     }
+
+    /// three.js's own KTX2Loader (headless Chromium, its Basis transcoder in a worker, formats
+    /// from the page's WebGL2 renderer) loads `ibl --target three`'s env.ktx2 of the marker
+    /// panorama: the transcoded level 0 is our map (its rows bottom first, as three.js uploads
+    /// a compressed texture unflipped), and the marks land where they do for env.jpg.
+    #[test]
+    fn three_ktx2loader_sees_the_marks_where_they_belong() {
+        let dir = tempfile::tempdir().unwrap();
+        let src = crate::ibl::marker_panorama(dir.path());
+        let out = dir.path().join("three");
+        let o = ibl(&src, &out, "three");
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        let file = out.join("env.ktx2");
+        // cubeforge reads it back top row first (KTXorientation "ru" undone).
+        let (decoded, _) = cubeforge::io::read_raw(&file, &ReadOptions::default()).unwrap();
+        let Decoded::Image(ours) = decoded else {
+            panic!("a 2D texture")
+        };
+        let marks = crate::ultrahdr::marks_three_sees(&ours, true, "cubeforge's read");
+        crate::ibl::assert_unmirrored("cubeforge env.ktx2", marks, true, glam::Vec3::Z);
+        if !crate::view::browser() || common::three_js().is_none() {
+            return;
+        }
+        let read = dir.path().join("read");
+        std::fs::create_dir(&read).unwrap();
+        let o = Command::new("node")
+            .arg(crate::ultrahdr::THREE_TOOL)
+            .arg(&read)
+            .arg(&file)
+            .output()
+            .expect("node runs");
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{stdout} {}", common::stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+        assert!(v.get("error").is_none(), "KTX2Loader: {v}");
+        assert_eq!(v["flipY"], false, "{v}");
+        assert_eq!(v["mips"], ours.height.ilog2() + 1, "{v}");
+        let format = match v["format"].as_str() {
+            Some("bc6h") => GpuFormat::Bc6h,
+            Some("half") => GpuFormat::Rgba16f,
+            other => panic!("KTX2Loader made {other:?}"),
+        };
+        let bytes = std::fs::read(read.join("0.f32")).unwrap();
+        let theirs = format
+            .decode_image(&bytes, ours.width, ours.height)
+            .unwrap();
+        let p = gpu::psnr(GpuFormat::Bc6h, [&ours.flipped_rows()], [&theirs]);
+        println!(
+            "KTX2Loader: {} ({p:.1} dB from cubeforge's read)",
+            v["format"]
+        );
+        assert!(p >= 40.0, "{p:.1} dB");
+        let marks = crate::ultrahdr::marks_three_sees(&theirs, false, "KTX2Loader");
+        crate::ibl::assert_unmirrored("three.js env.ktx2", marks, true, glam::Vec3::Z);
+    }
 }

@@ -9,7 +9,8 @@ use glam::{Vec3, Vec4};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const THREE_TOOL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/tools/three_uhdr.cjs");
+pub(crate) const THREE_TOOL: &str =
+    concat!(env!("CARGO_MANIFEST_DIR"), "/tests/tools/three_uhdr.cjs");
 
 fn ok(args: &[&str]) -> String {
     let o = run(args);
@@ -300,34 +301,42 @@ fn three_sees_the_marks_where_they_belong() {
         return;
     };
     for (img, what) in read.iter().zip(["env.jpg", "env.hdr"]) {
-        let (w, h) = (img.width, img.height);
-        let mut sums = [Vec3::ZERO; 3];
-        for y in 0..h {
-            for x in 0..w {
-                let p = img.pixels[y * w + x];
-                let u = (x as f32 + 0.5) / w as f32;
-                let v = 1.0 - (y as f32 + 0.5) / h as f32;
-                let phi = (u - 0.5) * std::f32::consts::TAU;
-                let theta = (v - 0.5) * std::f32::consts::PI;
-                let d = Vec3::new(
-                    theta.cos() * phi.cos(),
-                    theta.sin(),
-                    theta.cos() * phi.sin(),
-                );
-                for (c, sum) in sums.iter_mut().enumerate() {
-                    let others = (0..3).filter(|&o| o != c).map(|o| p[o]).fold(0.0, f32::max);
-                    if p[c] > 5.0 && p[c] > 4.0 * others {
-                        *sum += d;
-                    }
+        let marks = marks_three_sees(img, true, what);
+        crate::ibl::assert_unmirrored(&format!("three.js {what}"), marks, true, Vec3::Z);
+    }
+}
+
+/// Where three.js's equirect mapping (`equirectUv`) puts the marker panorama's three marks
+/// (red, green, blue), from a texture's rows as three.js holds them: with `flip_y` (images)
+/// row 0 is uploaded to the top, v = 1; without (compressed textures) to the bottom, v = 0.
+pub(crate) fn marks_three_sees(img: &Image, flip_y: bool, what: &str) -> [Vec3; 3] {
+    let (w, h) = (img.width, img.height);
+    let mut sums = [Vec3::ZERO; 3];
+    for y in 0..h {
+        for x in 0..w {
+            let p = img.pixels[y * w + x];
+            let u = (x as f32 + 0.5) / w as f32;
+            let row = (y as f32 + 0.5) / h as f32;
+            let v = if flip_y { 1.0 - row } else { row };
+            let phi = (u - 0.5) * std::f32::consts::TAU;
+            let theta = (v - 0.5) * std::f32::consts::PI;
+            let d = Vec3::new(
+                theta.cos() * phi.cos(),
+                theta.sin(),
+                theta.cos() * phi.sin(),
+            );
+            for (c, sum) in sums.iter_mut().enumerate() {
+                let others = (0..3).filter(|&o| o != c).map(|o| p[o]).fold(0.0, f32::max);
+                if p[c] > 5.0 && p[c] > 4.0 * others {
+                    *sum += d;
                 }
             }
         }
-        let marks = sums.map(|s| {
-            assert!(s.length() > 0.0, "{what}: a mark is missing");
-            s.normalize()
-        });
-        crate::ibl::assert_unmirrored(&format!("three.js {what}"), marks, true, Vec3::Z);
     }
+    sums.map(|s| {
+        assert!(s.length() > 0.0, "{what}: a mark is missing");
+        s.normalize()
+    })
 }
 
 /// A gain map larger than its picture, or metadata with no finite range, is refused in one
