@@ -2,7 +2,7 @@
 //! levels), against the GGX filtering that made it. Target: BC6H-encoding the chain takes less
 //! than filtering it. Also BC7, the packed HDR formats and Zstandard levels, and the PSNR of
 //! each lossy format at level 0. Run with `cargo bench --bench gpu_encode` (add `--features astc`
-//! for ASTC HDR 4x4 and 6x6).
+//! for ASTC HDR 4x4 and 6x6, `--features uastc` for those and UASTC HDR 4x4).
 
 use cubeforge::cube::CubeMap;
 use cubeforge::filter::{self, ChainOptions, FilterKind};
@@ -31,7 +31,14 @@ fn main() {
         .map(|l| 6 * l[0].width * l[0].width)
         .sum();
     let faces: Vec<&Image> = chain.levels[0].iter().collect();
-    let astc: &[(GpuFormat, Option<i32>)] = if cfg!(feature = "astc") {
+    let astc: &[(GpuFormat, Option<i32>)] = if cfg!(feature = "uastc") {
+        &[
+            (GpuFormat::AstcHdr4x4, None),
+            (GpuFormat::AstcHdr6x6, None),
+            (GpuFormat::UastcHdr4x4, None),
+            (GpuFormat::UastcHdr4x4, Some(19)),
+        ]
+    } else if cfg!(feature = "astc") {
         &[(GpuFormat::AstcHdr4x4, None), (GpuFormat::AstcHdr6x6, None)]
     } else {
         &[]
