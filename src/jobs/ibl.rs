@@ -98,10 +98,16 @@ impl IblJob {
         let (size, diffuse) = self.sizes(input_face);
         let face = |n: u64| 6 * 16 * n * n;
         let chains = if self.options.sheen { 2 } else { 1 };
-        // three.js's panorama: 4 x 2 faces of a power of two from 256, and its UltraHDR fit.
+        // three.js's panorama: 4 x 2 faces of a power of two from 256, and its UltraHDR fit;
+        // with a GPU format also its mips (4/3), their upside-down copy and the encoding.
         let three = if self.engine == Engine::Three {
             let s = size.next_power_of_two().clamp(256, 4096);
-            8 * s * s * (16 + crate::io::ultrahdr::ENCODE_BYTES_PER_TEXEL)
+            let ktx2 = if self.options.gpu_format.is_some() {
+                3 * 16
+            } else {
+                0
+            };
+            8 * s * s * (16 + crate::io::ultrahdr::ENCODE_BYTES_PER_TEXEL + ktx2)
         } else {
             0
         };

@@ -236,3 +236,25 @@ fn ibl_says_what_it_makes_and_counts_its_progress() {
     let (total, done) = *record.units.lock().unwrap();
     assert!(total > 0 && total == done, "{total} units, {done} done");
 }
+
+/// three.js's KTX2 panorama (its mips, their upside-down copy, the encoding) counts in the
+/// ibl job's memory estimate, so the budget still bounds it: at least 48 bytes a texel more of
+/// the 4 x 2 panorama of 256 px faces.
+#[test]
+fn ibl_three_counts_its_ktx2_panorama_in_the_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let job = |gpu_format| cubeforge::IblJob {
+        options: cubeforge::IblOptions {
+            gpu_format,
+            ..Default::default()
+        },
+        ..cubeforge::IblJob::new(
+            vec![sky()],
+            dir.path().join("three"),
+            cubeforge::Engine::Three,
+        )
+    };
+    let plain = job(None).memory_estimate().unwrap();
+    let ktx2 = job(Some(GpuFormat::UastcHdr4x4)).memory_estimate().unwrap();
+    assert!(ktx2 >= plain + 8 * 256 * 256 * 48, "{plain} -> {ktx2}");
+}
