@@ -103,7 +103,6 @@ pub fn warp_factor(n: usize) -> f64 {
 /// bilinear lookup of the faces at the direction it now stands for (rows in parallel; the
 /// same bytes on every thread count). `None` and faces of edge 1 come back unchanged.
 pub fn apply(faces: &Faces, mode: EdgeFixup) -> Faces {
-    use rayon::prelude::*;
     let n = faces[0].width;
     if mode == EdgeFixup::None || n < 2 {
         return faces.clone();
@@ -117,18 +116,11 @@ pub fn apply(faces: &Faces, mode: EdgeFixup) -> Faces {
         })
         .collect();
     std::array::from_fn(|face| {
-        let mut img = Image::new(n, n);
-        img.pixels
-            .par_chunks_mut(n)
-            .enumerate()
-            .for_each(|(y, row)| {
-                for (x, texel) in row.iter_mut().enumerate() {
-                    let d = face_dir(face, at[x], at[y]);
-                    let alpha = faces[face].get(x, y).w;
-                    *texel = sampler.bilinear(d, 0).truncate().extend(alpha);
-                }
-            });
-        img
+        Image::from_fn(n, n, |x, y| {
+            let d = face_dir(face, at[x], at[y]);
+            let alpha = faces[face].get(x, y).w;
+            sampler.bilinear(d, 0).truncate().extend(alpha)
+        })
     })
 }
 
@@ -136,7 +128,6 @@ pub fn apply(faces: &Faces, mode: EdgeFixup) -> Faces {
 /// per face and clamped (exactly how the fixup meant the faces to be sampled), where `mode`
 /// stored its direction ([`EdgeFixup::lookup`]). What reading such a file does.
 pub fn undo(faces: &Faces, mode: EdgeFixup) -> Faces {
-    use rayon::prelude::*;
     let n = faces[0].width;
     if mode == EdgeFixup::None || n < 2 {
         return faces.clone();
@@ -148,19 +139,9 @@ pub fn undo(faces: &Faces, mode: EdgeFixup) -> Faces {
             ((mode.lookup(t, n) + 1.0) * 0.5 * n as f64) as f32
         })
         .collect();
+    // The image's own bilinear lookup clamps at the face's edges.
     std::array::from_fn(|face| {
-        let src = &faces[face];
-        let mut img = Image::new(n, n);
-        img.pixels
-            .par_chunks_mut(n)
-            .enumerate()
-            .for_each(|(y, row)| {
-                for (x, texel) in row.iter_mut().enumerate() {
-                    // The image's own bilinear lookup clamps at the face's edges.
-                    *texel = src.bilinear(at[x], at[y], false);
-                }
-            });
-        img
+        Image::from_fn(n, n, |x, y| faces[face].bilinear(at[x], at[y], false))
     })
 }
 
