@@ -450,6 +450,23 @@ pub fn bevy_ktx2() -> Option<PathBuf> {
     found.then_some(bin)
 }
 
+/// What Bevy's own KTX2 loader (found by [`bevy_ktx2`]) makes of `file`, as the JSON
+/// `tests/tools/bevy_ktx2` prints (view, layers, mips, format); panics with the loader's
+/// message when it refuses the file.
+pub fn bevy_check(bin: &Path, file: &Path) -> serde_json::Value {
+    let o = Command::new(bin)
+        .arg(file)
+        .output()
+        .expect("run Bevy's loader");
+    assert!(
+        o.status.success(),
+        "Bevy's loader refused {}: {}",
+        file.display(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).expect("bevy_ktx2_check prints JSON")
+}
+
 /// What ktx-parse (found by [`ktx_parse`] in `tools`) reads in `file`, as the JSON
 /// `tests/tools/ktx_check.mjs` prints; panics with ktx-parse's message and `what` when it fails.
 pub fn ktx_check(tools: &Path, file: &Path, what: &str) -> serde_json::Value {

@@ -61,7 +61,6 @@ mod with_astc {
     use cubeforge::io::{self, gpu, ktx2, Decoded, GpuFormat, Limits, ReadOptions};
     use cubeforge::resample::Resampler;
     use std::path::{Path, PathBuf};
-    use std::process::Command;
 
     use crate::gpu_formats::panoramas;
 
@@ -206,9 +205,7 @@ mod with_astc {
                 assert_eq!(v["rewriteIdentical"], true, "{v}");
             }
             if let Some(bin) = common::bevy_ktx2() {
-                let o = Command::new(&bin).arg(&out).output().unwrap();
-                assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-                let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+                let v = common::bevy_check(&bin, &out);
                 assert_eq!(v["view"], "Cube", "{v}");
                 assert_eq!(v["mips"], 7, "{v}");
                 assert_eq!(v["format"], bevy, "{v}");
@@ -273,9 +270,7 @@ mod with_astc {
                 bevy.join("env_diffuse.ktx2"),
                 panorama.clone(),
             ] {
-                let o = Command::new(&bin).arg(&file).output().unwrap();
-                assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-                let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+                let v = common::bevy_check(&bin, &file);
                 assert_eq!(v["format"], "Astc { block: B4x4, channel: Hdr }", "{v}");
                 if file == panorama {
                     // A 2D texture (no view of its own), its chain down to one texel high.

@@ -150,9 +150,7 @@ mod with_uastc {
         }
         if let Some(bin) = common::bevy_ktx2() {
             // Bevy takes the blocks as the ASTC HDR they are.
-            let o = Command::new(&bin).arg(&out).output().unwrap();
-            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-            let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+            let v = common::bevy_check(&bin, &out);
             assert_eq!(v["view"], "Cube", "{v}");
             assert_eq!(v["mips"], 7, "{v}");
             assert_eq!(v["format"], "Astc { block: B4x4, channel: Hdr }", "{v}");
@@ -266,8 +264,7 @@ mod with_uastc {
                 cubeforge::io::read_raw(&bevy.join(file), &ReadOptions::default()).unwrap();
             assert_eq!(meta.pixel_format, "UASTC HDR 4x4");
             if let Some(bin) = common::bevy_ktx2() {
-                let o = Command::new(&bin).arg(bevy.join(file)).output().unwrap();
-                assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+                common::bevy_check(&bin, &bevy.join(file));
             }
         }
         // three.js: the UltraHDR and .hdr panoramas, and the same as UASTC HDR with its mips

@@ -58,9 +58,7 @@ fn bevys_own_loader_takes_the_bevy_files_as_cube_maps() {
     let out = dir.path().join("bevy");
     ibl(&input, &out, "bevy", &SMALL);
     for (file, mips) in [("env_specular.ktx2", 4), ("env_diffuse.ktx2", 1)] {
-        let o = Command::new(&bevy).arg(out.join(file)).output().unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let v = common::bevy_check(&bevy, &out.join(file));
         assert_eq!(v["view"], "Cube", "{v}");
         assert_eq!(v["layers"], 6, "{v}");
         assert_eq!(v["mips"], mips, "{v}");
@@ -72,12 +70,7 @@ fn bevys_own_loader_takes_the_bevy_files_as_cube_maps() {
         let mut args = SMALL.to_vec();
         args.extend(["--gpu-format", format, "--zstd=3"]);
         ibl(&input, &out, "bevy", &args);
-        let o = Command::new(&bevy)
-            .arg(out.join("env_specular.ktx2"))
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let v = common::bevy_check(&bevy, &out.join("env_specular.ktx2"));
         assert_eq!(v["view"], "Cube", "{v}");
         assert_eq!(v["mips"], 4, "{v}");
         assert_eq!(v["format"], bevy_name, "{v}");
