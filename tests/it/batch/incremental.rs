@@ -129,10 +129,7 @@ fn a_rerun_does_only_what_changed() {
 fn an_interrupted_batch_keeps_the_jobs_it_finished() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    std::fs::create_dir_all(d.join("proj/hdri")).unwrap();
-    for name in ["quick.exr", "slow.exr"] {
-        std::fs::copy(super::SKY_EXR, d.join("proj/hdri").join(name)).unwrap();
-    }
+    super::skies(d, &["quick.exr", "slow.exr"]);
     // One quick job, and one that takes many seconds (a 512 px GGX chain of 16384 samples).
     std::fs::write(
         d.join("proj/m.toml"),

@@ -13,16 +13,21 @@ use std::path::Path;
 pub(crate) const SKY_EXR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.exr");
 pub(crate) const SKY_PNG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.png");
 
+/// `d/proj/hdri/NAME` for each of `names`, each a copy of the bundled sky.
+pub(crate) fn skies(d: &Path, names: &[&str]) {
+    std::fs::create_dir_all(d.join("proj/hdri")).unwrap();
+    for name in names {
+        std::fs::copy(SKY_EXR, d.join("proj/hdri").join(name)).unwrap();
+    }
+}
+
 /// The test project under `d/proj`: three panoramas (hdri/a, b, c.exr), a decal, a recipe
 /// that names a mask, and a manifest of seven jobs: a box chain and a decal preview of each
 /// panorama, and the control map.
 pub(crate) fn project(d: &Path) {
     let p = d.join("proj");
-    std::fs::create_dir_all(p.join("hdri")).unwrap();
+    skies(d, &["a.exr", "b.exr", "c.exr"]);
     std::fs::create_dir_all(p.join("masks")).unwrap();
-    for name in ["a.exr", "b.exr", "c.exr"] {
-        std::fs::copy(SKY_EXR, p.join("hdri").join(name)).unwrap();
-    }
     std::fs::copy(SKY_PNG, p.join("decal.png")).unwrap();
     std::fs::copy(SKY_PNG, p.join("masks/m.png")).unwrap();
     std::fs::write(
@@ -70,10 +75,7 @@ pub(crate) fn ran(o: &std::process::Output) -> Vec<String> {
 fn a_manifest_runs_each_job_as_its_command_line() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    std::fs::create_dir_all(d.join("proj/hdri")).unwrap();
-    for name in ["a.exr", "b.exr"] {
-        std::fs::copy(SKY_EXR, d.join("proj/hdri").join(name)).unwrap();
-    }
+    skies(d, &["a.exr", "b.exr"]);
     std::fs::write(
         d.join("proj/m.toml"),
         r#"
