@@ -121,7 +121,7 @@ impl ConvertJob {
             32
         };
         // An edge fixup or an 8-bit encoding writes from a moved or encoded copy (mips too).
-        let copy = self.edge_fixup != crate::cube::EdgeFixup::None || self.hdr_encoding.is_some();
+        let copy = super::writes_a_copy(self.edge_fixup, self.hdr_encoding);
         let per_texel = per_texel + if copy { 24 } else { 0 };
         texels.saturating_mul(per_texel).saturating_add(input)
     }

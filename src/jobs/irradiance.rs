@@ -112,7 +112,7 @@ impl IrradianceJob {
         let base = input_face.unwrap_or(BASE).min(BASE) as u64;
         let face = |n: u64| 6 * 16 * n * n;
         // An edge fixup or an 8-bit encoding writes from a moved or encoded copy.
-        let copy = self.edge_fixup != crate::cube::EdgeFixup::None || self.hdr_encoding.is_some();
+        let copy = super::writes_a_copy(self.edge_fixup, self.hdr_encoding);
         let maps = if copy { 5 } else { 3 };
         (2 * face(base) + maps * face(self.size as u64)).saturating_add(input)
     }

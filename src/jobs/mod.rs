@@ -140,6 +140,15 @@ pub(crate) fn replaced_values(file: &std::path::Path, n: u64) -> Option<String> 
     })
 }
 
+/// Whether the encoders write from a moved (edge fixup) or encoded (RGBM/RGBD) copy of the
+/// map, which the memory plans count.
+pub(crate) fn writes_a_copy(
+    fixup: crate::cube::EdgeFixup,
+    encoding: Option<crate::io::HdrEncoding>,
+) -> bool {
+    fixup != crate::cube::EdgeFixup::None || encoding.is_some()
+}
+
 /// The warning for an edge fixup asked of an output that is not a cube: projections
 /// (equirect, mirror ball, angular, octahedral) have no face edges to fix.
 pub(crate) fn fixup_ignored(

@@ -108,12 +108,11 @@ impl PrefilterJob {
     /// beside the input's texels and pyramid (`input` bytes).
     fn plan_bytes(&self, size: usize, input: u64) -> u64 {
         // An edge fixup or an 8-bit encoding writes from a moved or encoded copy of the chain.
-        let copies =
-            if self.edge_fixup != crate::cube::EdgeFixup::None || self.hdr_encoding.is_some() {
-                6
-            } else {
-                4
-            };
+        let copies = if super::writes_a_copy(self.edge_fixup, self.hdr_encoding) {
+            6
+        } else {
+            4
+        };
         (6 * 16 * copies * (size as u64).pow(2)).saturating_add(input)
     }
 
