@@ -30,6 +30,7 @@ mod gpu_formats;
 mod hdr8;
 mod help_examples;
 mod hostile_exr;
+mod hostile_paths;
 mod ibl;
 mod info;
 mod jobs;

@@ -1,0 +1,1 @@
+//! Issue 44: see the parent module.
