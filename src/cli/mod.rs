@@ -320,7 +320,9 @@ pub fn report(text: impl std::fmt::Display) -> cubeforge::Result<()> {
         tell(text);
         return Ok(());
     }
-    say(text)
+    // A summary, not the command's data: a closed standard output is no reason to fail.
+    let text = cubeforge::error::name_params(&text.to_string(), true);
+    out::write_summary(&text)
 }
 
 /// A progress bar on standard error for work counted in `total` units; none when standard

@@ -20,6 +20,13 @@ pub(super) fn write_stdout(
     quietly(output::write_stdout(&text))
 }
 
+/// Writes a summary line to standard output (see [`output::write_summary`]): a standard
+/// output closed at start or on /dev/null takes it; a reader that went away ends the process
+/// quietly.
+pub(super) fn write_summary(text: &str) -> cubeforge::Result<()> {
+    quietly(output::write_summary(format!("{text}\n").as_bytes()))
+}
+
 /// A closed pipe on standard output ends the process quietly (`| head`).
 pub(super) fn quietly(r: cubeforge::Result<()>) -> cubeforge::Result<()> {
     match r {

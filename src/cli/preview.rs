@@ -82,7 +82,7 @@ pub struct Args {
     pub control: Option<PathBuf>,
     /// Exposure in stops: radiance scaled by 2^EV, before the tone curve of PNG, JPEG and TGA
     /// output (EXR and HDR keep it linear, scaled).
-    #[arg(value_parser = super::finite_f32, long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(value_parser = super::exposure, long, value_name = "EV", default_value_t = 0.0, allow_hyphen_values = true)]
     pub exposure: f32,
     /// Tone curve for PNG, JPEG and TGA output (EXR and HDR stay linear).
     #[arg(long, value_enum, default_value_t = Tonemap::None)]

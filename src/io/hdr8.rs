@@ -183,17 +183,32 @@ pub(crate) fn marked(format: FileFormat, png: Vec<u8>, e: HdrEncoding) -> Vec<u8
     out
 }
 
-/// The encoding a PNG's text names ([`PNG_KEY`]), read by the png crate.
-pub(crate) fn png_encoding(bytes: &[u8]) -> Option<HdrEncoding> {
-    let reader = png::Decoder::new(std::io::Cursor::new(bytes))
-        .read_info()
-        .ok()?;
-    reader
-        .info()
+/// The encoding a PNG's text names ([`PNG_KEY`]), read by the png crate. Only an 8-bit RGBA
+/// PNG can hold one (the encodings keep a scale in alpha), so on any other the text is not
+/// obeyed; two texts that name different encodings are refused, never settled by order.
+pub(crate) fn png_encoding(bytes: &[u8]) -> std::result::Result<Option<HdrEncoding>, String> {
+    let Ok(reader) = png::Decoder::new(std::io::Cursor::new(bytes)).read_info() else {
+        return Ok(None);
+    };
+    let info = reader.info();
+    if info.color_type != png::ColorType::Rgba || info.bit_depth != png::BitDepth::Eight {
+        return Ok(None);
+    }
+    let mut named = info
         .uncompressed_latin1_text
         .iter()
-        .find(|t| t.keyword == PNG_KEY)
-        .and_then(|t| HdrEncoding::from_name(t.text.as_bytes()))
+        .filter(|t| t.keyword == PNG_KEY)
+        .map(|t| t.text.as_str());
+    let Some(first) = named.next() else {
+        return Ok(None);
+    };
+    if let Some(other) = named.find(|t| *t != first) {
+        return Err(format!(
+            "its {PNG_KEY} texts disagree ({first:?} and {other:?}): give {} to say which",
+            param("decode")
+        ));
+    }
+    Ok(HdrEncoding::from_name(first.as_bytes()))
 }
 
 /// Every level of `cube` encoded ([`HdrEncoding::encode_image`]).
@@ -217,9 +232,11 @@ pub(crate) fn ktx2_encoding(bytes: &[u8]) -> Option<HdrEncoding> {
 
 /// A file read as stored, decoded: its 8-bit texels become radiance, and `meta` says so. A
 /// float file, or one read through sRGB, is refused: its values are not the encoding's bytes.
+/// `given`: the encoding was asked for (`--decode`), not named by the file's own metadata.
 pub(crate) fn decode(
     path: &Path,
     e: HdrEncoding,
+    given: bool,
     decoded: Decoded,
     mut meta: Meta,
 ) -> Result<(Decoded, Meta)> {
@@ -230,12 +247,15 @@ pub(crate) fn decode(
         && meta.color_space == crate::image::ColorSpace::Linear
         && !meta.pixel_format.contains("16");
     if !eight_bit {
+        let asked = if given {
+            format!("{} {}: this file holds", param("decode"), e.name())
+        } else {
+            format!("its metadata ({KTX2_KEY}) names {}, but it holds", e.name())
+        };
         return Err(Error::file(
             path,
             format!(
-                "{} {}: this file holds {} {}, not 8-bit RGBA data (a PNG, or a KTX2/DDS of rgba8)",
-                param("decode"),
-                e.name(),
+                "{asked} {} {}, not 8-bit RGBA data (a PNG, or a KTX2/DDS of rgba8)",
                 meta.file_format.name(),
                 meta.pixel_format
             ),

@@ -197,9 +197,10 @@ fn decode_bytes(
         FileFormat::Ktx2 => opts
             .hdr_encoding
             .or_else(|| super::hdr8::ktx2_encoding(bytes)),
-        FileFormat::Png => opts
-            .hdr_encoding
-            .or_else(|| super::hdr8::png_encoding(bytes)),
+        FileFormat::Png => match opts.hdr_encoding {
+            Some(e) => Some(e),
+            None => super::hdr8::png_encoding(bytes).map_err(|msg| Error::file(path, msg))?,
+        },
         _ => opts.hdr_encoding,
     };
     if let Some(e) = encoding {
@@ -210,7 +211,8 @@ fn decode_bytes(
             ..*opts
         };
         let (decoded, meta) = decode_format(bytes, format, path, &raw, sanitize)?;
-        let (decoded, meta) = super::hdr8::decode(path, e, decoded, meta)?;
+        let (decoded, meta) =
+            super::hdr8::decode(path, e, opts.hdr_encoding.is_some(), decoded, meta)?;
         return Ok(fixed_back(bytes, format, decoded, meta));
     }
     let (decoded, meta) = decode_format(bytes, format, path, opts, sanitize)?;

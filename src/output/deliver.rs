@@ -126,11 +126,19 @@ pub fn deliver(out: &Files, dest: &Destination, inputs: &[PathBuf]) -> Result<()
     staged.commit()
 }
 
-/// Writes `bytes` to standard output and flushes. Refuses a closed standard output.
+/// Writes `bytes`, a command's data (a file, `info`'s text, help), to standard output and
+/// flushes. Refuses a standard output that was closed when the process started.
 pub fn write_stdout(bytes: &[u8]) -> Result<()> {
-    use std::io::Write;
     // `cubeforge convert ... -o - >&-` must not exit 0 having written nothing.
     stdout_open()?;
+    write_summary(bytes)
+}
+
+/// Writes `bytes`, a summary of what a command did (its files are its product), to standard
+/// output and flushes: a standard output closed at start, or opened on /dev/null, takes it
+/// and says nothing. A full disk is still an error.
+pub fn write_summary(bytes: &[u8]) -> Result<()> {
+    use std::io::Write;
     let mut out = std::io::stdout().lock();
     out.write_all(bytes)
         .and_then(|()| out.flush())
@@ -159,24 +167,31 @@ pub fn stdout_open() -> Result<()> {
     Ok(())
 }
 
-/// Whether the process started with standard output closed (`>&-`). Rust's start-up puts
-/// /dev/null on a closed standard stream, opened for reading and writing, so writes to it
-/// succeed and go nowhere; a shell's `> /dev/null` opens it for writing only, so the two
-/// differ.
+/// Whether the process started with standard output closed (`>&-`). Rust's start-up puts a
+/// read-write /dev/null on a closed standard stream, which cannot be told from the one a
+/// parent opens on purpose (Python's `stdout=subprocess.DEVNULL`, build systems, test
+/// harnesses), so the descriptor is looked at before that start-up, by a constructor.
 fn stdout_closed() -> bool {
-    #[cfg(unix)]
-    // SAFETY: fcntl and fstat only read the descriptor's flags and status into `st`, and
-    // stat reads a NUL-terminated path.
-    unsafe {
-        let mut st: libc::stat = std::mem::zeroed();
-        let mut null: libc::stat = std::mem::zeroed();
-        let flags = libc::fcntl(1, libc::F_GETFL);
-        flags != -1
-            && flags & libc::O_ACCMODE == libc::O_RDWR
-            && libc::fstat(1, &mut st) == 0
-            && libc::stat(c"/dev/null".as_ptr(), &mut null) == 0
-            && (st.st_dev, st.st_ino) == (null.st_dev, null.st_ino)
-    }
-    #[cfg(not(unix))]
-    false
+    STDOUT_CLOSED_AT_START.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+static STDOUT_CLOSED_AT_START: std::sync::atomic::AtomicBool =
+    std::sync::atomic::AtomicBool::new(false);
+
+/// Runs before `main` (and before Rust's start-up touches the standard streams) in every
+/// program that links cubeforge.
+#[cfg(any(target_os = "linux", target_os = "android", target_os = "macos"))]
+#[used]
+#[cfg_attr(
+    any(target_os = "linux", target_os = "android"),
+    link_section = ".init_array"
+)]
+#[cfg_attr(target_os = "macos", link_section = "__DATA,__mod_init_func")]
+static RECORD_STDOUT: extern "C" fn() = record_stdout;
+
+#[cfg(any(target_os = "linux", target_os = "android", target_os = "macos"))]
+extern "C" fn record_stdout() {
+    // SAFETY: F_GETFD only reads descriptor 1's flags; -1 (EBADF) means it is not open.
+    let closed = unsafe { libc::fcntl(1, libc::F_GETFD) } == -1;
+    STDOUT_CLOSED_AT_START.store(closed, std::sync::atomic::Ordering::Relaxed);
 }

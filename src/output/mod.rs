@@ -14,7 +14,9 @@ use crate::tonemap::Tonemap;
 use std::path::{Path, PathBuf};
 
 mod deliver;
-pub use deliver::{deliver, is_closed_pipe, stdout_open, write_stdout, Destination, Files};
+pub use deliver::{
+    deliver, is_closed_pipe, stdout_open, write_stdout, write_summary, Destination, Files,
+};
 
 /// An output: where, in which layout and format, with which options.
 #[derive(Clone, Debug)]

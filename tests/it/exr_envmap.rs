@@ -256,7 +256,7 @@ fn info_names_exr_compressions_and_mixed_channel_types() {
     let o = common::run(["info".as_ref(), path.as_os_str()]);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(
-        text.contains("pixel format: R16F G32F B32F (DWAB)"),
+        text.contains("pixel format: R16F G32F B32F (DWAB, tiles 64x64)"),
         "{text}"
     );
     assert!(!text.contains("None"), "{text}");

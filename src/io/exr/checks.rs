@@ -377,7 +377,7 @@ pub(super) fn check_dwa(
     // Bytes of UNKNOWN and RLE channels, 8x8 blocks of lossy ones.
     let (mut unknown, mut rle, mut blocks) = (0u64, 0u64, 0u64);
     for c in &header.channels.list {
-        let name = c.name.to_string();
+        let name = super::select::text(&c.name);
         let suffix = name.rsplit('.').next().unwrap_or_default();
         let scheme = rules
             .iter()

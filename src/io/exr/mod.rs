@@ -193,11 +193,20 @@ fn pixel_format(header: &exr::meta::header::Header, alpha: bool, zstd: bool) -> 
     if let Some(c) = has("RY").filter(|c| luma && c.sampling != Vec2(1, 1)) {
         samples += &format!(", chroma {}x{}", c.sampling.0, c.sampling.1);
     }
-    let compression = if zstd {
+    let mut compression = if zstd {
         "ZSTD".to_string()
     } else {
         compression_name(header.compression)
     };
+    // A tiled file compresses a tile a block, whatever the scan-line count of its name.
+    if let BlockDescription::Tiles(t) = &header.blocks {
+        compression = match header.compression {
+            Compression::ZIP1 if !zstd => "ZIPS".into(),
+            Compression::ZIP16 if !zstd => "ZIP".into(),
+            _ => compression,
+        };
+        compression += &format!(", tiles {}x{}", t.tile_size.0, t.tile_size.1);
+    }
     format!("{samples} ({compression})")
 }
 

@@ -60,10 +60,10 @@ pub(super) fn read_planes(
             return Err(format!(
                 "channel {:?} is sampled every {sx} x {sy} texels, which does not divide the \
                  data window",
-                c.name.to_string()
+                super::select::text(&c.name)
             ));
         }
-        let name = c.name.to_string();
+        let name = super::select::text(&c.name);
         planes.push(wanted.contains(&name.as_str()).then(|| Plane {
             name,
             width: lw / sx,

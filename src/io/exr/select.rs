@@ -26,13 +26,19 @@ pub(super) fn part(meta: &MetaData, choice: Option<usize>) -> std::result::Resul
     }
 }
 
+/// An EXR text (a part's or channel's name) as written: OpenEXR stores UTF-8, where the exr
+/// crate's `to_string` reads each byte as a Latin-1 character.
+pub(super) fn text(t: &exr::meta::attribute::Text) -> String {
+    String::from_utf8_lossy(t.bytes()).into_owned()
+}
+
 /// Each part as `info` and messages name it: its index and, where it has one, its name.
 pub(super) fn names(meta: &MetaData) -> Vec<String> {
     meta.headers
         .iter()
         .enumerate()
         .map(|(i, h)| match &h.own_attributes.layer_name {
-            Some(name) => format!("{i} {:?}", name.to_string()),
+            Some(name) => format!("{i} {:?}", text(name)),
             None => i.to_string(),
         })
         .collect()
@@ -47,7 +53,7 @@ pub(super) fn part_named(meta: &MetaData, name: &str) -> std::result::Result<usi
             h.own_attributes
                 .layer_name
                 .as_ref()
-                .is_some_and(|n| n.eq(name))
+                .is_some_and(|n| n.bytes() == name.as_bytes())
         })
         .ok_or_else(|| {
             format!(
@@ -261,7 +267,7 @@ pub(super) fn no_colour(header: &Header, part: usize) -> String {
     let mut names: Vec<String> = list
         .iter()
         .take(8)
-        .map(|c| format!("{:?}", c.name.to_string()))
+        .map(|c| format!("{:?}", text(&c.name)))
         .collect();
     if list.len() > 8 {
         names.push(format!("and {} more", list.len() - 8));

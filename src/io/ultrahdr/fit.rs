@@ -8,7 +8,7 @@
 //! The gain map is the picture's size: three.js stretches a smaller one with the canvas's own
 //! filter, whose light came out 1-3% under a bilinear stretch's.
 
-use super::{decode_jpeg, flux_error, Gains, Reader, OFFSET};
+use super::{decode_jpeg, flux_error, inner, Gains, Reader, OFFSET};
 use crate::image::Image;
 use rayon::prelude::*;
 
@@ -96,7 +96,7 @@ pub(super) fn fit(
             })
             .collect();
         let jpeg = encode(&codes)?;
-        let map = decode_jpeg(&jpeg, true, &crate::io::Limits::default())?;
+        let map = decode_jpeg(&jpeg, true, &crate::io::Limits::default()).map_err(|e| inner(&e))?;
         let back = gains.apply(sdr, &map, reader);
         drop(map);
         let errors = flux_error(img, &back, equirect);

@@ -266,7 +266,7 @@ pub fn encode(
     let mut base_jpeg = jpeg(&base, w, h, BASE_QUALITY)?;
     // The gain is taken against the SDR picture as a reader decodes it, so the base's JPEG
     // error is not carried into the radiance.
-    let sdr = decode_jpeg(&base_jpeg, false, &Limits::default())?;
+    let sdr = decode_jpeg(&base_jpeg, false, &Limits::default()).map_err(|e| inner(&e))?;
     let fitted = fit::fit(img, &sdr, reader, equirect, ROUNDS, |codes| {
         jpeg(codes, w, h, GAIN_QUALITY)
     })?;
@@ -329,24 +329,77 @@ fn jpeg(data: &[u8], w: u32, h: u32, quality: u8) -> std::result::Result<Vec<u8>
 }
 
 /// A JPEG's pixels: linear light (sRGB decoded), or its stored values over 255 (`raw`), its
-/// size checked against `limits` first.
-fn decode_jpeg(bytes: &[u8], raw: bool, limits: &Limits) -> std::result::Result<Image, String> {
+/// size checked against `limits` first. Its errors name no file (see [`inner`]).
+fn decode_jpeg(bytes: &[u8], raw: bool, limits: &Limits) -> Result<Image> {
     let opts = ReadOptions {
         linear: raw,
         limits: *limits,
         ..ReadOptions::default()
     };
-    match raster::decode(bytes, FileFormat::Jpeg, Path::new("-"), &opts) {
-        Ok((Decoded::Image(img), _)) => Ok(img),
-        Ok(_) => Err("not an image".into()),
-        Err(e) => Err(e.to_string()),
+    match raster::decode(bytes, FileFormat::Jpeg, Path::new("-"), &opts)? {
+        (Decoded::Image(img), _) => Ok(img),
+        _ => Err(Error::file("-", "not an image")),
+    }
+}
+
+/// What went wrong in a JPEG inside the file, without the stand-in name [`decode_jpeg`] gave
+/// it (the file is named by the caller).
+fn inner(e: &Error) -> String {
+    match e {
+        Error::Io { source, .. } => crate::io::io_msg(source),
+        Error::Decode { msg, .. }
+        | Error::Unsupported { msg, .. }
+        | Error::Limit { msg, .. }
+        | Error::Recipe { msg, .. }
+        | Error::InvalidOption(msg) => msg.clone(),
+    }
+}
+
+/// An error of the JPEG `what` inside the UltraHDR file `path`: a limit stays a limit (the
+/// front end says how to raise it), anything else is the file's decode error.
+fn in_file(e: Error, path: &Path, what: &str) -> Error {
+    match e {
+        Error::Limit { kind, msg, .. } => Error::limit(Some(path), kind, format!("{what}: {msg}")),
+        e => Error::file(
+            path,
+            format!("cannot decode UltraHDR: {what}: {}", inner(&e)),
+        ),
     }
 }
 
 /// The radiance an UltraHDR file holds at full boost, its SDR picture and gain map decoded
 /// and the gain map stretched bilinearly over the picture where it is smaller, with the
 /// arithmetic it was fitted to ([`THREE_MARK`]).
-fn rebuild(decoder: &Decoder, limits: &Limits) -> std::result::Result<(Image, Reader), String> {
+fn rebuild(decoder: &Decoder, path: &Path, limits: &Limits) -> Result<(Image, Reader)> {
+    let fail = |msg: &str| Error::file(path, format!("cannot decode UltraHDR: {msg}"));
+    rebuild_checked(decoder, limits).map_err(|e| match e {
+        Rebuild::Said(msg) => fail(&msg),
+        Rebuild::Jpeg(e, what) => in_file(e, path, what),
+    })
+}
+
+/// Why [`rebuild`] stopped: a message about the file, or an error of one JPEG inside it.
+enum Rebuild {
+    Said(String),
+    Jpeg(Error, &'static str),
+}
+
+impl From<&str> for Rebuild {
+    fn from(s: &str) -> Rebuild {
+        Rebuild::Said(s.into())
+    }
+}
+
+impl From<String> for Rebuild {
+    fn from(s: String) -> Rebuild {
+        Rebuild::Said(s)
+    }
+}
+
+fn rebuild_checked(
+    decoder: &Decoder,
+    limits: &Limits,
+) -> std::result::Result<(Image, Reader), Rebuild> {
     let meta = decoder.metadata().ok_or("no gain-map metadata")?.clone();
     if meta.backward_direction {
         return Err("its base picture is the HDR rendition (backward direction), which cubeforge does not read".into());
@@ -365,13 +418,14 @@ fn rebuild(decoder: &Decoder, limits: &Limits) -> std::result::Result<(Image, Re
     }) {
         return Err("its gain-map metadata holds a value that is not finite".into());
     }
-    let map = decode_jpeg(gain, true, limits)?;
-    let mut img = decode_jpeg(primary, false, limits)?;
+    let map = decode_jpeg(gain, true, limits).map_err(|e| Rebuild::Jpeg(e, "its gain map"))?;
+    let mut img =
+        decode_jpeg(primary, false, limits).map_err(|e| Rebuild::Jpeg(e, "its primary picture"))?;
     if map.width > img.width || map.height > img.height {
-        return Err(format!(
+        return Err(Rebuild::Said(format!(
             "its gain map ({} x {}) is larger than its picture ({} x {})",
             map.width, map.height, img.width, img.height
-        ));
+        )));
     }
     let reader = if primary
         .windows(THREE_MARK.len())
@@ -396,8 +450,7 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<(Decoded,
         let (w, h) = raster::dimensions(p, FileFormat::Jpeg, path)?;
         opts.limits.check(path, w as u64, h as u64)?;
     }
-    let (img, reader) = rebuild(&decoder, &opts.limits)
-        .map_err(|e| Error::file(path, format!("cannot decode UltraHDR: {e}")))?;
+    let (img, reader) = rebuild(&decoder, path, &opts.limits)?;
     let meta = Meta {
         file_format: FileFormat::UltraHdr,
         pixel_format: match reader {
