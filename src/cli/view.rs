@@ -16,7 +16,8 @@ pub struct Args {
     /// One self-contained .html file: the page, its scripts and data inline.
     #[arg(long)]
     pub single_file: bool,
-    /// Serve the page on this machine after writing it (a free port, printed) until Ctrl-C.
+    /// Serve the page on this machine after writing it (a free port, printed) until Ctrl-C:
+    /// the files view wrote and nothing else.
     #[arg(long)]
     pub serve: bool,
     /// The address --serve listens on (default 127.0.0.1: this machine only).
@@ -70,13 +71,8 @@ pub fn run(a: Args, verbose: bool, depfile: Option<&std::path::Path>) -> Result<
     let (output, serve, bind, single) = (a.output.clone(), a.serve, a.bind.clone(), a.single_file);
     super::execute(job(a)?, &output, verbose, depfile)?;
     if serve {
-        let (dir, page) = if single {
-            let name = output.file_name().map(PathBuf::from).unwrap_or_default();
-            (output.parent().map(PathBuf::from).unwrap_or_default(), name)
-        } else {
-            (output, PathBuf::from("index.html"))
-        };
-        super::serve::serve(&dir, &page, &bind)?;
+        // What the job wrote, and nothing else the folder holds.
+        super::serve::serve(&cubeforge::view::paths(&output, single), &bind)?;
     }
     Ok(())
 }

@@ -14,12 +14,10 @@ use crate::preview::pbr::{self, PbrSetup};
 use crate::preview::LoadedEnv;
 use base64::Engine as _;
 use serde_json::{json, Value};
-use std::path::{Path, PathBuf};
 
-const INDEX: &str = include_str!("index.html");
-const VIEWER: &str = include_str!("viewer.js");
-const SHADERS: &str = include_str!("shaders.js");
-const UI: &str = include_str!("ui.js");
+mod page;
+
+pub use page::{files, paths};
 
 /// Rows of the pbr roughness -> level table (read linearly between rows).
 const LOD_ROWS: usize = 257;
@@ -101,7 +99,8 @@ fn material_json(m: &Material) -> Value {
     })
 }
 
-/// The scene as the page reads it: `window.cubeforgeScene = {...}`.
+/// The scene as the page reads it: `window.cubeforgeScene = {...}`, its strings escaped so
+/// that the script can stand inline in a page whatever the input's name and path hold.
 pub fn scene_script(env: &LoadedEnv, setup: &PbrSetup, extras: &Extras) -> String {
     let split = &setup.split_sum;
     let lod_table: Vec<f32> = (0..LOD_ROWS)
@@ -135,45 +134,10 @@ pub fn scene_script(env: &LoadedEnv, setup: &PbrSetup, extras: &Extras) -> Strin
         "materials": materials,
         "info": extras.info,
     });
-    format!("window.cubeforgeScene = {scene};\n")
-}
-
-/// The page's files in `dir` (index.html, viewer.js, shaders.js, ui.js, data.js), or with `single_file`
-/// the one page `dir` names, everything inline.
-pub fn files(dir: &Path, single_file: bool, title: &str, scene: String) -> Vec<(PathBuf, Vec<u8>)> {
-    let title = html_escape(title);
-    if single_file {
-        let inline = |s: &str| {
-            format!(
-                "<script>\n{}\n</script>",
-                s.replace("</script", "<\\/script")
-            )
-        };
-        let page = INDEX
-            .replace("{{title}}", &title)
-            .replace("<script src=\"data.js\"></script>", &inline(&scene))
-            .replace("<script src=\"shaders.js\"></script>", &inline(SHADERS))
-            .replace("<script src=\"ui.js\"></script>", &inline(UI))
-            .replace("<script src=\"viewer.js\"></script>", &inline(VIEWER));
-        return vec![(dir.to_path_buf(), page.into_bytes())];
-    }
-    vec![
-        (
-            dir.join("index.html"),
-            INDEX.replace("{{title}}", &title).into_bytes(),
-        ),
-        (dir.join("viewer.js"), VIEWER.as_bytes().to_vec()),
-        (dir.join("shaders.js"), SHADERS.as_bytes().to_vec()),
-        (dir.join("ui.js"), UI.as_bytes().to_vec()),
-        (dir.join("data.js"), scene.into_bytes()),
-    ]
-}
-
-fn html_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
+    format!(
+        "window.cubeforgeScene = {};\n",
+        page::script_json(&scene.to_string())
+    )
 }
 
 /// Bytes the page's data takes for `env` (half floats, base64), for the memory plan.

@@ -9,11 +9,15 @@
   const canvas = document.getElementById('view');
   const status = document.getElementById('status');
 
+  // One line on the page (a shader's log can run to many: the rest goes to the console).
   function fail(msg) {
-    status.textContent = 'cubeforge view: ' + msg;
+    const lines = String(msg).split(/\r?\n/).map((l) => l.trim()).filter(Boolean);
+    if (lines.length > 1) console.error(String(msg));
+    const line = (lines[0] || 'failed') + (lines.length > 1 ? ' (' + (lines.length - 1) + ' more lines in the console)' : '');
+    status.textContent = 'cubeforge view: ' + line;
     status.className = 'error';
     document.title = 'error';
-    window.cubeforgeError = msg;
+    window.cubeforgeError = line;
   }
   if (!scene) {
     fail('the scene data (data.js) is missing or broken: run cubeforge view again');
@@ -26,52 +30,88 @@
   }
 
   // ---- the page's state: its URL query, named as preview's options ----
+  // Every value is checked as preview checks its option, and a bad one is the page's one-line
+  // message (never a default in silence, nor a shader's error). Lookups keyed by the query ask
+  // for own properties only: `__proto__`, `constructor` or `toString` is no material.
+  const own = (o, k) => Object.prototype.hasOwnProperty.call(o, k);
   const MATERIALS = scene.materials;
   const TONEMAPS = ['none', 'reinhard', 'aces'];
   const q = new URLSearchParams(location.search);
-  const num = (k, d) => (q.has(k) && isFinite(parseFloat(q.get(k))) ? parseFloat(q.get(k)) : d);
+  const problems = [];
+  const ANY = [() => true, 'a finite number'];
+  const UNIT = [(v) => v >= 0 && v <= 1, 'between 0 and 1'];
+  const ANGLE = [(v) => v >= -3600 && v <= 3600, 'between -3600 and 3600 degrees'];
+  const POSITIVE = [(v) => v > 0, 'more than 0'];
+  // A number, or `d` without the key; `[ok, what]` says which numbers are allowed.
+  function num(k, d, [ok, what]) {
+    if (!q.has(k)) return d;
+    const s = q.get(k).trim();
+    const v = s === '' ? NaN : Number(s);
+    if (Number.isFinite(v) && ok(v)) return v;
+    problems.push(k + ' must be ' + what + ' (got ' + JSON.stringify(q.get(k)) + ')');
+    return d;
+  }
+  // One of `options` (the first without the key).
+  function choice(k, options) {
+    if (!q.has(k)) return options[0];
+    const v = q.get(k);
+    if (options.includes(v)) return v;
+    problems.push('unknown ' + k + ' ' + JSON.stringify(v) + ': use one of ' + options.join(', '));
+    return options[0];
+  }
   const state = {
     material: q.get('material') || 'chrome',
-    size: Math.max(16, Math.min(4096, Math.round(num('size', 512)))),
-    exposure: num('exposure', 0),
-    tonemap: TONEMAPS.includes(q.get('tonemap')) ? q.get('tonemap') : 'none',
-    lod_bias: num('lod_bias', 0),
-    level: num('level', 0),
-    yaw: num('yaw', 0),
-    pitch: num('pitch', 0),
-    fov: num('fov', 30),
-    distance: num('distance', 4),
-    samples: Math.max(1, Math.min(16, Math.round(num('samples', 4)))),
-    shading: q.get('shading') === 'per-vertex' ? 'per-vertex' : 'per-fragment',
+    size: Math.max(16, Math.min(4096, Math.round(num('size', 512, ANY)))),
+    exposure: num('exposure', 0, [(v) => v >= -32 && v <= 32, 'between -32 and 32 stops']),
+    tonemap: choice('tonemap', TONEMAPS),
+    lod_bias: num('lod_bias', 0, ANY),
+    level: num('level', 0, ANY),
+    yaw: num('yaw', 0, ANGLE),
+    pitch: num('pitch', 0, ANGLE),
+    fov: num('fov', 30, [(v) => v > 0 && v < 179, 'between 0 and 179 degrees']),
+    distance: num('distance', 4, [(v) => v > 1, 'more than 1, outside the unit sphere']),
+    samples: Math.max(1, Math.min(16, Math.round(num('samples', 4, ANY)))),
+    shading: choice('shading', ['per-fragment', 'per-vertex']),
     // preview's --refraction: the texts' one bend, or the solid sphere's exact path (per
     // fragment; a material that names its own wins, as in preview).
-    refraction: q.get('refraction') === 'exact' ? 'exact' : 'texts',
-    tessellation: Math.max(2, Math.min(256, Math.round(num('tessellation', 16)))),
-    parallax: ['approx', 'exact'].includes(q.get('parallax')) ? q.get('parallax') : 'approx',
-    env_radius: num('env_radius', 0),
-    env_center: (q.get('env_center') || '0,0,0').split(',').map(parseFloat),
-    layout: q.get('layout') === 'cross' ? 'cross' : 'sphere',
-    seams: q.get('seams') === '1',
-    sweep: q.get('sweep') === '1',
+    refraction: choice('refraction', ['texts', 'exact']),
+    tessellation: Math.max(2, Math.min(256, Math.round(num('tessellation', 16, ANY)))),
+    parallax: choice('parallax', ['approx', 'exact']),
+    env_radius: num('env_radius', 0, [(v) => v >= 0, 'positive (0: infinitely far)']),
+    env_center: [0, 0, 0],
+    layout: choice('layout', ['sphere', 'cross']),
+    seams: choice('seams', ['0', '1']) === '1',
+    sweep: choice('sweep', ['0', '1']) === '1',
   };
-  if (state.env_center.length !== 3 || state.env_center.some((x) => !isFinite(x))) state.env_center = [0, 0, 0];
-  if (!MATERIALS[state.material]) {
-    fail('unknown material "' + state.material + '": use one of ' + Object.keys(MATERIALS).join(', '));
+  if (q.has('env_center')) {
+    const c = q.get('env_center').split(',').map((x) => (x.trim() === '' ? NaN : Number(x)));
+    if (c.length === 3 && c.every(Number.isFinite)) state.env_center = c;
+    else problems.push('env_center must be three finite numbers X,Y,Z (got ' + JSON.stringify(q.get('env_center')) + ')');
+  }
+  if (state.env_radius > 0 && state.parallax === 'exact' && state.env_radius <= 1 + Math.hypot(...state.env_center)) {
+    problems.push('parallax exact needs the sphere inside the environment: env_radius must exceed 1 + |env_center|');
+  }
+  if (!own(MATERIALS, state.material)) {
+    fail('unknown material ' + JSON.stringify(state.material) + ': use one of ' + Object.keys(MATERIALS).join(', '));
     return;
   }
   const base = MATERIALS[state.material];
-  // Material parameters the query may override (the texts' uniforms, pbr's factors).
-  const mat = Object.assign({}, base);
-  for (const k of ['reflectivity', 'transmittance', 'fresnel_bias', 'fresnel_scale', 'fresnel_power',
-                   'metallic', 'roughness']) {
-    mat[k] = num(k, base[k]);
-  }
+  // Material parameters the query may override (the texts' uniforms, pbr's factors), on a
+  // copy: the scene's material stays as it came.
+  const mat = Object.assign({}, base, { eta_ratio: base.eta_ratio.slice() });
+  for (const k of ['reflectivity', 'transmittance', 'metallic', 'roughness']) mat[k] = num(k, base[k], UNIT);
+  for (const k of ['fresnel_bias', 'fresnel_scale']) mat[k] = num(k, base[k], ANY);
+  mat.fresnel_power = num('fresnel_power', base.fresnel_power, [(v) => v >= 0, 'at least 0']);
   if (q.has('eta')) {
-    const e = num('eta', 1.5);
+    const e = num('eta', 1.5, POSITIVE);
     mat.eta_ratio = [1 / e, 1 / e, 1 / e];
   }
   for (const [i, k] of [[0, 'eta_red'], [1, 'eta_green'], [2, 'eta_blue']]) {
-    if (q.has(k)) mat.eta_ratio[i] = 1 / num(k, 1 / base.eta_ratio[i]);
+    if (q.has(k)) mat.eta_ratio[i] = 1 / num(k, 1 / base.eta_ratio[i], POSITIVE);
+  }
+  if (problems.length) {
+    fail(problems.join('; '));
+    return;
   }
 
   // ---- data: base64 half floats (cube chains RGB, images RGBA), level by level, faces +X -X +Y -Y +Z -Z ----
@@ -158,7 +198,7 @@
 
   // One program per variant (material model, shading, layout, seams), compiled when first
   // asked: SwiftShader takes seconds over a program that holds every path.
-  const programs = {};
+  const programs = Object.create(null);
   let program, uniforms, buffer, textures;
   function variant(cross) {
     const model = { reflect: 0, refract: 1, dispersion: 2, pbr: 3 }[mat.model];
@@ -181,7 +221,7 @@
       gl.attachShader(p, compile(gl.FRAGMENT_SHADER, header + FS));
       gl.linkProgram(p);
       if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(p));
-      const cache = {};
+      const cache = Object.create(null);
       programs[key] = { p, u: new Proxy(cache, { get: (c, k) => (k in c ? c[k] : (c[k] = gl.getUniformLocation(p, k))) }) };
     }
     ({ p: program, u: uniforms } = programs[key]);
