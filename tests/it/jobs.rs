@@ -174,10 +174,15 @@ fn only_the_output_module_writes_files() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();
     crate::layers::walk(&src, &mut files);
+    // Opening for reading (`OpenOptions` with `read` and flags alone) is no write.
     let writes = [
         "fs::write(",
         "File::create(",
-        "OpenOptions::new(",
+        ".write(true)",
+        ".append(true)",
+        ".create(true)",
+        ".create_new(true)",
+        ".truncate(true)",
         "stage_with(",
         "write_all_atomic(",
         "write_all_atomic_with(",
