@@ -117,7 +117,7 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
                         Some(r) if batch.depfiles && !batch.dry_run && !d.exists() => {
                             let reads: Vec<PathBuf> =
                                 r.reads.iter().map(|(p, _)| p.clone()).collect();
-                            depfile::write(&d, &outputs[i], &reads)
+                            depfile::write(&d, &outputs[i], &reads, &r.outputs)
                         }
                         _ => Ok(()),
                     };
@@ -251,7 +251,7 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
                             }
                             if depfiles {
                                 let d = depfile::beside(&outputs[i]);
-                                depfile::write(&d, &outputs[i], &reads)?;
+                                depfile::write(&d, &outputs[i], &reads, &report.written)?;
                             }
                             Ok(report)
                         });
