@@ -27,7 +27,9 @@ mod place;
 
 use crate::error::{Error, Result};
 pub use folder::check_folder;
-pub(crate) use place::{check_regular, check_targets, Place, Places};
+pub(crate) use place::{
+    check_regular, check_targets, open_regular, special_kind, Place, Places, Resolver,
+};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;

@@ -111,6 +111,28 @@ pub(crate) fn special_kind(path: &Path) -> Option<&'static str> {
     (!t.is_file() && !t.is_dir()).then_some("not a regular file")
 }
 
+/// `path` opened for reading when it is a regular file (links followed): its type is looked
+/// at before the open, and again on the open file, which is opened without waiting (a FIFO
+/// put there between the two would block an open for reading until a writer came).
+pub(crate) fn open_regular(path: &Path) -> std::io::Result<std::fs::File> {
+    let not_regular = || std::io::Error::other("not a regular file");
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(not_regular());
+    }
+    let mut o = std::fs::OpenOptions::new();
+    o.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        o.custom_flags(libc::O_NONBLOCK);
+    }
+    let f = o.open(path)?;
+    if !f.metadata()?.is_file() {
+        return Err(not_regular());
+    }
+    Ok(f)
+}
+
 /// Refuses `path` when it names (through links) a FIFO, a device or a socket: cubeforge
 /// writes regular files only, and a rename would put one in place of the node (`/dev/null`
 /// replaced, a pipe's reader never fed).

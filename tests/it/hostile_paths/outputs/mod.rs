@@ -6,6 +6,8 @@
 //! `batch.rs`. Every run that could block on a FIFO is killed after a timeout, failing the
 //! test.
 
+mod batch;
+
 use crate::fault_campaign::{ok, refused, BIN};
 use std::ffi::CString;
 use std::os::unix::ffi::OsStrExt;
