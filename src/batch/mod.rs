@@ -2,6 +2,8 @@
 //! decode; inputs run side by side within the memory budget; a job whose record in the state
 //! file says it read the same bytes with the same build, and whose outputs are all there, is
 //! skipped; a failing job does not stop the others; a shard runs a fixed part of the jobs.
+//! Jobs that would write one file, or each other's files or inputs, are refused before any
+//! runs.
 //! `cubeforge batch` builds the jobs from a manifest; a tool that embeds cubeforge builds
 //! them itself:
 //!
@@ -39,6 +41,7 @@
 //! # }
 //! ```
 
+mod conflicts;
 pub mod depfile;
 mod state;
 
@@ -59,7 +62,8 @@ pub struct BatchJob {
     /// The input the job belongs to: the jobs of one input run together and decode it once
     /// (None: a group of its own).
     pub input: Option<PathBuf>,
-    /// The output as the job names it (a file or a folder): a depfile's target.
+    /// The output as the job names it (a file or a folder, never `-`): a depfile's target,
+    /// and what the batch checks against the other jobs' outputs and inputs.
     pub output: PathBuf,
     /// The work.
     pub job: Box<dyn Job + Send + Sync>,
@@ -201,8 +205,10 @@ mod run;
 
 impl Batch {
     /// Runs the batch, telling `on_done` of each job as it ends (from any thread), and
-    /// returns what became of every job. An error is the batch's own (its state file could
-    /// not be written); the jobs' errors are in the report.
+    /// returns what became of every job. An error is the batch's own, before any job runs
+    /// (jobs that write one file, another's input or standard output; a state file that is a
+    /// FIFO or a device) or after (its state file could not be written); the jobs' errors are
+    /// in the report.
     pub fn run(self, on_done: &(dyn Fn(&Done) + Sync)) -> Result<BatchReport> {
         run::run(self, on_done)
     }

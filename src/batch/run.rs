@@ -2,10 +2,10 @@
 //! of one input in turn over its one decode, and the state file brought up to date.
 
 use super::state::{self, Hashes, Record, State, Why};
-use super::{depfile, save, share, Batch, BatchJob, BatchReport, Done, Outcome};
+use super::{conflicts, depfile, save, share, Batch, BatchJob, BatchReport, Done, Outcome};
 use crate::error::{Error, Result};
 use crate::io::Session;
-use std::collections::{BTreeMap, HashSet};
+use std::collections::HashSet;
 use std::path::PathBuf;
 use std::sync::{Condvar, Mutex};
 use std::time::{Duration, Instant};
@@ -34,27 +34,19 @@ fn groups(jobs: &[BatchJob]) -> Vec<Group> {
     out.into_iter().map(|(_, g)| g).collect()
 }
 
-/// Two jobs with one id, or writing one output, are a mistake in the batch.
-fn check_unique(jobs: &[BatchJob]) -> Result<()> {
-    let mut ids = HashSet::new();
-    let mut outputs = BTreeMap::new();
-    for j in jobs {
-        if !ids.insert(j.id.as_str()) {
-            return Err(Error::usage(format!("two jobs are one: {}", j.id)));
-        }
-        if let Some(other) = outputs.insert(j.output.clone(), j.id.as_str()) {
-            return Err(Error::usage(format!(
-                "two jobs write {}: {other} and {}",
-                j.output.display(),
-                j.id
-            )));
+pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<BatchReport> {
+    conflicts::check(&batch.jobs, batch.depfiles, batch.state.as_deref())?;
+    if let Some(p) = &batch.state {
+        // A FIFO would block the read (and a rename would replace it): refused, before any job.
+        if let Some(kind) = crate::io::atomic::special_kind(p) {
+            return Err(Error::file(
+                p,
+                format!(
+                    "is {kind}, not a regular file: the batch's state file must be one (or absent)"
+                ),
+            ));
         }
     }
-    Ok(())
-}
-
-pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<BatchReport> {
-    check_unique(&batch.jobs)?;
     let mut report = BatchReport::default();
     let (mut state, warning) = match &batch.state {
         Some(p) => State::load(p),
@@ -117,7 +109,7 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
                         Some(r) if batch.depfiles && !batch.dry_run && !d.exists() => {
                             let reads: Vec<PathBuf> =
                                 r.reads.iter().map(|(p, _)| p.clone()).collect();
-                            depfile::write(&d, &outputs[i], &reads)
+                            depfile::write(&d, &outputs[i], &reads, &r.outputs)
                         }
                         _ => Ok(()),
                     };
@@ -251,7 +243,7 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
                             }
                             if depfiles {
                                 let d = depfile::beside(&outputs[i]);
-                                depfile::write(&d, &outputs[i], &reads)?;
+                                depfile::write(&d, &outputs[i], &reads, &report.written)?;
                             }
                             Ok(report)
                         });

@@ -9,13 +9,15 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use xxhash_rust::xxh3::Xxh3;
 
-/// The state file's format version: a record of another version is not trusted.
-const FORMAT: u32 = 1;
+/// The state file's format version: a record of another version is not trusted. 2: a
+/// record's key holds its outputs.
+const FORMAT: u32 = 2;
 
 /// What one job's last successful run read and wrote.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize, PartialEq)]
 pub(crate) struct Record {
-    /// The hash of the build, the job's id and every (file, bytes' hash) it read.
+    /// The hash of the build, the job's id, every (file, bytes' hash) it read and the files it
+    /// wrote: a record edited by hand does not match it.
     pub key: String,
     /// The cubeforge build that ran it.
     pub cubeforge: String,
@@ -60,9 +62,14 @@ impl std::fmt::Display for Why {
 
 impl State {
     /// The state in `path`; an absent, unreadable or foreign file is an empty state (and
-    /// the warning that says so, unless it is simply absent).
+    /// the warning that says so, unless it is simply absent). A FIFO or a device is never
+    /// opened in a way that waits ([`crate::io::atomic::open_regular`]).
     pub fn load(path: &Path) -> (State, Option<String>) {
-        let bytes = match std::fs::read(path) {
+        let read = crate::io::atomic::open_regular(path).and_then(|mut f| {
+            let mut b = Vec::new();
+            std::io::Read::read_to_end(&mut f, &mut b).map(|_| b)
+        });
+        let bytes = match read {
             Ok(b) => b,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return (State::default(), None),
             Err(e) => {
@@ -121,12 +128,10 @@ impl Hashes {
     }
 }
 
+/// The hash of a regular file's bytes (None: not one, or unreadable: the job runs).
 fn hash_file(path: &Path) -> Option<String> {
     use std::io::Read;
-    let mut f = std::fs::File::open(path).ok()?;
-    if !f.metadata().ok()?.is_file() {
-        return None;
-    }
+    let mut f = crate::io::atomic::open_regular(path).ok()?;
     let mut h = Xxh3::new();
     let mut buf = vec![0u8; 1 << 20];
     loop {
@@ -160,8 +165,13 @@ pub(crate) fn build() -> &'static str {
     })
 }
 
-/// The key of a job `id` run by `build` that read `reads`.
-pub(crate) fn key(build: &str, id: &str, reads: &[(PathBuf, String)]) -> String {
+/// The key of a job `id` run by `build` that read `reads` and wrote `outputs`.
+pub(crate) fn key(
+    build: &str,
+    id: &str,
+    reads: &[(PathBuf, String)],
+    outputs: &[PathBuf],
+) -> String {
     let mut h = Xxh3::new();
     for part in [build, id] {
         h.update(&(part.len() as u64).to_le_bytes());
@@ -172,6 +182,12 @@ pub(crate) fn key(build: &str, id: &str, reads: &[(PathBuf, String)]) -> String 
         h.update(&(p.len() as u64).to_le_bytes());
         h.update(p.as_bytes());
         h.update(hash.as_bytes());
+    }
+    h.update(&(outputs.len() as u64).to_le_bytes());
+    for path in outputs {
+        let p = path.to_string_lossy();
+        h.update(&(p.len() as u64).to_le_bytes());
+        h.update(p.as_bytes());
     }
     format!("{:032x}", h.digest128())
 }
@@ -193,7 +209,7 @@ pub(crate) fn why(id: &str, record: Option<&Record>, hashes: &Hashes) -> Option<
         }
     }
     // A record edited by hand (or of another job) is not trusted.
-    (key(build(), id, &r.reads) != r.key).then_some(Why::NeverRan)
+    (key(build(), id, &r.reads, &r.outputs) != r.key).then_some(Why::NeverRan)
 }
 
 /// The record of a run of `id` that read `reads` and wrote `outputs`; None when a file it read
@@ -209,7 +225,7 @@ pub(crate) fn record(
         .map(|p| hashes.of(&p).map(|h| (p, h)))
         .collect::<Option<_>>()?;
     Some(Record {
-        key: key(build(), id, &reads),
+        key: key(build(), id, &reads, &outputs),
         cubeforge: build().to_owned(),
         reads,
         outputs,

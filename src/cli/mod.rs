@@ -210,7 +210,9 @@ pub struct ToneArgs {
 }
 
 /// Runs a command's job and prints its report; with `--depfile`, then writes the depfile:
-/// `output` depends on every file the job read.
+/// `output` depends on every file the job read. A depfile that would land on the output, in
+/// an output folder or on any file the job wrote is refused (before the work where the
+/// output names it, else before the depfile is written: the outputs stay whole).
 pub fn execute(
     mut job: impl cubeforge::Job,
     output: &std::path::Path,
@@ -222,6 +224,9 @@ pub fn execute(
             "--depfile needs -o FILE: standard output has no name for a depfile's target",
         ));
     }
+    if let Some(path) = depfile {
+        cubeforge::batch::depfile::check(path, output)?;
+    }
     let guard = depfile.map(|_| cubeforge::Session::open());
     if let Some(g) = &guard {
         job.limits_mut().session = g.session();
@@ -229,7 +234,8 @@ pub fn execute(
     let observer = Observer::new(verbose);
     let report = job.run(&observer)?;
     if let (Some(path), Some(g)) = (depfile, &guard) {
-        cubeforge::batch::depfile::write(path, output, &g.session().take_reads())?;
+        let reads = g.session().take_reads();
+        cubeforge::batch::depfile::write(path, output, &reads, &report.written)?;
     }
     observer.report(&report)
 }

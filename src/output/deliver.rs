@@ -1,5 +1,6 @@
 //! The one write path: every command's files (faces, crosses, containers, chains, engine
-//! deliveries, control maps, tables, previews) land here. The inputs are refused once, the
+//! deliveries, control maps, tables, previews, depfiles, the batch's state) land here. The
+//! one output check refuses FIFOs and devices, inputs and two outputs onto one file, the
 //! files are staged and committed all or none ([`crate::io::atomic`]), and standard output
 //! is a destination of its own, never a file name made up by a front end.
 
@@ -91,8 +92,9 @@ impl Files {
     }
 }
 
-/// Writes `out` to `dest`: refuses to overwrite any of `inputs` (and folder outputs that hold
-/// one), then stages and commits every file, all or none; or writes its one file to standard
+/// Writes `out` to `dest`: refuses what [`super::check_outputs`] refuses (a FIFO or a device,
+/// two outputs onto one file, one of `inputs`, a folder output that holds one), then stages
+/// and commits every file, all or none; or writes its one file to standard
 /// output. A reader that went away from standard output is an [`Error::Io`] of kind
 /// `BrokenPipe` on `-`, for the front end to end quietly.
 pub fn deliver(out: &Files, dest: &Destination, inputs: &[PathBuf]) -> Result<()> {
@@ -111,10 +113,7 @@ pub fn deliver(out: &Files, dest: &Destination, inputs: &[PathBuf]) -> Result<()
         }
         return write_stdout(&out.files[0].1);
     }
-    for dir in &out.folders {
-        super::refuse_folder(dir, inputs)?;
-    }
-    super::refuse_inputs(&out.paths(), inputs)?;
+    super::check_outputs(&out.paths(), &out.folders, inputs)?;
     let staged = io::stage_with(&out.files, &out.folders)?;
     // Tests stop here to signal a command that has written its temporaries.
     if let Some(ms) = std::env::var("CUBEFORGE_TEST_PAUSE_BEFORE_COMMIT_MS")

@@ -330,13 +330,40 @@ pub fn check_folder_output(dir: &Path, inputs: &[PathBuf], writing: &[PathBuf]) 
     io::check_folder(dir, writing)
 }
 
-/// Refuses a folder output (replaced whole) that holds an input.
-pub fn refuse_folder(dir: &Path, inputs: &[PathBuf]) -> Result<()> {
-    let Ok(real) = std::fs::canonicalize(dir) else {
-        return Ok(()); // a new folder holds nothing yet
-    };
-    for i in inputs {
-        if std::fs::canonicalize(i).is_ok_and(|c| c.starts_with(&real)) {
+/// The one output check, made before the work where a job can and again by [`deliver`] as
+/// every file is written: each of `files` is a regular file or nothing yet (never a FIFO, a
+/// device or a socket, links followed), no two of them are one file, none is an input, and
+/// no folder output (`folders`, replaced whole) holds an input. Paths are compared as places
+/// (normalised, folders resolved, device and inode: hard links and symlinked folders too).
+pub(crate) fn check_outputs(
+    files: &[PathBuf],
+    folders: &[PathBuf],
+    inputs: &[PathBuf],
+) -> Result<()> {
+    io::atomic::check_targets(files)?;
+    if inputs.is_empty() {
+        return Ok(());
+    }
+    let ins: Vec<io::atomic::Place> = inputs.iter().map(|i| io::atomic::Place::of(i)).collect();
+    let mut by_place = io::atomic::Places::default();
+    for place in &ins {
+        by_place.insert(place, ());
+    }
+    if let Some(o) = files
+        .iter()
+        .find(|o| by_place.get(&io::atomic::Place::of(o)).is_some())
+    {
+        return Err(Error::file(o, "refusing to overwrite an input file"));
+    }
+    let mut dirs = io::atomic::Places::default();
+    for d in folders {
+        dirs.insert(&io::atomic::Place::of(d), d);
+    }
+    for (i, place) in inputs.iter().zip(&ins) {
+        if let Some(dir) = dirs
+            .get(place)
+            .or_else(|| dirs.above(place).map(|(_, d)| d))
+        {
             return Err(Error::file(
                 dir,
                 format!(
@@ -349,18 +376,14 @@ pub fn refuse_folder(dir: &Path, inputs: &[PathBuf]) -> Result<()> {
     Ok(())
 }
 
-/// Refuses to write over any input file.
+/// Refuses a folder output (replaced whole) that holds an input ([`check_outputs`]).
+pub fn refuse_folder(dir: &Path, inputs: &[PathBuf]) -> Result<()> {
+    check_outputs(&[], std::slice::from_ref(&dir.to_path_buf()), inputs)
+}
+
+/// Refuses to write over any input file, or where no regular file can be ([`check_outputs`]).
 pub fn refuse_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<()> {
-    let canon = |p: &Path| std::fs::canonicalize(p).ok();
-    let ins: Vec<PathBuf> = inputs.iter().filter_map(|p| canon(p)).collect();
-    for o in outputs {
-        if let Some(c) = canon(o) {
-            if ins.contains(&c) {
-                return Err(Error::file(o, "refusing to overwrite an input file"));
-            }
-        }
-    }
-    Ok(())
+    check_outputs(outputs, &[], inputs)
 }
 
 /// The exposure and tone curve `target` gets: both for 8-bit outputs; for others the exposure

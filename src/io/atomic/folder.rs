@@ -66,6 +66,13 @@ fn foreign_entry(dir: &Path, rel: &Path, written: &[PathBuf]) -> Result<Option<P
         let name = e.file_name().to_string_lossy().into_owned();
         let here = rel.join(&name);
         let is_dir = e.file_type().map(|t| t.is_dir()).unwrap_or(false);
+        // A FIFO, a device or a socket is never cubeforge's, whatever its name.
+        let special = e
+            .file_type()
+            .is_ok_and(|t| !t.is_dir() && !t.is_file() && !t.is_symlink());
+        if special {
+            return Ok(Some(here));
+        }
         let ours = written.contains(&here)
             || DESKTOP_LITTER.contains(&name.as_str())
             || (name.starts_with('.') && name.contains(".cubeforge-") && name.ends_with(".tmp"))

@@ -12,6 +12,10 @@
 //! ([`folder`]). Files into existing folders are renamed under an advisory lock on each
 //! folder, so two processes writing one folder never interleave their files.
 //!
+//! Targets are regular files only: one that is a FIFO, a device or a socket (links followed)
+//! is refused before anything is staged, and looked at again before the renames, never
+//! replaced by one ([`place`]); so are two targets that are one file however spelled.
+//!
 //! Temporaries are registered, and every step that makes or moves one happens under the
 //! registry's lock, so a signal handler ([`remove_temporaries`]) that takes them back never
 //! races a thread still making one: after it, nothing new appears.
@@ -19,9 +23,13 @@
 #![warn(missing_docs)]
 
 mod folder;
+mod place;
 
 use crate::error::{Error, Result};
 pub use folder::check_folder;
+pub(crate) use place::{
+    check_regular, check_targets, open_regular, special_kind, Place, Places, Resolver,
+};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
@@ -175,6 +183,8 @@ pub fn stage_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> Result<S
             *f = real;
         }
     }
+    // Regular files only, each once: before anything is written.
+    check_targets(&paths)?;
     // A rename onto a folder fails: find that out before anything is written.
     if let Some(path) = paths.iter().find(|p| p.is_dir()) {
         return Err(Error::file(path, "a folder of that name is in the way"));
@@ -316,6 +326,10 @@ impl Staged {
     }
 
     fn put_in_place(&mut self) -> Result<()> {
+        // A FIFO or a device put there since the files were staged: refused, nothing moved.
+        for (_, p) in &self.files {
+            check_regular(p)?;
+        }
         let mut created: Vec<PathBuf> = Vec::new();
         // Temporary names that hold what was replaced, removed at the end.
         let mut old: Vec<PathBuf> = Vec::new();

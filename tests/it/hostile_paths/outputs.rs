@@ -1,1 +1,0 @@
-//! Issue 44: see the parent module.
