@@ -3,8 +3,10 @@
 //! (inputs side by side, each decoded once, incremental through a state file, sharded), or
 //! written out as a `build.ninja` for Ninja to run.
 
+mod expand;
 mod manifest;
 mod ninja;
+mod template;
 
 use super::{Cli, Command};
 use cubeforge::batch::{Batch, BatchJob, Done, Outcome, Shard};
@@ -122,7 +124,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     if let Some(dir) = a.manifest.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::env::set_current_dir(dir).map_err(|e| Error::io(dir, e))?;
     }
-    let planned = manifest::plan(&a.manifest, &text)?;
+    let planned = manifest::plan(&a.manifest, &text, &mut |w| super::warn(w))?;
     if let Some(Emit::Ninja) = a.emit {
         let out = ninja::write(&name, &planned)?;
         return super::report(format!(
