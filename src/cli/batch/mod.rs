@@ -127,15 +127,18 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let planned = manifest::plan(&a.manifest, &text, &mut |w| super::warn(w))?;
     if let Some(Emit::Ninja) = a.emit {
         let out = ninja::write(&name, &planned)?;
-        return super::report(format!(
+        let line = format!(
             "batch: wrote {} ({} jobs): run ninja -C {}",
             out.display(),
             planned.len(),
             a.manifest
                 .parent()
                 .filter(|d| !d.as_os_str().is_empty())
-                .map_or(".".into(), |d| d.display().to_string())
-        ));
+                .map_or(".".into(), |d| manifest::shell_quote(
+                    &d.display().to_string()
+                ))
+        );
+        return super::report(cubeforge::error::escape_text(&line));
     }
     let mut jobs = Vec::new();
     for p in &planned {
@@ -202,12 +205,13 @@ fn summarize(
     })?;
     for d in &report.jobs {
         if let Outcome::Failed(e) = &d.outcome {
-            super::tell(format_args!(
+            let line = format!(
                 "cubeforge: batch: failed: line {}: cubeforge {}: {}",
                 lines.get(&d.id).copied().unwrap_or(0),
                 d.id,
-                cubeforge::error::escape_text(&e.with_flags())
-            ));
+                e.with_flags()
+            );
+            super::tell(cubeforge::error::escape_text(&line));
         }
     }
     match report.failed() {
@@ -217,23 +221,23 @@ fn summarize(
 }
 
 /// One job's end, in one line (and its warnings) on standard output; up-to-date jobs only with
-/// -v; failures are listed under the summary.
+/// -v; failures are listed under the summary. Ids and reasons name files: every line is
+/// written through `escape_text`, so an ESC or BEL in a file's name never reaches the terminal.
 fn show(d: &Done, verbose: bool) {
     let id = &d.id;
+    let say = |line: String| {
+        let _ = super::report(cubeforge::error::escape_text(&line));
+    };
     match &d.outcome {
         Outcome::Ran(_, report) => {
             for w in &report.warnings {
                 super::warn(format_args!("{id}: {w}"));
             }
-            let _ = super::report(format!("ran         cubeforge {id} ({:.2} s)", d.seconds));
+            say(format!("ran         cubeforge {id} ({:.2} s)", d.seconds));
         }
-        Outcome::UpToDate if verbose => {
-            let _ = super::report(format!("up to date  cubeforge {id}"));
-        }
+        Outcome::UpToDate if verbose => say(format!("up to date  cubeforge {id}")),
         Outcome::UpToDate => {}
-        Outcome::WouldRun(why) => {
-            let _ = super::report(format!("would run   cubeforge {id} ({why})"));
-        }
+        Outcome::WouldRun(why) => say(format!("would run   cubeforge {id} ({why})")),
         Outcome::Failed(_) => {}
     }
 }
