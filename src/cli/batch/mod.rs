@@ -75,12 +75,17 @@ fn state_path(manifest: &Path, shard: Option<Shard>) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// The job a command line describes, built by that command's own flags.
-fn job_of(argv: &[String]) -> Result<Box<dyn Job + Send + Sync>> {
-    let cli = <Cli as clap::Parser>::try_parse_from(
-        std::iter::once("cubeforge".to_owned()).chain(argv.iter().cloned()),
-    )
-    .map_err(|e| Error::usage(super::one_line(&e)))?;
+/// The job a command line describes, built by that command's own flags through `parser`,
+/// the command line's parser built once for the batch (built again for each job, it was
+/// most of the planning of a large manifest).
+fn job_of(parser: &mut clap::Command, argv: &[String]) -> Result<Box<dyn Job + Send + Sync>> {
+    let usage = |e: clap::Error| Error::usage(super::one_line(&e));
+    let matches = parser
+        .try_get_matches_from_mut(
+            std::iter::once("cubeforge").chain(argv.iter().map(String::as_str)),
+        )
+        .map_err(usage)?;
+    let cli = <Cli as clap::FromArgMatches>::from_arg_matches(&matches).map_err(usage)?;
     if cli.depfile.is_some() {
         return Err(Error::usage(
             "--depfile in a manifest's args: give batch --depfiles (one beside each output)",
@@ -141,8 +146,9 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         return super::report(cubeforge::error::escape_text(&line));
     }
     let mut jobs = Vec::new();
+    let mut parser = <Cli as clap::CommandFactory>::command();
     for p in &planned {
-        let job: Box<dyn Job + Send + Sync> = match job_of(&p.argv) {
+        let job: Box<dyn Job + Send + Sync> = match job_of(&mut parser, &p.argv) {
             Ok(j) => j,
             Err(e) => Box::new(Unbuilt(e.with_flags(), cubeforge::Limits::default())),
         };
