@@ -3,8 +3,10 @@
 //! (inputs side by side, each decoded once, incremental through a state file, sharded), or
 //! written out as a `build.ninja` for Ninja to run.
 
+mod expand;
 mod manifest;
 mod ninja;
+mod template;
 
 use super::{Cli, Command};
 use cubeforge::batch::{Batch, BatchJob, Done, Outcome, Shard};
@@ -73,12 +75,17 @@ fn state_path(manifest: &Path, shard: Option<Shard>) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// The job a command line describes, built by that command's own flags.
-fn job_of(argv: &[String]) -> Result<Box<dyn Job + Send + Sync>> {
-    let cli = <Cli as clap::Parser>::try_parse_from(
-        std::iter::once("cubeforge".to_owned()).chain(argv.iter().cloned()),
-    )
-    .map_err(|e| Error::usage(super::one_line(&e)))?;
+/// The job a command line describes, built by that command's own flags through `parser`,
+/// the command line's parser built once for the batch (built again for each job, it was
+/// most of the planning of a large manifest).
+fn job_of(parser: &mut clap::Command, argv: &[String]) -> Result<Box<dyn Job + Send + Sync>> {
+    let usage = |e: clap::Error| Error::usage(super::one_line(&e));
+    let matches = parser
+        .try_get_matches_from_mut(
+            std::iter::once("cubeforge").chain(argv.iter().map(String::as_str)),
+        )
+        .map_err(usage)?;
+    let cli = <Cli as clap::FromArgMatches>::from_arg_matches(&matches).map_err(usage)?;
     if cli.depfile.is_some() {
         return Err(Error::usage(
             "--depfile in a manifest's args: give batch --depfiles (one beside each output)",
@@ -122,22 +129,28 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     if let Some(dir) = a.manifest.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::env::set_current_dir(dir).map_err(|e| Error::io(dir, e))?;
     }
-    let planned = manifest::plan(&a.manifest, &text)?;
+    // Depfiles and build.ninja name every file: only then do names they cannot hold matter.
+    let build_files = a.depfiles || a.emit.is_some();
+    let planned = manifest::plan(&a.manifest, &text, build_files, &mut |w| super::warn(w))?;
     if let Some(Emit::Ninja) = a.emit {
         let out = ninja::write(&name, &planned)?;
-        return super::report(format!(
+        let line = format!(
             "batch: wrote {} ({} jobs): run ninja -C {}",
             out.display(),
             planned.len(),
             a.manifest
                 .parent()
                 .filter(|d| !d.as_os_str().is_empty())
-                .map_or(".".into(), |d| d.display().to_string())
-        ));
+                .map_or(".".into(), |d| manifest::shell_quote(
+                    &d.display().to_string()
+                ))
+        );
+        return super::report(cubeforge::error::escape_text(&line));
     }
     let mut jobs = Vec::new();
+    let mut parser = <Cli as clap::CommandFactory>::command();
     for p in &planned {
-        let job: Box<dyn Job + Send + Sync> = match job_of(&p.argv) {
+        let job: Box<dyn Job + Send + Sync> = match job_of(&mut parser, &p.argv) {
             Ok(j) => j,
             Err(e) => Box::new(Unbuilt(e.with_flags(), cubeforge::Limits::default())),
         };
@@ -200,12 +213,13 @@ fn summarize(
     })?;
     for d in &report.jobs {
         if let Outcome::Failed(e) = &d.outcome {
-            super::tell(format_args!(
+            let line = format!(
                 "cubeforge: batch: failed: line {}: cubeforge {}: {}",
                 lines.get(&d.id).copied().unwrap_or(0),
                 d.id,
-                cubeforge::error::escape_text(&e.with_flags())
-            ));
+                e.with_flags()
+            );
+            super::tell(cubeforge::error::escape_text(&line));
         }
     }
     match report.failed() {
@@ -215,23 +229,23 @@ fn summarize(
 }
 
 /// One job's end, in one line (and its warnings) on standard output; up-to-date jobs only with
-/// -v; failures are listed under the summary.
+/// -v; failures are listed under the summary. Ids and reasons name files: every line is
+/// written through `escape_text`, so an ESC or BEL in a file's name never reaches the terminal.
 fn show(d: &Done, verbose: bool) {
     let id = &d.id;
+    let say = |line: String| {
+        let _ = super::report(cubeforge::error::escape_text(&line));
+    };
     match &d.outcome {
         Outcome::Ran(_, report) => {
             for w in &report.warnings {
                 super::warn(format_args!("{id}: {w}"));
             }
-            let _ = super::report(format!("ran         cubeforge {id} ({:.2} s)", d.seconds));
+            say(format!("ran         cubeforge {id} ({:.2} s)", d.seconds));
         }
-        Outcome::UpToDate if verbose => {
-            let _ = super::report(format!("up to date  cubeforge {id}"));
-        }
+        Outcome::UpToDate if verbose => say(format!("up to date  cubeforge {id}")),
         Outcome::UpToDate => {}
-        Outcome::WouldRun(why) => {
-            let _ = super::report(format!("would run   cubeforge {id} ({why})"));
-        }
+        Outcome::WouldRun(why) => say(format!("would run   cubeforge {id} ({why})")),
         Outcome::Failed(_) => {}
     }
 }
