@@ -48,4 +48,5 @@ mod sh_bands;
 mod simd;
 mod uastc;
 mod ultrahdr;
+mod ultrahdr_readers;
 mod view;

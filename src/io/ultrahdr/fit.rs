@@ -15,6 +15,10 @@ use rayon::prelude::*;
 /// The neighbourhood radius of the corrections, in texels.
 const BLUR: usize = 2;
 
+/// The share of each round's correction taken: a whole one overshoots where the JPEG moved a
+/// sun's few codes, and the rounds then swing instead of settling.
+const DAMPING: f32 = 0.5;
+
 /// The light read back this close to the source's (largest channel error) ends the rounds.
 const GOOD_ENOUGH: f64 = 0.0025;
 
@@ -114,7 +118,7 @@ pub(super) fn fit(
             .zip(wanted.par_iter().zip(rebuilt.par_iter()))
             .for_each(|(t, (n, d))| {
                 for c in 0..3 {
-                    t[c] += (n[c] / d[c]).log2();
+                    t[c] += DAMPING * (n[c] / d[c]).log2();
                 }
             });
     }

@@ -25,6 +25,7 @@ use std::path::Path;
 use ultrahdr_rs::{ColorGamut, Decoder, GainMapMetadata};
 
 mod fit;
+mod meta;
 
 /// How gain-map values become radiance: per channel, the log2 gain runs from `lo` to `hi` over
 /// the map's 0..1 raised to 1/`gamma`, and `hdr = (sdr + k_sdr) * 2^gain - k_hdr`.
@@ -169,7 +170,7 @@ pub const ENCODE_BYTES_PER_TEXEL: u64 = 112;
 const BASE_QUALITY: u8 = 71;
 const GAIN_QUALITY: u8 = 85;
 /// Rounds of fitting the gain map to the light through its own JPEG ([`fit::fit`]).
-const ROUNDS: usize = 8;
+const ROUNDS: usize = 12;
 /// What writing a gain map kept of the radiance, as the reader it was fitted to rebuilds it.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct GainStats {
@@ -223,9 +224,10 @@ pub fn has_gain_map(bytes: &[u8]) -> bool {
     let says = |needle: &[u8]| head.windows(needle.len()).any(|w| w == needle);
     says(b"Item:Semantic=\"GainMap\"")
         || says(b"hdr-gain-map")
+        || meta::declares_iso(head)
         || caught(|| {
             Decoder::new(bytes).is_ok_and(|d| {
-                d.is_ultrahdr() && d.metadata().is_some() && d.gainmap_jpeg().is_some()
+                d.is_ultrahdr() && d.gainmap_jpeg().is_some() && meta::of(&d).is_ok()
             })
         })
         .unwrap_or(false)
@@ -370,7 +372,11 @@ fn in_file(e: Error, path: &Path, what: &str) -> Error {
 /// The radiance an UltraHDR file holds at full boost, its SDR picture and gain map decoded
 /// and the gain map stretched bilinearly over the picture where it is smaller, with the
 /// arithmetic it was fitted to ([`THREE_MARK`]).
-fn rebuild(decoder: &Decoder, path: &Path, limits: &Limits) -> Result<(Image, Reader)> {
+fn rebuild(
+    decoder: &Decoder,
+    path: &Path,
+    limits: &Limits,
+) -> Result<(Image, Reader, meta::Source)> {
     let fail = |msg: &str| Error::file(path, format!("cannot decode UltraHDR: {msg}"));
     rebuild_checked(decoder, limits).map_err(|e| match e {
         Rebuild::Said(msg) => fail(&msg),
@@ -399,8 +405,8 @@ impl From<String> for Rebuild {
 fn rebuild_checked(
     decoder: &Decoder,
     limits: &Limits,
-) -> std::result::Result<(Image, Reader), Rebuild> {
-    let meta = decoder.metadata().ok_or("no gain-map metadata")?.clone();
+) -> std::result::Result<(Image, Reader, meta::Source), Rebuild> {
+    let (meta, source) = meta::of(decoder)?;
     if meta.backward_direction {
         return Err("its base picture is the HDR rendition (backward direction), which cubeforge does not read".into());
     }
@@ -437,7 +443,13 @@ fn rebuild_checked(
         Reader::Format
     };
     Gains::of(&meta).apply_in_place(&mut img, &map, reader);
-    Ok((img, reader))
+    if let Some(m) = meta::primaries(decoder) {
+        // Colours outside BT.709 clip at 0, as libultrahdr's own decode clips them.
+        img.pixels.par_iter_mut().for_each(|p| {
+            *p = (m * p.truncate()).max(glam::Vec3::ZERO).extend(p.w);
+        });
+    }
+    Ok((img, reader, source))
 }
 
 /// Decodes an UltraHDR file to its radiance at full boost.
@@ -450,12 +462,16 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<(Decoded,
         let (w, h) = raster::dimensions(p, FileFormat::Jpeg, path)?;
         opts.limits.check(path, w as u64, h as u64)?;
     }
-    let (img, reader) = rebuild(&decoder, path, &opts.limits)?;
+    let (img, reader, source) = rebuild(&decoder, path, &opts.limits)?;
+    let by = match source {
+        meta::Source::Iso => "ISO 21496-1",
+        meta::Source::Xmp => "hdrgm XMP",
+    };
     let meta = Meta {
         file_format: FileFormat::UltraHdr,
         pixel_format: match reader {
-            Reader::Format => "RGB8 + RGB gain map".into(),
-            Reader::Three => "RGB8 + RGB gain map (fitted to three.js)".into(),
+            Reader::Format => format!("RGB8 + RGB gain map ({by})"),
+            Reader::Three => format!("RGB8 + RGB gain map ({by}, fitted to three.js)"),
         },
         color_space: ColorSpace::Linear,
         hdr: true,
