@@ -36,7 +36,7 @@ pub fn convolve(src: &CubeMap, lobe: Lobe, size: usize) -> [Image; 6] {
 /// each texel is then the solid-angle-weighted mean of those it covers, as
 /// [`super::prefilter`] makes such levels.
 pub fn convolve_level(src: &CubeMap, lobe: Lobe, size: usize) -> [Image; 6] {
-    let fine = super::fine_size(size);
+    let fine = super::fine_size_for(size, Some(lobe));
     super::reduce_to(convolve(src, lobe, fine), size)
 }
 

@@ -160,6 +160,10 @@ pub struct LevelInfo {
     /// level, those of its tail: its core is summed exactly).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub samples: Option<u32>,
+    /// How far the final rescale to the base's flux moved the level (the largest channel's
+    /// factor minus 1), for the tests that report it; not written to files.
+    #[serde(skip)]
+    pub rescale: Option<f32>,
 }
 
 /// cmft's mapping of a level to a specular power: glossiness falls linearly from 1 at level
@@ -210,6 +214,7 @@ pub fn plan(opts: &ChainOptions, base: usize) -> Vec<(LevelInfo, Option<Lobe>)> 
                 power: None,
                 sigma: None,
                 samples: None,
+                rescale: None,
             };
             let lobe = match opts.filter {
                 FilterKind::Box => None,
@@ -320,7 +325,9 @@ pub fn prefilter_planned(
     }
     // An HDR sun is convolved exactly; the sampled filters see the rest, at most
     // BRIGHT_RATIO times the mean luminance, so no tap can turn into a firefly.
-    let (residual, bright) = bright::split_bright(base, BRIGHT_RATIO);
+    let (mut residual, bright) = bright::split_bright(base, BRIGHT_RATIO);
+    // Alpha 1 everywhere: the filters carry their weights' total in it (see `by_weight`).
+    opaque(&mut residual.levels[0]);
     let src = lobe::source_sampler(&residual);
     // A filter normalised over the sphere keeps the mean radiance: each level's is this.
     let flux = crate::flux::mean_radiance(
@@ -328,7 +335,7 @@ pub fn prefilter_planned(
         &base.levels[0].iter().collect::<Vec<_>>(),
     );
     // Each level's faces, and the samples it took where that differs from the plan's.
-    let levels: Vec<(Faces, Option<u32>)> = {
+    let levels: Vec<(Faces, (Option<u32>, f32))> = {
         use rayon::prelude::*;
         plan.par_iter()
             .map(|(info, lobe)| {
@@ -336,7 +343,7 @@ pub fn prefilter_planned(
                 // A small level is filtered at FINE_SIZE, then each texel becomes the
                 // solid-angle-weighted mean of those it covers: the filtered radiance over its
                 // whole patch, not at its centre, so the level keeps the light.
-                let size = fine_size(info.size);
+                let size = fine_size_for(info.size, *lobe);
                 let faces = match lobe {
                     None => copy_faces(&base.levels[0]),
                     Some(l) => match window::Window::plan(*l, n, src.level_count()) {
@@ -358,17 +365,27 @@ pub fn prefilter_planned(
                         }
                     },
                 };
-                let faces = keep_flux(reduce_to(faces, info.size), flux);
+                let faces = reduce_to(faces, info.size);
+                let faces = if lobe.is_some() {
+                    by_weight(faces)
+                } else {
+                    faces
+                };
+                let (faces, rescale) = keep_flux(faces, flux);
                 progress(info.level);
-                (faces, samples)
+                (faces, (samples, rescale))
             })
             .collect()
     };
-    let (levels, samples): (Vec<Faces>, Vec<Option<u32>>) = levels.into_iter().unzip();
+    let (levels, done): (Vec<Faces>, Vec<(Option<u32>, f32)>) = levels.into_iter().unzip();
     let infos = plan
         .into_iter()
-        .zip(samples)
-        .map(|((info, _), samples)| LevelInfo { samples, ..info })
+        .zip(done)
+        .map(|((info, _), (samples, rescale))| LevelInfo {
+            samples,
+            rescale: Some(rescale),
+            ..info
+        })
         .collect();
     (CubeMap { levels }, infos)
 }
@@ -383,6 +400,26 @@ pub(crate) fn fine_size(size: usize) -> usize {
     let mut fine = size.max(1);
     while fine < FINE_SIZE {
         fine *= 2;
+    }
+    fine
+}
+
+/// A sub-patch of an output texel spans at most this fraction of its lobe's width.
+const SUB_PATCH_WIDTHS: f32 = 0.5;
+
+/// The size a level of edge `size` filtered with `lobe` is computed at, before each texel
+/// becomes the mean of its sub-patches: [`fine_size`], doubled further while a texel is wider
+/// than `SUB_PATCH_WIDTHS` of the lobe's width (up to 16 times `size`). A texel holds the mean
+/// of the filtered radiance over its patch; where the lobe is narrower than the patch, its
+/// centre's value is not that mean (issue 45: cosine level 1 of a 32 px chain, power 512 on
+/// 16 px texels, was 7.8% off brute force).
+pub(crate) fn fine_size_for(size: usize, lobe: Option<Lobe>) -> usize {
+    let mut fine = fine_size(size);
+    if let Some(l) = lobe {
+        let limit = SUB_PATCH_WIDTHS * l.width();
+        while texel_angle(fine) > limit && fine < 16 * size.max(1) {
+            fine *= 2;
+        }
     }
     fine
 }
@@ -403,8 +440,10 @@ pub(crate) fn reduce_to(mut faces: Faces, size: usize) -> Faces {
 /// `faces` scaled, each channel by itself, to the mean radiance `flux`: the sampled filters'
 /// estimate of each texel is a ratio of sums over a few hundred samples, whose error leaves
 /// up to 0.6% in a level's mean (Charlie's first level on a studio's lamps, at the default
-/// samples); the exact filtered map keeps its base's mean, so that error is taken out.
-fn keep_flux(mut faces: Faces, flux: [f64; 3]) -> Faces {
+/// samples); the exact filtered map keeps its base's mean, so that error is taken out. The
+/// exact sums keep it by themselves (each texel's light divided by its lobe's integral), so
+/// there the factor stays within a few 1e-4: returned as the largest channel's factor - 1.
+fn keep_flux(mut faces: Faces, flux: [f64; 3]) -> (Faces, f32) {
     let n = faces[0].width;
     let got = crate::flux::mean_radiance(
         crate::flux::Grid::Cube(n),
@@ -421,7 +460,11 @@ fn keep_flux(mut faces: Faces, flux: [f64; 3]) -> Faces {
             *p *= scale;
         }
     }
-    faces
+    let moved = (scale.truncate() - glam::Vec3::ONE)
+        .to_array()
+        .into_iter()
+        .fold(0.0f32, |a, b| if b.abs() > a.abs() { b } else { a });
+    (faces, moved)
 }
 
 /// `want / got`, or 1 where `got` holds no light to scale.
@@ -431,6 +474,32 @@ fn ratio(want: f64, got: f64) -> f32 {
     } else {
         1.0
     }
+}
+
+/// Sets every texel's alpha to 1, rows in parallel.
+fn opaque(faces: &mut Faces) {
+    use rayon::prelude::*;
+    for face in faces.iter_mut() {
+        face.pixels.par_iter_mut().for_each(|p| p.w = 1.0);
+    }
+}
+
+/// Each texel's colour over its alpha, then alpha 1. The exact sums divide by the lobe's
+/// integral, so on an opaque source their alpha is the lobe's discrete weight total over the
+/// texel's patch (the sampled filters' is 1): dividing by it keeps a constant environment
+/// exactly constant, and the bright texels, whose weights are in it through their clamped
+/// residual, are divided by the same total as the rest (issue 45: they were divided by the
+/// lobe's integral and the rest by its weights, 30% apart for a lobe narrower than a texel).
+fn by_weight(mut faces: Faces) -> Faces {
+    use rayon::prelude::*;
+    for face in faces.iter_mut() {
+        face.pixels.par_iter_mut().for_each(|p| {
+            if p.w > 0.0 {
+                *p = (p.truncate() / p.w).extend(1.0);
+            }
+        });
+    }
+    faces
 }
 
 /// A copy of six faces, rows in parallel (a level-0 copy of a 512 cube is 25 MB).

@@ -83,6 +83,20 @@ impl Lobe {
     }
 }
 
+impl Lobe {
+    /// The angle (radians) over which the weight changes by about e: an output texel's patch
+    /// is sampled finer than half of it (see `filter::fine_size_for`). GGX: its core's; Charlie:
+    /// its ring's depth towards the horizon, where it peaks.
+    pub(crate) fn width(&self) -> f32 {
+        match *self {
+            Lobe::Ggx { alpha } => 1.3 * alpha,
+            Lobe::Charlie { alpha } => 2.0 * alpha / (2.0 * alpha + 1.0),
+            Lobe::CosinePower { power } => (1.0 / power.max(1e-6)).sqrt(),
+            Lobe::Gaussian { sigma } => sigma,
+        }
+    }
+}
+
 /// GGX normal distribution D(h) for cos(n, h) = `nh`.
 #[inline]
 pub(crate) fn ggx_d(nh: f32, alpha: f32) -> f32 {

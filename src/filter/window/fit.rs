@@ -125,3 +125,18 @@ pub(super) fn weight_f64(lobe: Lobe, c: f64) -> f64 {
         other => other.weight(c as f32) as f64,
     }
 }
+
+/// The integral over the sphere of `lobe`'s weight over its peak, out to 1 - cos = `u_cut` (2:
+/// the whole sphere), per steradian: the midpoint rule on 2^16 steps of the angle, in f64.
+pub(super) fn integral_over_peak(lobe: Lobe, u_cut: f64) -> f64 {
+    const STEPS: usize = 1 << 16;
+    let end = (1.0 - u_cut).clamp(-1.0, 1.0).acos();
+    let dt = end / STEPS as f64;
+    let sum: f64 = (0..STEPS)
+        .map(|i| {
+            let t = (i as f64 + 0.5) * dt;
+            weight_f64(lobe, t.cos()) * t.sin()
+        })
+        .sum();
+    sum * dt * std::f64::consts::TAU / weight_f64(lobe, 1.0)
+}

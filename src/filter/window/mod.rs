@@ -70,6 +70,12 @@ const MAX_DEGREE: usize = 4;
 /// How a level is summed exactly: the source level, the lobe's reach and its weights.
 pub(crate) struct Window {
     level: usize,
+    /// One over the lobe's integral over the sphere in the shape's units (weight over peak,
+    /// per steradian): the sum divides by it, not by its own weights, so every source texel
+    /// sends its light times its solid angle into the sphere exactly once, whatever the lobe's
+    /// width against the texels (issue 45: a lobe narrower than a texel gave the texel under
+    /// it 30% more than the continuous integral the bright texels were divided by).
+    norm: f32,
     /// Largest 1 - cos(angle) within reach.
     u_cut: f32,
     shape: Shape,
@@ -108,7 +114,8 @@ impl Window {
         if reach >= MAX_REACH as f64 {
             return None;
         }
-        Some(Window::build(lobe, sigma, reach, src_size, levels))
+        let kept = fit::integral_over_peak(lobe, 1.0 - reach.cos());
+        Some(Window::build(lobe, sigma, reach, src_size, levels, kept))
     }
 
     /// The part of `lobe` within `reach` radians of its axis, for lobes whose tails reach too
@@ -121,13 +128,22 @@ impl Window {
         src_size: usize,
         levels: usize,
     ) -> Option<Window> {
+        let whole = fit::integral_over_peak(lobe, 2.0);
         (reach < MAX_REACH)
-            .then(|| Window::build(lobe, width as f64, reach as f64, src_size, levels))
+            .then(|| Window::build(lobe, width as f64, reach as f64, src_size, levels, whole))
     }
 
     /// The sum on the coarsest level where the lobe is still MIN_SIGMA_TEXELS texels wide (a
-    /// texel at the face centre spans 2 / n radians), its weights up to `reach`.
-    fn build(lobe: Lobe, sigma: f64, reach: f64, src_size: usize, levels: usize) -> Window {
+    /// texel at the face centre spans 2 / n radians), its weights up to `reach`, divided by
+    /// `integral` (of the weight over its peak, per steradian).
+    fn build(
+        lobe: Lobe,
+        sigma: f64,
+        reach: f64,
+        src_size: usize,
+        levels: usize,
+        integral: f64,
+    ) -> Window {
         let wide =
             |l: usize| sigma as f32 * (src_size >> l).max(1) as f32 / 2.0 >= MIN_SIGMA_TEXELS;
         let level = (0..levels).take_while(|&l| wide(l)).last().unwrap_or(0);
@@ -146,6 +162,7 @@ impl Window {
         };
         Window {
             level,
+            norm: (1.0 / integral) as f32,
             u_cut: u_cut as f32,
             shape,
         }

@@ -57,24 +57,25 @@ impl Candidates {
         self.len += 1;
     }
 
-    /// The weighted mean of the candidates around unit `n`.
+    /// The candidates' light around unit `n`: their weighted sum over the lobe's integral.
     #[inline(always)]
     pub(super) fn mean(&self, window: &Window, n: Vec3) -> Vec4 {
         let cut = window.u_cut;
-        match window.shape {
-            Shape::Exp2 { q } => self.mean_with(n, cut, |u| exp2_weight(&q, u)),
-            Shape::Ggx { a2, h } => self.mean_with(n, cut, |u| ggx_weight(a2, h, u)),
-        }
+        let sum = match window.shape {
+            Shape::Exp2 { q } => self.sum_with(n, cut, |u| exp2_weight(&q, u)),
+            Shape::Ggx { a2, h } => self.sum_with(n, cut, |u| ggx_weight(a2, h, u)),
+        };
+        sum * window.norm
     }
 
-    /// The mean with `weight` (over the peak, a function of 1 - cos) for u up to `cut`: each
+    /// The sum with `weight` (over the peak, a function of 1 - cos) for u up to `cut`: each
     /// lane summed in order, the lanes added in a fixed order, so every build and thread
     /// count gives the same bits. The lane loop is written lane by lane for the compiler to
     /// turn into one eight-wide instruction per step (two four-wide ones without AVX).
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // one index into nine arrays, for the vectoriser
-    fn mean_with(&self, n: Vec3, cut: f32, weight: impl Fn(f32) -> f32) -> Vec4 {
-        let mut acc = [[0.0f32; LANES]; 5];
+    fn sum_with(&self, n: Vec3, cut: f32, weight: impl Fn(f32) -> f32) -> Vec4 {
+        let mut acc = [[0.0f32; LANES]; 4];
         for o in &self.octs {
             for l in 0..LANES {
                 // 1 - cos from the difference: |n - d|^2 / 2, precise for small angles.
@@ -86,22 +87,16 @@ impl Candidates {
                 acc[1][l] = w.mul_add(o.g[l], acc[1][l]);
                 acc[2][l] = w.mul_add(o.b[l], acc[2][l]);
                 acc[3][l] = w.mul_add(o.a[l], acc[3][l]);
-                acc[4][l] += w;
             }
         }
         let total =
             |v: &[f32; LANES]| ((v[0] + v[4]) + (v[2] + v[6])) + ((v[1] + v[5]) + (v[3] + v[7]));
-        let wsum = total(&acc[4]);
-        if wsum > 0.0 {
-            Vec4::new(
-                total(&acc[0]),
-                total(&acc[1]),
-                total(&acc[2]),
-                total(&acc[3]),
-            ) / wsum
-        } else {
-            Vec4::ZERO
-        }
+        Vec4::new(
+            total(&acc[0]),
+            total(&acc[1]),
+            total(&acc[2]),
+            total(&acc[3]),
+        )
     }
 }
 

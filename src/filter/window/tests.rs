@@ -24,7 +24,7 @@ fn weights_follow_the_lobe() {
     }
     for (lobe, reach) in lobes {
         assert!(reach < MAX_REACH as f64, "{lobe:?}");
-        let w = Window::build(lobe, 0.01, reach, 256, 9);
+        let w = Window::build(lobe, 0.01, reach, 256, 9, 1.0);
         let peak = weight_f64(lobe, 1.0);
         let mut worst = 0.0f64;
         for i in 0..=10_000 {
