@@ -80,7 +80,7 @@ fn zstd_files_read_as_their_zip_twins() {
     for (name, format) in [
         ("float", "RGB32F (ZSTD)"),
         ("mixed", "R16F G32F B32F A16F (ZSTD)"),
-        ("tiles", "RGB16F (ZSTD)"),
+        ("tiles", "RGB16F (ZSTD, tiles 16x16)"),
     ] {
         let zstd = dir.path().join(format!("{name}.exr"));
         let zip = dir.path().join(format!("{name}_zip.exr"));
