@@ -13,8 +13,8 @@ use std::ffi::CString;
 use std::os::unix::ffi::OsStrExt;
 use std::os::unix::fs::FileTypeExt;
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Command, Output};
+use std::time::Duration;
 
 pub(crate) const SKY_EXR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.exr");
 
@@ -24,41 +24,9 @@ const HANG: Duration = Duration::from_secs(60);
 /// Runs cubeforge in `dir`, killed and the test failed if it runs past [`HANG`] (blocked on a
 /// FIFO, say).
 pub(crate) fn run_within(dir: &Path, args: &[&str]) -> Output {
-    use std::io::Read;
-    let mut child = Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("cubeforge starts");
-    let drain = |mut r: Box<dyn Read + Send>| {
-        std::thread::spawn(move || {
-            let mut v = Vec::new();
-            r.read_to_end(&mut v).ok();
-            v
-        })
-    };
-    let out = drain(Box::new(child.stdout.take().unwrap()));
-    let err = drain(Box::new(child.stderr.take().unwrap()));
-    let start = Instant::now();
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if start.elapsed() > HANG {
-            child.kill().ok();
-            child.wait().ok();
-            panic!("cubeforge {args:?} still ran after {HANG:?}: it blocked");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    Output {
-        status,
-        stdout: out.join().unwrap(),
-        stderr: err.join().unwrap(),
-    }
+    let mut c = Command::new(BIN);
+    c.args(args).current_dir(dir);
+    super::within(c, HANG.as_secs())
 }
 
 /// Makes a FIFO at `path`.
