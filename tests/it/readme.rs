@@ -22,6 +22,8 @@ struct Example {
     line: usize,
     text: String,
     commands: Vec<Vec<String>>,
+    /// The comment after it (what it says the command does: counts a test can hold it to).
+    comment: String,
 }
 
 /// The examples of a README text, by the convention above, or what breaks the convention.
@@ -43,6 +45,7 @@ fn examples(file: &str, readme: &str) -> Result<Vec<Example>, String> {
             continue;
         }
         let code = strip_comment(raw);
+        let comment = raw[code.len()..].trim_start_matches('#').trim().to_owned();
         let (start, mut text) = pending.take().unwrap_or((line_no, String::new()));
         text.push(' ');
         match code.trim_end().strip_suffix('\\') {
@@ -82,6 +85,7 @@ fn examples(file: &str, readme: &str) -> Result<Vec<Example>, String> {
             line: start,
             text,
             commands,
+            comment,
         });
     }
     if pending.is_some() {
@@ -91,6 +95,35 @@ fn examples(file: &str, readme: &str) -> Result<Vec<Example>, String> {
         return Err(format!("{file}: a code block is not closed"));
     }
     Ok(out)
+}
+
+/// What a batch example's comment says its summary line holds: `N jobs` (`batch: N jobs`),
+/// `N up to date`, `N left to other shards`, and `nothing would run` / `nothing runs`.
+fn batch_claims(comment: &str) -> Vec<String> {
+    let words: Vec<&str> = comment
+        .split(|c: char| c.is_whitespace() || c == ';' || c == ',' || c == ':')
+        .filter(|w| !w.is_empty())
+        .collect();
+    let mut out = Vec::new();
+    for (i, w) in words.iter().enumerate() {
+        let Ok(n) = w.parse::<usize>() else {
+            continue;
+        };
+        let next = |k: usize| words.get(i + k).copied().unwrap_or_default();
+        match (next(1), next(2)) {
+            ("jobs", _) => out.push(format!("batch: {n} jobs")),
+            ("up", "to") => out.push(format!("{n} up to date")),
+            ("left", "to") => out.push(format!("{n} left to other shards")),
+            _ => {}
+        }
+    }
+    if comment.contains("nothing would run") {
+        out.push(" 0 would run".into());
+    }
+    if comment.contains("nothing runs") || comment.contains("nothing changed") {
+        out.push(" 0 ran".into());
+    }
+    out
 }
 
 /// The line without its comment (`#` at the start or after a space).
@@ -256,6 +289,18 @@ fn readme_and_docs_examples_run_in_order_on_a_fresh_copy() {
                     ex.text,
                     String::from_utf8_lossy(&out.stderr)
                 );
+                if args.first().map(String::as_str) == Some("batch") {
+                    let said = String::from_utf8_lossy(&out.stdout);
+                    for claim in batch_claims(&ex.comment) {
+                        assert!(
+                            said.contains(&claim),
+                            "{file}:{}: {} says \"{}\", but printed:\n{said}",
+                            ex.line,
+                            ex.text,
+                            ex.comment
+                        );
+                    }
+                }
                 ran += 1;
             }
         }
