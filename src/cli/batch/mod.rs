@@ -189,7 +189,7 @@ fn summarize(
     lines: &std::collections::HashMap<String, usize>,
 ) -> Result<()> {
     for w in &report.warnings {
-        super::warn(w);
+        super::warn(w.with_flags());
     }
     let shards = if report.other_shards > 0 {
         format!(", {} left to other shards", report.other_shards)
@@ -239,7 +239,7 @@ fn show(d: &Done, verbose: bool) {
     match &d.outcome {
         Outcome::Ran(_, report) => {
             for w in &report.warnings {
-                super::warn(format_args!("{id}: {w}"));
+                super::warn(format_args!("{id}: {}", w.with_flags()));
             }
             say(format!("ran         cubeforge {id} ({:.2} s)", d.seconds));
         }

@@ -211,3 +211,21 @@ fn manifest_errors_name_their_line() {
         assert_eq!(err(&o).lines().count(), 1, "{}", err(&o));
     }
 }
+
+/// A job's warnings in a batch name the flags the manifest's args take (`--tonemap`), as the
+/// command line's do, not the library's fields (`` `tonemap` ``).
+#[test]
+fn batch_warnings_name_flags() {
+    let d = tempfile::tempdir().unwrap();
+    skies(d.path(), &["a.exr"]);
+    std::fs::write(
+        d.path().join("proj/m.toml"),
+        "[[job]]\ninputs = [\"hdri/a.exr\"]\ncommand = \"convert\"\n\
+         args = [\"--tonemap\", \"aces\", \"--size\", \"8\"]\noutput = \"o/{stem}.exr\"\n",
+    )
+    .unwrap();
+    let o = run_ok(&["batch", "m.toml"], &d.path().join("proj"));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("--tonemap applies to 8-bit outputs"), "{e}");
+    assert!(!e.contains('`'), "{e}");
+}
