@@ -376,7 +376,23 @@ fn remove_temporaries_on_signals() {
         };
         std::thread::spawn(move || {
             if let Some(sig) = signals.forever().next() {
-                cubeforge::io::remove_temporaries();
+                let kept = cubeforge::io::remove_temporaries();
+                let name = match sig {
+                    SIGINT => "interrupted (SIGINT)",
+                    SIGTERM => "stopped (SIGTERM)",
+                    _ => "stopped (SIGHUP)",
+                };
+                // One line: what the stop left, so a user never guesses at half a result.
+                tell(format_args!(
+                    "cubeforge: {name}: {}",
+                    match kept {
+                        0 => "nothing written".to_string(),
+                        n => format!(
+                            "the {n} output{} written before it kept whole, nothing half-written left",
+                            if n == 1 { "" } else { "s" }
+                        ),
+                    }
+                ));
                 let _ = signal_hook::low_level::emulate_default_handler(sig);
                 std::process::exit(128 + sig);
             }

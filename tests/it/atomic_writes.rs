@@ -179,15 +179,23 @@ fn sigterm_before_the_rename_leaves_nothing() {
         if existing {
             std::fs::create_dir(&out).unwrap();
         }
-        let mut child = convert(&out, "0", 20_000);
+        let child = convert(&out, "0", 20_000);
         // The temporaries are written when a hidden entry shows up.
         let hidden = |d: &Path| tree(d).iter().any(|e| e.contains(".cubeforge-"));
         wait_for("staging", || hidden(t.path()) && tree(t.path()).len() >= 6);
         let pid = child.id() as libc::pid_t;
         // SAFETY: kill only sends a signal to the child we started.
         unsafe { libc::kill(pid, libc::SIGTERM) };
-        let status = child.wait().unwrap();
+        let out = child.wait_with_output().unwrap();
+        let status = out.status;
         assert_eq!(status.signal(), Some(libc::SIGTERM), "{status:?}");
+        // One line says what the stop left (issue 48).
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(
+            err.lines().last(),
+            Some("cubeforge: stopped (SIGTERM): nothing written"),
+            "{err}"
+        );
         let left = tree(t.path());
         let want: &[&str] = if existing { &["faces"] } else { &[] };
         assert_eq!(left, want, "existing folder: {existing}");

@@ -84,15 +84,21 @@ pub(super) fn remove_any(p: &Path) {
     }
 }
 
+/// Outputs put in place whole by this process so far (each [`Staged::commit`] that ended).
+static COMMITTED: AtomicU64 = AtomicU64::new(0);
+
 /// Removes every temporary file and folder not yet in place: what a SIGINT, SIGTERM or
 /// SIGHUP handler calls before the process ends. From then on every write of this process
 /// fails (the registry's lock is held while they go, and no temporary is made after it).
-pub fn remove_temporaries() {
+/// Returns how many outputs were put in place whole before it, so the handler can say what
+/// the stop kept (0: nothing was written).
+pub fn remove_temporaries() -> u64 {
     let mut p = pending();
     p.stopping = true;
     for t in std::mem::take(&mut p.paths) {
         remove_any(&t);
     }
+    COMMITTED.load(Ordering::SeqCst)
 }
 
 /// Files written under temporary names, not yet in place. Dropped without [`Staged::commit`],
@@ -322,7 +328,9 @@ impl Staged {
     /// files and folders this call created are taken back (files it replaced stay replaced).
     pub fn commit(mut self) -> Result<()> {
         // Whatever is still staged when this returns is removed by `drop`.
-        self.put_in_place()
+        self.put_in_place()?;
+        COMMITTED.fetch_add(1, Ordering::SeqCst);
+        Ok(())
     }
 
     fn put_in_place(&mut self) -> Result<()> {
