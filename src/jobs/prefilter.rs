@@ -260,9 +260,10 @@ impl Job for PrefilterJob {
         if let Some(w) = &encoded.clamped {
             warnings.push(w);
         }
-        // 8-bit files clip at 1.
+        // 8-bit files clip at 1, unless an HDR encoding holds more (its own range is the
+        // clamp warning's above).
         let format = container.unwrap_or(self.face_format);
-        if io::largest_value(format, self.gpu_format).is_none() {
+        if io::largest_value(format, self.gpu_format).is_none() && self.hdr_encoding.is_none() {
             let (n, top) = tonemap::clipped(chain.levels.iter().flatten(), Tonemap::None, 0.0);
             if n > 0 {
                 let name = self.output.name();

@@ -287,3 +287,34 @@ fn the_jobs_refuse_an_encoding_in_validate() {
     };
     assert!(ok.validate().is_ok());
 }
+
+/// A prefiltered chain in RGBD (up to 255) does not warn of texels clipping at 1: the
+/// encoding's own range is what clamps (issue 48, item 10); plain RGBA8 still warns.
+#[test]
+fn prefilter_warns_of_clipping_by_the_encodings_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = source(dir.path());
+    let prefilter = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "prefilter",
+            src.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--filter",
+            "box",
+            "--size",
+            "16",
+            "--gpu-format",
+            "rgba8",
+        ];
+        args.extend_from_slice(extra);
+        let r = run(&args);
+        assert!(r.status.success(), "{name}: {}", stderr(&r));
+        stderr(&r)
+    };
+    let rgbd = prefilter("d.ktx2", &["--hdr-encoding", "rgbd"]);
+    assert!(!rgbd.contains("clip"), "{rgbd}");
+    let plain = prefilter("p.ktx2", &[]);
+    assert!(plain.contains("clip"), "{plain}");
+}
