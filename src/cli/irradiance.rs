@@ -63,7 +63,7 @@ Examples:
   # a 32 px irradiance cube map (KTX2) and the 9 SH coefficients as JSON
   cubeforge irradiance panorama.hdr -o irradiance.ktx2 --sh sh.json
   # cmft's 25 coefficients, windowed as cmgen's auto does
-  cubeforge irradiance panorama.hdr -o irradiance25.ktx2 --sh sh25.json --sh-bands 5 --sh-window auto
+  cubeforge irradiance panorama.hdr -o irr25.ktx2 --sh sh25.json --sh-bands 5 --sh-window auto
   # six 16 px EXR faces
   cubeforge irradiance panorama.hdr -o irradiance/ --size 16";
 

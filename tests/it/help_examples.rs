@@ -68,6 +68,8 @@ fn commands() -> Vec<String> {
     listed
         .lines()
         .take_while(|l| l.starts_with("  "))
+        // A description wrapped to the terminal goes on under its own column.
+        .filter(|l| !l[2..].starts_with(' '))
         .map(|l| l.split_whitespace().next().unwrap().to_owned())
         .filter(|c| c != "help")
         .collect()
@@ -198,4 +200,23 @@ fn examples_are_read_as_documented() {
     assert!(examples("Examples:\n  cubeforge info $HOME/a.exr\n").is_err());
     assert!(examples("Examples:\n  ls\n").is_err());
     assert!(examples("no section").is_err());
+}
+
+/// Help is wrapped to the terminal (100 columns when it is not one), so no paragraph runs on
+/// as one line; the examples fit whole (issue 48, item 14).
+#[test]
+fn help_is_wrapped_and_examples_fit() {
+    for c in commands() {
+        let text = help(Some(&c));
+        let long: Vec<&str> = text.lines().filter(|l| l.chars().count() > 100).collect();
+        assert!(long.is_empty(), "{c}: {long:?}");
+        let section = text.split("\nExamples").nth(1).unwrap_or_default();
+        for line in section.lines().skip(1).take_while(|l| l.starts_with("  ")) {
+            let l = line.trim_start();
+            assert!(
+                l.starts_with('#') || l.starts_with("cubeforge ") || l.starts_with("source "),
+                "{c}: an example wrapped: {line:?}"
+            );
+        }
+    }
 }
