@@ -21,8 +21,24 @@ Examples:
   # fish
   cubeforge completions fish > ~/.config/fish/completions/cubeforge.fish";
 
+/// The command line as a user sees it: the hidden commands (`man`, `fixtures`: the project's
+/// own) are not offered.
+fn visible() -> clap::Command {
+    let full = super::command();
+    let mut cmd = clap::Command::new("cubeforge")
+        .version(full.get_version().unwrap_or_default().to_owned())
+        .about(full.get_about().cloned().unwrap_or_default());
+    for a in full.get_arguments() {
+        cmd = cmd.arg(a.clone());
+    }
+    for s in full.get_subcommands().filter(|s| !s.is_hide_set()) {
+        cmd = cmd.subcommand(s.clone());
+    }
+    cmd
+}
+
 pub fn run(args: Args) -> Result<()> {
     let mut script = Vec::new();
-    clap_complete::generate(args.shell, &mut super::command(), "cubeforge", &mut script);
+    clap_complete::generate(args.shell, &mut visible(), "cubeforge", &mut script);
     super::say(String::from_utf8_lossy(&script).trim_end())
 }

@@ -226,6 +226,11 @@ fn completions_for_every_shell() {
             "{shell}"
         );
         assert!(text.contains("tonemap"), "{shell}: options of the commands");
+        // The project's own hidden commands are not offered (issue 48, item 16).
+        assert!(
+            !text.contains("fixtures") && !text.contains("man pages"),
+            "{shell}: hidden commands"
+        );
     }
     assert_eq!(
         run(&["completions", "tcsh"], t.path()).status.code(),
