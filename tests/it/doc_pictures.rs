@@ -55,11 +55,13 @@ fn doc_pictures_are_current() {
                     && said.contains(&format!("skipped: {name} ")),
                 "docs/{name} is not made by docs/pictures.sh"
             );
+            // Why, as docs/pictures.sh said it: what is missing for this picture.
+            let why = said
+                .lines()
+                .find_map(|l| l.strip_prefix(&format!("skipped: {name} ")))
+                .unwrap_or("not made");
             use std::io::Write;
-            let _ = writeln!(
-                std::io::stderr(),
-                "SKIPPED docs/{name}: ../shared/fixtures/real not found"
-            );
+            let _ = writeln!(std::io::stderr(), "SKIPPED docs/{name}: {why}");
             continue;
         }
         let (mean, max) = difference(&docs.join(name), &fresh);
