@@ -167,7 +167,14 @@ fn three(ctx: &Context, size: Option<usize>) -> Result<Delivery> {
              BC6H or half floats elsewhere):\n\
              import {{ KTX2Loader }} from 'three/addons/loaders/KTX2Loader.js';\n\
              new KTX2Loader().setTranscoderPath('three/examples/jsm/libs/basis/')\n\
-               .detectSupport(renderer).load('{f}', (texture) => {{ /* the same three lines */ }});",
+               .detectSupport(renderer).load('{f}', (texture) => {{\n\
+                 texture.mapping = THREE.EquirectangularReflectionMapping;\n\
+                 // Its mips are the panorama's own: as a background, filter level 0 alone\n\
+                 // (three draws a one-level cube from it, black through a mip-map filter).\n\
+                 texture.minFilter = THREE.LinearFilter;\n\
+                 scene.environment = texture;\n\
+                 scene.background = texture;\n\
+               }});",
             f = file_name(&k.path),
             levels = k.levels,
         )
