@@ -52,7 +52,9 @@ pub fn run(args: Args) -> Result<()> {
     let mut reports = Vec::new();
     let mut failed = 0;
     for f in &args.files {
-        match info::describe(f, args.from, &opts) {
+        // An `ibl` output folder: what its specular file holds (as `view` and `preview` read).
+        let shown = cubeforge::ibl::specular_of(f).map(|(file, _)| file);
+        match info::describe(shown.as_ref().unwrap_or(f), args.from, &opts) {
             Ok(r) => reports.push(r),
             // One file: its error is the one line (no summary after it).
             Err(e) if args.files.len() == 1 => return Err(e),

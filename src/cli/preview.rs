@@ -193,6 +193,9 @@ pub fn job(a: Args) -> Result<PreviewJob> {
             "preview needs an environment and an output: cubeforge preview ENV -o OUTPUT",
         ));
     };
+    // An `ibl` output folder: its specular chain (or panorama), as `view` shows it; a pbr
+    // material reads the chain by the engine --target names.
+    let env = cubeforge::ibl::specular_of(&env).map_or(env, |(file, _)| file);
     let output = super::destination(&output, a.format.as_deref(), FileFormat::is_image)?;
     if a.env_radius.is_none() && (a.env_center.is_some() || a.parallax.is_some()) {
         return Err(Error::usage(

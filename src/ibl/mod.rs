@@ -9,6 +9,7 @@
 #![warn(missing_docs)]
 
 pub mod engines;
+mod folder;
 pub mod panorama;
 
 use crate::convert::{self, Loaded};
@@ -65,6 +66,7 @@ impl Engine {
 }
 
 pub use crate::filter::RoughnessMapping;
+pub use folder::specular_of;
 
 /// What a caller may change; None takes the engine's default.
 #[derive(Clone, Debug, Default)]

@@ -73,7 +73,7 @@ impl ViewJob {
     /// specular file (Bevy's, glTF's, Filament's, Babylon's, the generic one) with that
     /// engine, anything else as it is with `target`.
     fn shown(&self) -> (PathBuf, Option<Engine>) {
-        if let Some((file, engine)) = ibl_folder(&self.input) {
+        if let Some((file, engine)) = crate::ibl::specular_of(&self.input) {
             return (file, self.target.or(engine));
         }
         (self.input.clone(), self.target)
@@ -244,55 +244,5 @@ impl Job for ViewJob {
 
     fn limits_mut(&mut self) -> &mut Limits {
         &mut self.limits
-    }
-}
-
-/// The specular file of an `ibl` output folder and its engine (None: not such a folder).
-fn ibl_folder(dir: &std::path::Path) -> Option<(PathBuf, Option<Engine>)> {
-    if !dir.is_dir() || crate::chain::is_chain_dir(dir) {
-        return None;
-    }
-    let mut names: Vec<PathBuf> = std::fs::read_dir(dir)
-        .ok()?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .collect();
-    names.sort();
-    let ends = |p: &PathBuf, suffix: &str| p.to_string_lossy().ends_with(suffix);
-    for (suffix, engine) in [
-        ("_ggx.ktx2", Engine::Gltf),
-        ("_ibl.ktx", Engine::Filament),
-        (".env", Engine::Babylon),
-        ("_specular.ktx2", Engine::Bevy),
-    ] {
-        if let Some(p) = names.iter().find(|p| ends(p, suffix)) {
-            let stem = p.to_string_lossy();
-            let stem = &stem[..stem.len() - suffix.len()];
-            let generic =
-                engine == Engine::Bevy && PathBuf::from(format!("{stem}_sh.json")).is_file();
-            return Some((
-                p.clone(),
-                Some(if generic { Engine::Generic } else { engine }),
-            ));
-        }
-    }
-    // Godot's, Unity's and Unreal's folders hold the panorama the engine filters itself.
-    let images: Vec<&PathBuf> = names
-        .iter()
-        .filter(|p| crate::io::FileFormat::from_extension(p).is_some())
-        .collect();
-    // three.js's folder: NAME.jpg (UltraHDR) and its NAME.hdr fallback; the JPEG is shown.
-    let stem = |p: &PathBuf| p.with_extension("");
-    match images.as_slice() {
-        [one] => Some(((*one).clone(), None)),
-        [a, b] if stem(a) == stem(b) => {
-            let jpg = |p: &PathBuf| {
-                crate::io::FileFormat::from_extension(p) == Some(crate::io::FileFormat::Jpeg)
-            };
-            [a, b]
-                .into_iter()
-                .find(|p| jpg(p))
-                .map(|p| ((*p).clone(), None))
-        }
-        _ => None,
     }
 }

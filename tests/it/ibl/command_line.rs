@@ -1,4 +1,5 @@
-//! The command's own reports: bad requests as one-line errors, BC6H quality with --verbose.
+//! The command's own reports: bad requests as one-line errors, BC6H quality with --verbose;
+//! its folder read back by `info` and `preview`.
 
 use super::*;
 
@@ -89,4 +90,29 @@ fn bc6h_quality_is_reported_with_verbose() {
         .unwrap();
     assert!(db > 35.0, "{line}");
     assert!(e.contains("encode"), "{e}");
+}
+
+/// Every reading command takes the folder `ibl` wrote (issue 48, item 11): `info` describes its
+/// specular chain and `preview` draws with it, as `view` shows it.
+#[test]
+fn info_and_preview_read_an_ibl_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let sky = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/sky.exr");
+    for target in ["bevy", "gltf", "filament", "babylon"] {
+        let out = dir.path().join(target);
+        super::ibl(&sky, &out, target, &["--size", "32"]);
+        let o = run(["info", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{target}: {}", stderr(&o));
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(text.contains("mip levels"), "{target}: {text}");
+        let png = dir.path().join(format!("{target}.png"));
+        let o = run([
+            "preview",
+            out.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{target}: {}", stderr(&o));
+        assert!(png.is_file());
+    }
 }
