@@ -5,7 +5,7 @@
 //! then be 1.000 +- 0.002. Before issue 45 the cosine chain's level 0 at 32 px moved by 0.866
 //! (the sun normalised apart from the rest, the level then scaled to the base's flux); now
 //! 1.0000. GGX and Charlie, then importance-sampled, moved to 0.989-0.996; summed exactly,
-//! within 0.9988-1.0003.
+//! within 0.9986-1.0004.
 
 use super::reference::{self, Lobe};
 use super::{chain, real_base, real_chain, stated, to_cube};
