@@ -21,6 +21,10 @@ use std::f64::consts::PI;
 /// Bands a set may hold: cmft's five (up to l = 4).
 pub const MAX_BANDS: usize = 5;
 
+/// Texels per face edge of the grid `--sh-window auto` tests the irradiance on (with the
+/// margin that makes it hold between the points).
+const GRID: usize = 128;
+
 /// Coefficients of [`MAX_BANDS`] bands.
 const MAX_COEFFS: usize = MAX_BANDS * MAX_BANDS;
 
@@ -296,10 +300,11 @@ impl ShSet {
     }
 
     /// The set with `window` applied; `Auto` searches the cutoff as cmgen does (bisection
-    /// up to `4 bands + 1`, per channel, the smallest kept; from band 1 rather than `bands`), but tests the
-    /// irradiance on a 6 x 32 x 32 grid of directions instead of Sloan's closed-form minimum,
-    /// so it works for every band count, and leaves a set alone whose irradiance is already
-    /// nowhere negative.
+    /// up to `4 bands + 1`, per channel, the smallest kept; from band 1 rather than `bands`),
+    /// but proves the irradiance non-negative over the whole sphere from a 6 x 128 x 128 grid
+    /// and a bound between its points (see `nonnegative`) instead of Sloan's closed-form
+    /// minimum, so it works for every band count, and leaves a set alone whose irradiance is
+    /// already provably nowhere negative.
     pub fn windowed(&self, window: ShWindow) -> ShSet {
         let cutoff = match window {
             ShWindow::None => return self.clone(),
@@ -328,12 +333,15 @@ impl ShSet {
         }
     }
 
-    /// None when the exact set's irradiance is already nowhere negative on the grid.
+    /// None when the exact set's irradiance is already nowhere negative.
     fn auto_cutoff(&self) -> Option<f64> {
-        let grid: Vec<Vec3> = (0..6 * 32 * 32)
-            .map(|i| texel_dir(i / 1024, i % 32, (i / 32) % 32, 1.0 / 32.0))
+        let grid: Vec<Vec3> = (0..6 * GRID * GRID)
+            .map(|i| {
+                let (face, y, x) = (i / (GRID * GRID), (i / GRID) % GRID, i % GRID);
+                texel_dir(face, x, y, 1.0 / GRID as f32)
+            })
             .collect();
-        if (0..3).all(|c| self.min_irradiance(&grid, c) >= 0.0) {
+        if (0..3).all(|c| self.nonnegative(&grid, c)) {
             return None;
         }
         let mut cutoff = (4 * self.bands + 1) as f64;
@@ -341,7 +349,7 @@ impl ShSet {
             // Band 1 leaves the mean alone, never negative: the search starts there (cmgen's
             // starts at `bands`, still negative next to a strong sun at 5 bands).
             let (mut lo, mut hi) = (1.0, cutoff);
-            if self.with_cutoff(hi).min_irradiance(&grid, channel) >= 0.0 {
+            if self.with_cutoff(hi).nonnegative(&grid, channel) {
                 continue;
             }
             for _ in 0..16 {
@@ -349,10 +357,10 @@ impl ShSet {
                     break;
                 }
                 let mid = 0.5 * (lo + hi);
-                if self.with_cutoff(mid).min_irradiance(&grid, channel) < 0.0 {
-                    hi = mid;
-                } else {
+                if self.with_cutoff(mid).nonnegative(&grid, channel) {
                     lo = mid;
+                } else {
+                    hi = mid;
                 }
             }
             cutoff = cutoff.min(lo);
@@ -360,16 +368,38 @@ impl ShSet {
         Some(cutoff)
     }
 
-    /// The smallest irradiance of one channel over `grid`.
-    fn min_irradiance(&self, grid: &[Vec3], channel: usize) -> f64 {
+    /// Whether one channel's irradiance is non-negative over the whole sphere, not only on
+    /// `grid` (issue 45: a 6 x 32 x 32 grid left park's blue at 5 bands negative in 66 of
+    /// 393,216 directions). E is a polynomial of degree L (its highest band with weight) on
+    /// the sphere; on the great circle from its minimum to the nearest grid point, d radians
+    /// away, it is a trigonometric polynomial of degree L with no slope at the minimum, so by
+    /// Bernstein's inequality the grid point exceeds the minimum by at most d^2 / 2 L^2 max|E|,
+    /// and max|E| <= |c| B / sqrt(4 pi) (Cauchy-Schwarz and the addition theorem, B bands).
+    /// Every grid point at least that far above 0 proves E >= 0 everywhere.
+    fn nonnegative(&self, grid: &[Vec3], channel: usize) -> bool {
+        use rayon::prelude::*;
         let e = self.irradiance();
-        let mut ys = [0.0f64; MAX_COEFFS];
-        grid.iter()
-            .map(|&d| {
-                basis_into(d, self.bands, &mut ys);
-                e.iter().zip(&ys).map(|(c, y)| c[channel] * y).sum::<f64>()
-            })
-            .fold(f64::INFINITY, f64::min)
+        let degree = (0..e.len())
+            .filter(|&i| e[i][channel] != 0.0)
+            .map(band)
+            .max()
+            .unwrap_or(0) as f64;
+        let norm = e
+            .iter()
+            .map(|c| c[channel] * c[channel])
+            .sum::<f64>()
+            .sqrt();
+        let max_e = norm * self.bands as f64 / (4.0 * PI).sqrt();
+        // No point of the sphere is further from a texel centre than a texel's half diagonal
+        // at the face centre, atan(sqrt(2) / GRID).
+        let d = (2f64.sqrt() / GRID as f64).atan();
+        let margin = 0.5 * d * d * degree * degree * max_e;
+        let bands = self.bands;
+        grid.par_iter().all(|&dir| {
+            let mut ys = [0.0f64; MAX_COEFFS];
+            basis_into(dir, bands, &mut ys);
+            e.iter().zip(&ys).map(|(c, y)| c[channel] * y).sum::<f64>() >= margin
+        })
     }
 
     /// Coefficients of the irradiance E(n) = integral of L(l) max(0, n.l) dl.

@@ -122,7 +122,16 @@ pub(super) fn weight_f64(lobe: Lobe, c: f64) -> f64 {
                 0.0
             }
         }
-        other => other.weight(c as f32) as f64,
+        // (2 + 1/alpha) ((1 - c) / 2)^(1 / (2 alpha)) / (2 pi) c, as `shape::charlie_d`.
+        Lobe::Charlie { alpha } => {
+            let a = (alpha as f64).max(1e-4);
+            let sin2 = ((1.0 - c) * 0.5).max(0.0);
+            if c > 0.0 {
+                (2.0 + 1.0 / a) * sin2.powf(0.5 / a) / std::f64::consts::TAU * c
+            } else {
+                0.0
+            }
+        }
     }
 }
 

@@ -42,6 +42,7 @@ use fit::fit_log_weight;
 use glam::Vec4;
 use rayon::prelude::*;
 use source::Source;
+use std::f64::consts::FRAC_PI_2;
 use std::marker::PhantomData;
 use sum::Candidates;
 
@@ -64,6 +65,23 @@ const MAX_REACH: f32 = 0.5;
 /// 123 -> 115 ms with 8; level 1 (same texel size) 67 -> 71 ms with 8, 106 ms with 2.
 const TILE: usize = 4;
 
+/// A whole lobe's width (GGX: 2 alpha) in texels of the level it is summed on, at least.
+const WHOLE_SIGMA_TEXELS: f64 = 2.0;
+
+/// Most weights a whole-lobe sum may take for one level (about 0.3 s on one core): small
+/// levels and small chains, where importance sampling was least accurate.
+pub(crate) const WHOLE_BUDGET: f64 = (1u64 << 29) as f64;
+
+/// Most weights a whole-lobe sum may take where a window would do, on a finer source (about
+/// 20 ms on one core).
+pub(crate) const SMALL_BUDGET: f64 = (1u64 << 25) as f64;
+
+/// The smallest source level a whole lobe is summed on (the base where it is smaller).
+const WHOLE_MIN_SOURCE: usize = 16;
+
+/// Steps of a [`Shape::Table`] (Charlie's ring at alpha 0.04 spans 300 of them).
+const TABLE_STEPS: usize = 8192;
+
 /// Highest degree of the polynomial in a log-weight fit.
 const MAX_DEGREE: usize = 4;
 
@@ -79,6 +97,8 @@ pub(crate) struct Window {
     /// Largest 1 - cos(angle) within reach.
     u_cut: f32,
     shape: Shape,
+    /// [`Shape::Table`]'s weights over their largest, on equal steps of u from 0 to `u_cut`.
+    table: Vec<f32>,
 }
 
 /// The lobe's weight over its peak as a function of u = 1 - cos(angle), in a form eight lanes
@@ -92,6 +112,10 @@ enum Shape {
     /// (1 - u) (a2 / (a2 + h u))^2 with h = (1 - a2) / 2: GGX, whose log has a pole just
     /// below u = 0 that no short polynomial follows.
     Ggx { a2: f32, h: f32 },
+    /// Linear interpolation in `Window::table`, `scale` steps per unit of u: lobes summed
+    /// over the whole sphere whose log weight no short polynomial follows (Charlie's ring,
+    /// Gaussians reaching past 150 degrees).
+    Table { scale: f32 },
 }
 
 impl Window {
@@ -165,7 +189,72 @@ impl Window {
             norm: (1.0 / integral) as f32,
             u_cut: u_cut as f32,
             shape,
+            table: Vec::new(),
         }
+    }
+
+    /// The whole lobe summed exactly on a reduced source (every texel within its reach, the
+    /// tail included), for GGX, Charlie and Gaussians too wide for [`Window::plan`]: on the coarsest level
+    /// where the lobe is still `WHOLE_SIGMA_TEXELS` texels wide, when six faces of `size`
+    /// output texels cost at most `budget` weights (importance sampling's trilinear
+    /// lookups at coarse lods left 1-2.6% in GGX, Charlie and the Gaussian's wide levels of a
+    /// 32 px chain, issue 45). None where it would cost more.
+    pub(crate) fn whole(
+        lobe: Lobe,
+        src_size: usize,
+        levels: usize,
+        size: usize,
+        budget: f64,
+    ) -> Option<Self> {
+        let sigma = match lobe {
+            Lobe::Ggx { alpha } => 2.0 * alpha,
+            Lobe::Charlie { .. } => lobe.width(),
+            Lobe::Gaussian { sigma } => sigma,
+            // Wide cosine lobes stay sampled: within 0.3% of brute force that way, and their
+            // whole sums made the 256 cosine chain 12% slower.
+            Lobe::CosinePower { .. } => return None,
+        } as f64;
+        let reach = (lobe.cutoff_cos().clamp(-1.0, 1.0) as f64).acos();
+        let wide = |l: usize| sigma * (src_size >> l).max(1) as f64 / 2.0 >= WHOLE_SIGMA_TEXELS;
+        // Not below WHOLE_MIN_SOURCE texels: on a 2 px level, GGX's alpha 1 (2 radians
+        // wide) was 6% off brute force (on 16 px, 0.21%).
+        let fine_enough = |l: usize| (src_size >> l) >= WHOLE_MIN_SOURCE.min(src_size);
+        let level = (0..levels)
+            .take_while(|&l| wide(l) && fine_enough(l))
+            .last()
+            .unwrap_or(0);
+        let m = (src_size >> level).max(1) as f64;
+        let candidates = 6.0 * m * m * (1.0 - reach.cos()) * 0.5;
+        if 6.0 * (size * size) as f64 * candidates > budget {
+            return None;
+        }
+        let u_cut = 1.0 - reach.cos();
+        if let Lobe::Ggx { .. } = lobe {
+            // GGX's own form is exact and vectorises; its reach is the hemisphere.
+            let mut w = Window::build(lobe, sigma, reach.min(FRAC_PI_2), src_size, 1, 1.0);
+            w.level = level;
+            w.norm = (1.0 / fit::integral_over_peak(lobe, 2.0)) as f32;
+            return Some(w);
+        }
+        let steps = TABLE_STEPS as f64;
+        let raw: Vec<f64> = (0..=TABLE_STEPS)
+            .map(|i| fit::weight_f64(lobe, 1.0 - u_cut * i as f64 / steps))
+            .collect();
+        let peak = raw.iter().copied().fold(0.0, f64::max).max(1e-300);
+        Some(Window {
+            level,
+            norm: (peak / lobe.integral()) as f32,
+            u_cut: u_cut as f32,
+            shape: Shape::Table {
+                scale: (steps / u_cut) as f32,
+            },
+            table: raw.iter().map(|w| (w / peak) as f32).collect(),
+        })
+    }
+
+    /// The source level the sum runs on.
+    pub(crate) fn level(&self) -> usize {
+        self.level
     }
 
     /// The lobe's reach, radians.

@@ -127,7 +127,8 @@ impl Source {
     /// Appends every texel whose centre lies within `reach` (at most the level's largest) of
     /// `axis` to `out`.
     pub(super) fn gather(&self, axis: Vec3, reach: f32, out: &mut Candidates) {
-        let cos_reach = reach.cos();
+        // Past pi the cosine turns back: everything is within reach.
+        let cos_reach = if reach >= PI { -2.0 } else { reach.cos() };
         let (n, block, per_edge) = (self.n, self.block, self.per_edge);
         let (ax, ay, az) = (
             Vec4::splat(axis.x),

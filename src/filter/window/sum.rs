@@ -64,6 +64,10 @@ impl Candidates {
         let sum = match window.shape {
             Shape::Exp2 { q } => self.sum_with(n, cut, |u| exp2_weight(&q, u)),
             Shape::Ggx { a2, h } => self.sum_with(n, cut, |u| ggx_weight(a2, h, u)),
+            Shape::Table { scale } => {
+                let t = &window.table;
+                self.sum_with(n, cut, |u| table_weight(t, scale, u))
+            }
         };
         sum * window.norm
     }
@@ -108,6 +112,16 @@ pub(super) fn exp2_weight(q: &[f32; MAX_DEGREE + 1], u: f32) -> f32 {
         p = p.mul_add(u, c);
     }
     exp2_small(u * p)
+}
+
+/// [`Shape::Table`]'s weight at `u` (0 <= u; past the table's end, its last step).
+#[inline(always)]
+pub(super) fn table_weight(table: &[f32], scale: f32, u: f32) -> f32 {
+    let last = table.len() - 2;
+    let t = (u * scale).max(0.0);
+    let i = (t as usize).min(last);
+    let f = (t - i as f32).min(1.0);
+    f.mul_add(table[i + 1] - table[i], table[i])
 }
 
 /// [`Shape::Ggx`]'s weight at `u`.

@@ -4,14 +4,15 @@
 //! patch, over the lobe's integral) is under 1e-4 of its value; its ratio clipped / full must
 //! then be 1.000 +- 0.002. Before issue 45 the cosine chain's level 0 at 32 px moved by 0.866
 //! (the sun normalised apart from the rest, the level then scaled to the base's flux); now
-//! 1.0000. GGX and Charlie, still importance-sampled, are printed (0.989 to 1.000) but not
-//! checked.
+//! 1.0000. GGX and Charlie, then importance-sampled, moved to 0.989-0.996; summed exactly,
+//! within 0.9986-1.0004.
 
 use super::reference::{self, Lobe};
-use super::{chain, real_base, stated, to_cube};
+use super::{chain, real_base, real_chain, stated, to_cube};
 use cubeforge::cube::CubeMap;
 use cubeforge::filter::FilterKind;
 use glam::Vec4;
+use rayon::prelude::*;
 
 /// `base` with every texel brighter than `times` its mean luminance clipped to that (hue kept),
 /// and the clipped texels: index and lost radiance.
@@ -43,6 +44,27 @@ fn clipped(base: &CubeMap, times: f32) -> (CubeMap, Vec<(usize, [f64; 3])>) {
     (out, lost)
 }
 
+/// The lost texels' total power, and a cone holding their directions (axis, radius).
+fn lost_cone(n: usize, lost: &[(usize, [f64; 3])]) -> (f64, [f64; 3], f64) {
+    let dir = |j: usize| reference::texel(n, j / (n * n), j % n, (j / n) % n);
+    let mut power = 0.0;
+    let mut sum = [0.0f64; 3];
+    for &(j, d) in lost {
+        let (v, sa) = dir(j);
+        power += d.iter().sum::<f64>() * sa;
+        for c in 0..3 {
+            sum[c] += v[c];
+        }
+    }
+    let l = reference::dot(sum, sum).sqrt();
+    let axis = sum.map(|v| v / l);
+    let radius = lost
+        .iter()
+        .map(|&(j, _)| reference::dot(axis, dir(j).0).clamp(-1.0, 1.0).acos())
+        .fold(0.0, f64::max);
+    (power, axis, radius)
+}
+
 #[test]
 fn texels_out_of_the_lobes_reach_do_not_change_when_the_sun_is_clipped() {
     let mut failed = Vec::new();
@@ -52,6 +74,7 @@ fn texels_out_of_the_lobes_reach_do_not_change_when_the_sun_is_clipped() {
         };
         let (clip, lost) = clipped(&base, 16.0);
         assert!(!lost.is_empty(), "esplanade has a sun");
+        let cone = lost_cone(n, &lost);
         for kind in [
             FilterKind::Box,
             FilterKind::Gaussian,
@@ -59,57 +82,73 @@ fn texels_out_of_the_lobes_reach_do_not_change_when_the_sun_is_clipped() {
             FilterKind::Ggx,
             FilterKind::Charlie,
         ] {
-            let (full, infos) = chain(&base, kind);
+            let made = real_chain("esplanade.hdr", n, kind).expect("esplanade");
+            let (full, infos) = (&made.levels, &made.infos);
             let (part, _) = chain(&clip, kind);
             let mut cells = Vec::new();
-            for ((a, b), info) in full.levels.iter().zip(&part.levels).zip(&infos) {
+            for ((a, b), info) in full.levels.iter().zip(&part.levels).zip(infos) {
                 let (a, b) = (to_cube(a), to_cube(b));
                 let s = info.size;
                 let lobe = stated(kind, info);
                 let norm = lobe.map(Lobe::integral);
-                let (mut count, mut worst) = (0usize, 0.0f64);
-                for (i, (fa, fb)) in a.texels.iter().zip(&b.texels).enumerate() {
-                    let (face, y, x) = (i / (s * s), (i / s) % s, i % s);
-                    let value: f64 = fb.iter().sum();
-                    let reach: f64 = lost
-                        .iter()
-                        .map(|&(j, d)| {
-                            let (jf, jy, jx) = (j / (n * n), (j / n) % n, j % n);
-                            let (dir, sa) = reference::texel(n, jf, jx, jy);
-                            let power = d.iter().sum::<f64>() * sa;
-                            match (lobe, norm) {
-                                (Some(l), Some(norm)) => {
-                                    power * reference::max_weight_over(l, s, face, x, y, dir) / norm
-                                }
-                                // A copy or box mean: only the texels inside.
-                                _ => {
-                                    let inside = jf == face && jx * s / n == x && jy * s / n == y;
-                                    if inside {
-                                        f64::INFINITY
-                                    } else {
-                                        0.0
+                // Each texel out of reach gives its ratio clipped / full (texels in parallel).
+                let ratios: Vec<f64> = (0..a.texels.len())
+                    .into_par_iter()
+                    .filter_map(|i| {
+                        let (fa, fb) = (a.texels[i], b.texels[i]);
+                        let (face, y, x) = (i / (s * s), (i / s) % s, i % s);
+                        let value: f64 = fb.iter().sum();
+                        let ratio = fb.iter().sum::<f64>() / fa.iter().sum::<f64>();
+                        // First a bound from the lost texels' cone (all their power at the
+                        // nearest angle any of them has to the patch); only where it does
+                        // not settle it, texel by texel.
+                        if let (Some(l), Some(norm)) = (lobe, norm) {
+                            let most =
+                                reference::max_weight_over_cone(l, s, face, x, y, cone.1, cone.2);
+                            if cone.0 * most / norm < 1e-4 * value {
+                                return Some(ratio);
+                            }
+                        }
+                        let reach: f64 = lost
+                            .iter()
+                            .map(|&(j, d)| {
+                                let (jf, jy, jx) = (j / (n * n), (j / n) % n, j % n);
+                                let (dir, sa) = reference::texel(n, jf, jx, jy);
+                                let power = d.iter().sum::<f64>() * sa;
+                                match (lobe, norm) {
+                                    (Some(l), Some(norm)) => {
+                                        power * reference::max_weight_over(l, s, face, x, y, dir)
+                                            / norm
+                                    }
+                                    // A copy or box mean: only the texels inside.
+                                    _ => {
+                                        let inside =
+                                            jf == face && jx * s / n == x && jy * s / n == y;
+                                        if inside {
+                                            f64::INFINITY
+                                        } else {
+                                            0.0
+                                        }
                                     }
                                 }
-                            }
-                        })
-                        .sum();
-                    if reach < 1e-4 * value {
-                        count += 1;
-                        let ratio = fb.iter().sum::<f64>() / fa.iter().sum::<f64>();
-                        worst = if (ratio - 1.0).abs() > (worst - 1.0).abs() || count == 1 {
-                            ratio
-                        } else {
-                            worst
-                        };
+                            })
+                            .sum();
+                        (reach < 1e-4 * value).then_some(ratio)
+                    })
+                    .collect();
+                let count = ratios.len();
+                let worst = ratios.iter().copied().fold(1.0f64, |w, r| {
+                    if (r - 1.0).abs() > (w - 1.0).abs() {
+                        r
+                    } else {
+                        w
                     }
-                }
+                });
                 if count == 0 {
                     cells.push("(all reached)".to_string());
                 } else {
                     cells.push(format!("{worst:.4} ({count} texels)"));
-                    // GGX and Charlie are still importance-sampled: printed, not checked.
-                    let sampled = matches!(kind, FilterKind::Ggx | FilterKind::Charlie);
-                    if (worst - 1.0).abs() > 0.002 && !sampled {
+                    if (worst - 1.0).abs() > 0.002 {
                         failed.push(format!(
                             "{} {n} px level {}: {worst:.4}",
                             kind.name(),

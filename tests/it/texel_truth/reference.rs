@@ -8,11 +8,10 @@
 //! constant; where the lobe is wider than a texel, that total is the lobe's integral and the
 //! flux is exact), the patch summed on k x k sub-patches, each at its centre with its exact
 //! solid angle. k is chosen so a sub-patch is at most a quarter
-//! of the lobe's width; base texels far from the output texel, where the lobe changes slowly
-//! over the patch, are summed on 2 x 2 and then 1 sub-patch (their share of the lobe is small
-//! and smooth: `reference_is_the_crates_geometry_and_converged` measures what that leaves).
-//! The tiers assume a lobe that peaks on its axis: Charlie's ring, 86 degrees out at alpha
-//! 0.04, falls in the 2 x 2 tier, so its figures are not yet shown to have converged.
+//! of the lobe's width; base texels far from the lobe's peak (its axis, or Charlie's ring),
+//! where the lobe changes slowly over the patch, are summed on 2 x 2 and then 1 sub-patch
+//! (`reference_is_the_crates_geometry_and_converged` doubles every tier and measures what
+//! moves).
 
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -135,6 +134,15 @@ impl Lobe {
         }
     }
 
+    /// The angle (radians) at which the weight peaks: 0 but for Charlie's ring, where
+    /// ((1 - c) / 2)^(1 / (2 alpha)) c is largest, at c = 2 alpha / (2 alpha + 1).
+    fn peak_angle(self) -> f64 {
+        match self {
+            Lobe::Charlie(a) => (2.0 * a / (2.0 * a + 1.0)).acos(),
+            _ => 0.0,
+        }
+    }
+
     /// The weight's integral over the sphere: 2 pi int w(cos t) sin t dt, midpoint rule in f64
     /// on steps a fortieth of the lobe's width.
     pub fn integral(self) -> f64 {
@@ -165,11 +173,51 @@ impl Lobe {
     }
 }
 
-/// Base texels' directions, solid angles and values, in arrays.
+/// A lobe's weight as the reference evaluates it: the formula, but Charlie's (a power per
+/// call, its ring on most of a hemisphere: 10 s of the module) by linear interpolation in
+/// 2^16 steps of c over [0, 1], built from the formula in f64: off by under 1e-8 of its
+/// peak on its ring; where ((1 - c) / 2)^(1 / (2 alpha)) has no slope, at c = 1, over
+/// 1e-4 steradian.
+struct Weigher {
+    lobe: Lobe,
+    table: Option<Vec<f64>>,
+}
+
+const CHARLIE_STEPS: usize = 1 << 16;
+
+impl Weigher {
+    fn new(lobe: Lobe) -> Weigher {
+        let table = matches!(lobe, Lobe::Charlie(_)).then(|| {
+            (0..=CHARLIE_STEPS)
+                .map(|i| lobe.weight(i as f64 / CHARLIE_STEPS as f64))
+                .collect()
+        });
+        Weigher { lobe, table }
+    }
+
+    #[inline]
+    fn at(&self, c: f64) -> f64 {
+        match &self.table {
+            None => self.lobe.weight(c),
+            Some(_) if c <= 0.0 => 0.0,
+            Some(t) => {
+                let x = c.min(1.0) * CHARLIE_STEPS as f64;
+                let i = (x as usize).min(CHARLIE_STEPS - 1);
+                t[i] + (x - i as f64) * (t[i + 1] - t[i])
+            }
+        }
+    }
+}
+
+/// Base texels' directions, solid angles and values, in arrays, and blocks of them (8 x 8
+/// blocks per face) with bounding cones, so an output texel skips the blocks beyond its
+/// lobe's reach without testing their texels (what the per-texel test would skip anyway).
 struct Base {
     dirs: Vec<[f64; 3]>,
     angles: Vec<f64>,
     values: Vec<[f64; 3]>,
+    /// Axis, angular radius and texel indices of each block.
+    blocks: Vec<([f64; 3], f64, Vec<usize>)>,
 }
 
 fn base_of(cube: &Cube) -> Base {
@@ -184,10 +232,31 @@ fn base_of(cube: &Cube) -> Base {
             }
         }
     }
+    let edge = n.div_ceil(8).max(1);
+    let mut blocks = Vec::new();
+    for face in 0..6 {
+        for by in (0..n).step_by(edge) {
+            for bx in (0..n).step_by(edge) {
+                let members: Vec<usize> = (by..(by + edge).min(n))
+                    .flat_map(|y| (bx..(bx + edge).min(n)).map(move |x| (face * n + y) * n + x))
+                    .collect();
+                let sum = members.iter().fold([0.0; 3], |a, &i| {
+                    [a[0] + dirs[i][0], a[1] + dirs[i][1], a[2] + dirs[i][2]]
+                });
+                let axis = unit(sum);
+                let radius = members
+                    .iter()
+                    .map(|&i| dot(axis, dirs[i]).clamp(-1.0, 1.0).acos())
+                    .fold(0.0, f64::max);
+                blocks.push((axis, radius + 1e-9, members));
+            }
+        }
+    }
     Base {
         dirs,
         angles,
         values: cube.texels.clone(),
+        blocks,
     }
 }
 
@@ -199,39 +268,65 @@ fn subdivisions(width: f64, size: usize, refine: usize) -> usize {
 }
 
 /// The level of face edge `size`: each texel the mean over its patch of the base convolved
-/// with `lobe`.
+/// with `lobe`. Sub-patches in three tiers by the angle between a base texel and the lobe's
+/// peak (its axis; Charlie's ring): k x k near it, 2 x 2 further, then the centre; `refine`
+/// multiplies all three, so doubling it shows every tier's convergence.
 pub fn convolve(base: &Cube, lobe: Lobe, size: usize, refine: usize) -> Cube {
     let b = base_of(base);
+    let weigher = Weigher::new(lobe);
     let k = subdivisions(lobe.width(), size, refine);
     let h = PI / 2.0 / size as f64;
-    // Near: the lobe resolved on k x k; further, 2 x 2, then the centre.
-    let near = (8.0 * lobe.width()).max(6.0 * h);
-    let (cos_near, cos_mid) = (near.cos(), (4.0 * near).min(PI).cos());
-    let cos_reach = (lobe.reach() + 1.5 * h).min(PI).cos();
+    let near = (4.0 * lobe.width()).max(3.0 * h);
+    let mid = (4.0 * near).min(PI);
+    let peak = lobe.peak_angle();
+    let reach = (lobe.reach() + 1.5 * h).min(PI);
+    let (cos_near, cos_mid, cos_reach) = (near.min(PI).cos(), mid.cos(), reach.cos());
     let texels = (0..6 * size * size)
         .into_par_iter()
         .map(|i| {
             let (face, y, x) = (i / (size * size), (i / size) % size, i % size);
             let (centre, omega) = texel(size, face, x, y);
             let fine = sub_patches(size, face, x, y, k);
-            let mid = sub_patches(size, face, x, y, k.min(2));
+            let coarse = sub_patches(size, face, x, y, k.min(2 * refine));
+            let far = sub_patches(size, face, x, y, refine);
             let (mut acc, mut total) = ([0.0f64; 3], 0.0f64);
-            for ((d, sa), v) in b.dirs.iter().zip(&b.angles).zip(&b.values) {
-                let c = dot(centre, *d);
-                if c < cos_reach {
+            for (axis, radius, members) in &b.blocks {
+                if dot(centre, *axis).clamp(-1.0, 1.0).acos() - radius > reach {
                     continue;
                 }
-                let w: f64 = if c >= cos_near {
-                    fine.iter().map(|(r, o)| lobe.weight(dot(*r, *d)) * o).sum()
-                } else if c >= cos_mid {
-                    mid.iter().map(|(r, o)| lobe.weight(dot(*r, *d)) * o).sum()
-                } else {
-                    lobe.weight(c) * omega
-                };
-                let w = w * sa;
-                total += w;
-                for ch in 0..3 {
-                    acc[ch] += w * v[ch];
+                for &j in members {
+                    let (d, sa, v) = (b.dirs[j], b.angles[j], b.values[j]);
+                    let c = dot(centre, d);
+                    if c < cos_reach {
+                        continue;
+                    }
+                    // The angle to the peak (cosines compared where it is the axis).
+                    let (is_near, is_mid) = if peak == 0.0 {
+                        (c >= cos_near, c >= cos_mid)
+                    } else {
+                        let off = (c.clamp(-1.0, 1.0).acos() - peak).abs();
+                        (off <= near, off <= mid)
+                    };
+                    let patches = if is_near {
+                        &fine
+                    } else if is_mid {
+                        &coarse
+                    } else {
+                        &far
+                    };
+                    let w: f64 = if patches.len() == 1 {
+                        weigher.at(c) * omega
+                    } else {
+                        patches
+                            .iter()
+                            .map(|(r, o)| weigher.at(dot(*r, d)) * o)
+                            .sum()
+                    };
+                    let w = w * sa;
+                    total += w;
+                    for ch in 0..3 {
+                        acc[ch] += w * v[ch];
+                    }
                 }
             }
             acc.map(|a| a / total)
@@ -265,6 +360,20 @@ pub fn box_level(base: &Cube, size: usize) -> Cube {
     Cube { n: size, texels }
 }
 
+/// Largest weight `lobe` gives any direction of output texel (`size`, face, x, y) from any
+/// direction within `radius` of `axis`: [`max_weight_over`] with the angles widened by it.
+pub fn max_weight_over_cone(
+    lobe: Lobe,
+    size: usize,
+    face: usize,
+    x: usize,
+    y: usize,
+    axis: [f64; 3],
+    radius: f64,
+) -> f64 {
+    max_weight_within(lobe, size, face, x, y, axis, radius)
+}
+
 /// Largest weight `lobe` gives any direction of output texel (`size`, face, x, y) from `d`: the
 /// lobe over the angles the patch spans from `d`, on 64 steps (it may peak off the axis).
 pub fn max_weight_over(
@@ -274,6 +383,19 @@ pub fn max_weight_over(
     x: usize,
     y: usize,
     d: [f64; 3],
+) -> f64 {
+    max_weight_within(lobe, size, face, x, y, d, 0.0)
+}
+
+/// [`max_weight_over`] from any direction within `spread` of `d`.
+fn max_weight_within(
+    lobe: Lobe,
+    size: usize,
+    face: usize,
+    x: usize,
+    y: usize,
+    d: [f64; 3],
+    spread: f64,
 ) -> f64 {
     let (centre, _) = texel(size, face, x, y);
     // The patch lies within this angle of its centre (its corners are furthest).
@@ -288,7 +410,10 @@ pub fn max_weight_over(
         })
         .fold(0.0, f64::max);
     let t = dot(centre, d).clamp(-1.0, 1.0).acos();
-    let (lo, hi) = ((t - radius).max(0.0), (t + radius).min(PI));
+    let (lo, hi) = (
+        (t - radius - spread).max(0.0),
+        (t + radius + spread).min(PI),
+    );
     (0..=64)
         .map(|i| lobe.weight((lo + (hi - lo) * i as f64 / 64.0).cos()))
         .fold(0.0, f64::max)
