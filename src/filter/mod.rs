@@ -346,7 +346,7 @@ pub fn prefilter_planned(
                 let size = fine_size_for(info.size, *lobe);
                 let faces = match lobe {
                     None => copy_faces(&base.levels[0]),
-                    Some(l) => match exact_window(*l, n, src.level_count(), size) {
+                    Some(l) => match exact_window(*l, n, src.level_count(), size, info.size) {
                         Some(w) => {
                             samples = None;
                             window::filter_level(&src, &w, size, &BrightSum::new(&bright, *l))
@@ -400,17 +400,35 @@ pub fn prefilter_planned(
 /// window runs on one only 1.4 lobe widths per texel: the Gaussian's level 2 of a 64 px chain
 /// was 0.78% off brute force, whole 0.37%); lobes no window holds, whole within
 /// [`window::WHOLE_BUDGET`]; None: sampled.
-fn exact_window(lobe: Lobe, src_size: usize, levels: usize, size: usize) -> Option<window::Window> {
-    use window::{Window, SMALL_BUDGET, WHOLE_BUDGET};
+fn exact_window(
+    lobe: Lobe,
+    src_size: usize,
+    levels: usize,
+    size: usize,
+    level_size: usize,
+) -> Option<window::Window> {
+    use window::{Window, CHARLIE_WHOLE_BUDGET, SMALL_BUDGET, WHOLE_BUDGET};
     match Window::plan(lobe, src_size, levels) {
         // The whole lobe where it reads a finer source than the window would, cheaply.
         Some(w) => match Window::whole(lobe, src_size, levels, size, SMALL_BUDGET) {
             Some(whole) if whole.level() < w.level() => Some(whole),
             _ => Some(w),
         },
-        None => Window::whole(lobe, src_size, levels, size, WHOLE_BUDGET),
+        // Levels over 32 px stay sampled: summed whole, the middle levels of a 256 chain
+        // made it slower by half again or more (their tests reach 64 px chains' level 1).
+        None if level_size > WHOLE_MAX_SIZE && !matches!(lobe, Lobe::Charlie { .. }) => None,
+        None => {
+            let budget = match lobe {
+                Lobe::Charlie { .. } => CHARLIE_WHOLE_BUDGET,
+                _ => WHOLE_BUDGET,
+            };
+            Window::whole(lobe, src_size, levels, size, budget)
+        }
     }
 }
+
+/// The largest level (edge, texels) a GGX or Gaussian lobe is summed whole for.
+const WHOLE_MAX_SIZE: usize = 32;
 
 /// Importance samples a sampled level may take in all, counted on its own texels.
 const SAMPLE_BUDGET: u64 = 1 << 23;
