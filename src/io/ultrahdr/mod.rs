@@ -443,7 +443,8 @@ fn rebuild_checked(
         Reader::Format
     };
     Gains::of(&meta).apply_in_place(&mut img, &map, reader);
-    if let Some(m) = meta::primaries(decoder) {
+    // A profile's parser is given the file's bytes: a panic in it is no reason to stop.
+    if let Some(m) = caught(|| meta::primaries(decoder)).ok().flatten() {
         // Colours outside BT.709 clip at 0, as libultrahdr's own decode clips them.
         img.pixels.par_iter_mut().for_each(|p| {
             *p = (m * p.truncate()).max(glam::Vec3::ZERO).extend(p.w);
