@@ -16,6 +16,7 @@ mod prefilter;
 mod preview;
 mod read;
 mod serve;
+mod signals;
 mod view;
 
 use clap::{Parser, Subcommand};
@@ -365,41 +366,6 @@ pub fn tell(text: impl std::fmt::Display) {
     let _ = writeln!(std::io::stderr(), "{text}");
 }
 
-/// On SIGINT, SIGTERM or SIGHUP: take back the temporaries written so far, then end as the
-/// signal would have (the shell sees the usual status).
-fn remove_temporaries_on_signals() {
-    #[cfg(unix)]
-    {
-        use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
-        let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
-            return;
-        };
-        std::thread::spawn(move || {
-            if let Some(sig) = signals.forever().next() {
-                let kept = cubeforge::io::remove_temporaries();
-                let name = match sig {
-                    SIGINT => "interrupted (SIGINT)",
-                    SIGTERM => "stopped (SIGTERM)",
-                    _ => "stopped (SIGHUP)",
-                };
-                // One line: what the stop left, so a user never guesses at half a result.
-                tell(format_args!(
-                    "cubeforge: {name}: {}",
-                    match kept {
-                        0 => "nothing written".to_string(),
-                        n => format!(
-                            "the {n} output{} written before it kept whole, nothing half-written left",
-                            if n == 1 { "" } else { "s" }
-                        ),
-                    }
-                ));
-                let _ = signal_hook::low_level::emulate_default_handler(sig);
-                std::process::exit(128 + sig);
-            }
-        });
-    }
-}
-
 /// The limits from the size options.
 pub fn limits(max_pixels: u64, max_memory: Option<u64>) -> cubeforge::io::Limits {
     let default = cubeforge::io::Limits::default();
@@ -537,7 +503,7 @@ pub fn run() -> i32 {
             return 2;
         }
     };
-    remove_temporaries_on_signals();
+    signals::remove_temporaries_on_signals();
     QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
     match dispatch(cli) {
         Ok(()) => 0,
