@@ -343,20 +343,7 @@ pub(crate) fn marks_three_sees(img: &Image, flip_y: bool, what: &str) -> [Vec3; 
 /// line naming the file, before any radiance is made.
 #[test]
 fn ultrahdr_with_a_bad_gain_map_is_refused() {
-    use image::ImageEncoder;
     let dir = tempfile::tempdir().unwrap();
-    let jpeg = |n: u32| {
-        let mut out = Vec::new();
-        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 90)
-            .write_image(
-                &vec![128u8; (n * n * 3) as usize],
-                n,
-                n,
-                image::ExtendedColorType::Rgb8,
-            )
-            .unwrap();
-        out
-    };
     let mut meta = ultrahdr_rs::GainMapMetadata::default();
     meta.gain_map_max = [4.0; 3];
     meta.alternate_hdr_headroom = 4.0;
@@ -385,4 +372,19 @@ fn ultrahdr_with_a_bad_gain_map_is_refused() {
             "{err}"
         );
     }
+}
+
+/// An n x n JPEG of mid grey: a picture or gain map to build UltraHDR files from.
+pub(crate) fn jpeg(n: u32) -> Vec<u8> {
+    use image::ImageEncoder;
+    let mut out = Vec::new();
+    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 90)
+        .write_image(
+            &vec![128u8; (n * n * 3) as usize],
+            n,
+            n,
+            image::ExtendedColorType::Rgb8,
+        )
+        .unwrap();
+    out
 }

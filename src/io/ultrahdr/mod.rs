@@ -413,15 +413,7 @@ fn rebuild_checked(
     let (Some(primary), Some(gain)) = (decoder.primary_jpeg(), decoder.gainmap_jpeg()) else {
         return Err("the gain map or the primary picture is missing".into());
     };
-    let bad = |v: f64| !v.is_finite();
-    if (0..3).any(|c| {
-        bad(meta.gain_map_min[c])
-            || bad(meta.gain_map_max[c])
-            || bad(meta.gamma[c])
-            || meta.gamma[c] <= 0.0
-            || bad(meta.base_offset[c])
-            || bad(meta.alternate_offset[c])
-    }) {
+    if !meta::finite(&meta) {
         return Err("its gain-map metadata holds a value that is not finite".into());
     }
     let map = decode_jpeg(gain, true, limits).map_err(|e| Rebuild::Jpeg(e, "its gain map"))?;

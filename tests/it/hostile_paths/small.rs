@@ -95,20 +95,8 @@ fn standard_output_on_dev_null_is_no_error() {
 /// with which of its pictures failed (the inner JPEG was named `-`).
 #[test]
 fn ultrahdr_errors_name_the_file_and_its_picture() {
-    use image::ImageEncoder;
     let dir = tempfile::tempdir().unwrap();
-    let jpeg = |n: u32| {
-        let mut out = Vec::new();
-        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 90)
-            .write_image(
-                &vec![128u8; (n * n * 3) as usize],
-                n,
-                n,
-                image::ExtendedColorType::Rgb8,
-            )
-            .unwrap();
-        out
-    };
+    use crate::ultrahdr::jpeg;
     let mut meta = ultrahdr_rs::GainMapMetadata::default();
     meta.gain_map_max = [4.0; 3];
     meta.alternate_hdr_headroom = 4.0;
