@@ -32,11 +32,8 @@ pub(super) fn texels(r: &[u8], g: &[u8], b: &[u8], e: &[u8], row: &mut [Vec4]) {
                 let bits = _mm_or_si128(_mm_and_si128(normal, hi), _mm_andnot_si128(normal, lo));
                 let scale = _mm_mul_ps(_mm_castsi128_ps(bits), _mm_set1_ps(0.003_906_25));
                 let max = _mm_set1_ps(crate::image::MAX_RADIANCE);
-                let half = _mm_set1_ps(0.5);
-                let channel = |p: &[u8]| {
-                    let m = _mm_add_ps(_mm_cvtepi32_ps(lanes(p)), half);
-                    _mm_min_ps(_mm_mul_ps(scale, m), max)
-                };
+                let channel =
+                    |p: &[u8]| _mm_min_ps(_mm_mul_ps(scale, _mm_cvtepi32_ps(lanes(p))), max);
                 let (rv, gv, bv) = (channel(r), channel(g), channel(b));
                 let one = _mm_set1_ps(1.0);
                 // Planes to texels: (r, g, b, 1) per lane.
@@ -56,9 +53,7 @@ pub(super) fn texels(r: &[u8], g: &[u8], b: &[u8], e: &[u8], row: &mut [Vec4]) {
     }
 }
 
-/// An RGBE texel in linear light as Radiance's own `colr_color` reads it: each mantissa
-/// plus one half (the middle of the step its writer truncated to) times 2^(e - 136); e = 0
-/// is black. Readers that leave out the half (stb_image) read half a step dark.
+/// An RGBE texel in linear light: the mantissas times 2^(e - 136), e = 0 for black.
 #[inline]
 pub(super) fn texel([r, g, b, e]: [u8; 4]) -> Vec4 {
     // 2^(e - 128) built from its bits (e = 1 needs the subnormal), then / 256.
@@ -68,7 +63,6 @@ pub(super) fn texel([r, g, b, e]: [u8; 4]) -> Vec4 {
         (e as u32) << 22
     }) * 0.003_906_25;
     // RGBE reaches 1.7e38: clamped like every input (see `MAX_RADIANCE`).
-    let m = |c: u8| c as f32 + 0.5;
-    let v = Vec4::new(scale * m(r), scale * m(g), scale * m(b), 1.0);
+    let v = Vec4::new(scale * r as f32, scale * g as f32, scale * b as f32, 1.0);
     v.min(Vec4::splat(crate::image::MAX_RADIANCE))
 }
