@@ -47,6 +47,14 @@ macro_rules! kernel {
 }
 pub(crate) use kernel;
 
+/// Whether AVX2, FMA and their companions can run here and are wanted: for code that
+/// dispatches itself to intrinsics.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) fn avx2_available() -> bool {
+    has_avx2()
+}
+
 /// Whether AVX2 and its companions can run here (detected once; a load afterwards). The
 /// environment variable CUBEFORGE_NO_AVX2 turns them off, to compare or to test both paths.
 #[cfg(target_arch = "x86_64")]

@@ -138,6 +138,13 @@ pub(super) fn weight_f64(lobe: Lobe, c: f64) -> f64 {
 /// The integral over the sphere of `lobe`'s weight over its peak, out to 1 - cos = `u_cut` (2:
 /// the whole sphere), per steradian: the midpoint rule on 2^16 steps of the angle, in f64.
 pub(super) fn integral_over_peak(lobe: Lobe, u_cut: f64) -> f64 {
+    // A cosine power's in closed form, 2 pi (1 - c0^(p+1)) / (p + 1): the 2^16 steps cost
+    // each level of the cosine chain 3 ms before its sum began, 15% of the chain on 16 cores.
+    if let Lobe::CosinePower { power } = lobe {
+        let p = power as f64;
+        let c0 = (1.0 - u_cut).clamp(0.0, 1.0);
+        return std::f64::consts::TAU * (1.0 - c0.powf(p + 1.0)) / (p + 1.0);
+    }
     const STEPS: usize = 1 << 16;
     let end = (1.0 - u_cut).clamp(-1.0, 1.0).acos();
     let dt = end / STEPS as f64;

@@ -84,3 +84,26 @@ fn whole_tables_follow_the_lobe() {
         assert!(off < 1e-4, "{lobe:?}: {off:e}");
     }
 }
+
+/// The cosine power's closed-form integral against the midpoint rule on 2^20 steps.
+#[test]
+fn cosine_integral_in_closed_form() {
+    for (p, u_cut) in [(2.0f32, 2.0), (11.3, 0.5), (64.0, 0.1), (2048.0, 0.01)] {
+        let got = fit::integral_over_peak(Lobe::CosinePower { power: p }, u_cut);
+        let steps = 1 << 20;
+        let end = (1.0 - u_cut).clamp(-1.0, 1.0).acos();
+        let dt = end / steps as f64;
+        let want: f64 = (0..steps)
+            .map(|i| {
+                let t = (i as f64 + 0.5) * dt;
+                t.cos().max(0.0).powf(p as f64) * t.sin()
+            })
+            .sum::<f64>()
+            * dt
+            * std::f64::consts::TAU;
+        assert!(
+            (got / want - 1.0).abs() < 1e-6,
+            "power {p}: {got} against {want}"
+        );
+    }
+}
