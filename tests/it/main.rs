@@ -22,6 +22,7 @@ mod exr_envmap;
 mod exr_openexr;
 mod fault_campaign;
 mod fault_outputs;
+mod figures;
 mod finite;
 mod first_hour;
 mod flux;

@@ -160,12 +160,17 @@ fn min_irradiance(set: &ShSet) -> f64 {
 #[test]
 fn auto_window_keeps_the_irradiance_positive_next_to_a_sun() {
     let cube = CubeMap::from_fn(48, sky);
+    // The docs' figures: the dip at 3 and 5 bands, and where auto lands and what it leaves.
+    let (mut dips, mut lands, mut leaves) = (Vec::new(), Vec::new(), Vec::new());
     for bands in [3, 5] {
         let exact = ShSet::project(&cube.levels[0], bands).unwrap();
         let dc = exact.irradiance()[0][0] * y_lm(0, 0, [0.0, 0.0, 1.0]);
         let before = min_irradiance(&exact);
         let auto = exact.windowed(ShWindow::Auto);
         let after = min_irradiance(&auto);
+        dips.push(format!("{:.0}%", -100.0 * before / dc));
+        lands.push(format!("{:.2}", auto.cutoff.unwrap_or(f64::NAN)));
+        leaves.push(format!("{:+.2}%", 100.0 * after / dc));
         eprintln!(
             "{bands} bands: least irradiance {:.3}% of the mean exact, {:.3}% windowed to band {:?}",
             100.0 * before / dc,
@@ -176,6 +181,17 @@ fn auto_window_keeps_the_irradiance_positive_next_to_a_sun() {
         assert!(auto.cutoff.is_some());
         assert!(after > -1e-3 * dc, "auto leaves {after} (mean {dc})");
     }
+    let doc = "docs/prefilter.md";
+    let text = format!(
+        "{} of the mean for a test sky with a small sun at 3 bands, {} at 5",
+        dips[0], dips[1]
+    );
+    crate::figures::check(doc, "sh ringing", &text);
+    let text = format!(
+        "{} (3 bands) and {} (5 bands) and leaves at worst {} and {}",
+        lands[0], lands[1], leaves[0], leaves[1]
+    );
+    crate::figures::check(doc, "sh auto window", &text);
     // A set that never goes negative is left alone.
     let calm = CubeMap::from_fn(16, |d| Vec4::new(1.0 + 0.5 * d.y, 1.0, 1.0, 1.0));
     let set = ShSet::project(&calm.levels[0], 5).unwrap();
@@ -211,11 +227,13 @@ fn five_bands_come_closer_to_the_exact_irradiance_than_three() {
     let (brute, _) = irradiance(&cube, 16, IrradianceMethod::Brute);
     let e3 = sh_error(&brute, &ShSet::project(&cube.levels[0], 3).unwrap());
     let e5 = sh_error(&brute, &ShSet::project(&cube.levels[0], 5).unwrap());
-    eprintln!(
-        "SH irradiance off by {:.2}% (3 bands), {:.2}% (5 bands)",
+    let text = format!(
+        "3 bands are {:.1}% off at worst and 5 bands {:.2}%",
         100.0 * e3,
         100.0 * e5
     );
+    eprintln!("SH irradiance of a smooth lobe: {text}");
+    crate::figures::check("docs/prefilter.md", "sh smooth lobe", &text);
     assert!(e5 < 0.6 * e3, "3 bands {e3}, 5 bands {e5}");
 }
 
@@ -334,6 +352,7 @@ fn auto_window_keeps_every_real_panoramas_irradiance_non_negative() {
         return;
     };
     let (brute, _) = irradiance(&cube, 16, IrradianceMethod::Brute);
+    let mut off = Vec::new();
     for bands in [3, 5] {
         let e = sh_error(&brute, &ShSet::project(&cube.levels[0], bands).unwrap());
         println!(
@@ -341,5 +360,8 @@ fn auto_window_keeps_every_real_panoramas_irradiance_non_negative() {
              of its mean",
             100.0 * e
         );
+        off.push(format!("{:.1}%", 100.0 * e));
     }
+    let text = format!("{} and {} of the mean", off[0], off[1]);
+    crate::figures::check("docs/prefilter.md", "sh real sun", &text);
 }

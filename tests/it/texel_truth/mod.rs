@@ -173,38 +173,56 @@ fn bound(n: usize) -> f64 {
     }
 }
 
-/// Prints the table's rows for `kind` and checks them against the bounds.
+/// Prints the table's rows for `kind`, checks them against the bounds, and checks
+/// docs/prefilter.md's table for `kind` (block `texel_truth KIND`) against them.
 fn check(kind: FilterKind) {
     let mut failed = Vec::new();
+    let mut doc = vec![
+        "| base | levels 0 to the last | largest rescale |".to_string(),
+        "| --- | --- | --- |".to_string(),
+    ];
     for (name, n) in cases() {
-        {
-            let Some(c) = real_chain(name, n, kind) else {
-                return;
-            };
-            let rows = measure(&c, kind);
-            let cells: Vec<String> = rows
-                .iter()
-                .map(|((m, w, f), r)| {
-                    format!(
-                        "{:.2}% (max {:.1}%, flux {:+.3}%, rescaled {:+.3}%)",
-                        m * 100.0,
-                        w * 100.0,
-                        f * 100.0,
-                        r * 100.0
-                    )
-                })
-                .collect();
-            println!(
-                "| {name} {n} px | {} | {} |",
-                kind.name(),
-                cells.join(" | ")
-            );
-            for (level, ((m, _, _), _)) in rows.iter().enumerate() {
-                if *m > bound(n) {
-                    failed.push(format!("{name} {n} px level {level}: {:.2}%", m * 100.0));
-                }
+        let Some(c) = real_chain(name, n, kind) else {
+            return;
+        };
+        let rows = measure(&c, kind);
+        let cells: Vec<String> = rows
+            .iter()
+            .map(|((m, w, f), r)| {
+                format!(
+                    "{:.2}% (max {:.1}%, flux {:+.3}%, rescaled {:+.3}%)",
+                    m * 100.0,
+                    w * 100.0,
+                    f * 100.0,
+                    r * 100.0
+                )
+            })
+            .collect();
+        println!(
+            "| {name} {n} px | {} | {} |",
+            kind.name(),
+            cells.join(" | ")
+        );
+        let means: Vec<String> = rows
+            .iter()
+            .map(|((m, _, _), _)| format!("{:.2}", m * 100.0))
+            .collect();
+        let rescale = rows.iter().map(|(_, r)| r.abs()).fold(0.0f32, f32::max);
+        doc.push(format!(
+            "| {} {n} px | {} | {:.3}% |",
+            name.trim_end_matches(".hdr"),
+            means.join(" "),
+            rescale * 100.0
+        ));
+        for (level, ((m, _, _), _)) in rows.iter().enumerate() {
+            if *m > bound(n) {
+                failed.push(format!("{name} {n} px level {level}: {:.2}%", m * 100.0));
             }
         }
+    }
+    if std::env::var_os("TEXEL_TRUTH_FULL").is_none() {
+        let key = format!("texel_truth {}", kind.name());
+        crate::figures::check("docs/prefilter.md", &key, &doc.join("\n"));
     }
     if std::env::var_os("TEXEL_TRUTH_REPORT").is_none() {
         assert!(
@@ -244,6 +262,7 @@ fn charlie_levels_match_brute_force() {
 #[test]
 fn irradiance_matches_brute_force() {
     let mut failed = Vec::new();
+    let mut worst = 0.0f64;
     for (name, n) in cases() {
         {
             let Some(base) = real_base(name, n) else {
@@ -259,10 +278,15 @@ fn irradiance_matches_brute_force() {
                 w * 100.0,
                 f * 100.0
             );
+            worst = worst.max(m);
             if m > bound(n) {
                 failed.push(format!("{name} {n} px: {:.2}%", m * 100.0));
             }
         }
+    }
+    if std::env::var_os("TEXEL_TRUTH_FULL").is_none() {
+        let text = format!("the irradiance map {:.3}% at most", worst * 100.0);
+        crate::figures::check("docs/prefilter.md", "texel_truth irradiance", &text);
     }
     if std::env::var_os("TEXEL_TRUTH_REPORT").is_none() {
         assert!(
