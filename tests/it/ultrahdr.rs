@@ -215,6 +215,11 @@ fn real_panoramas_keep_their_light_in_ultrahdr_and_in_three() {
     };
     let dir = tempfile::tempdir().unwrap();
     let mut threes = vec![];
+    let mut table = vec![
+        "| panorama | UltraHDR | of the `.hdr` | light as cubeforge reads it back, within |"
+            .to_string(),
+        "| --- | --- | --- | --- |".to_string(),
+    ];
     for name in ["esplanade", "park", "studio", "venice"] {
         let src = real.join(format!("hdr/{name}.hdr"));
         let jpg = dir.path().join(format!("{name}.jpg"));
@@ -229,6 +234,11 @@ fn real_panoramas_keep_their_light_in_ultrahdr_and_in_three() {
             hdr as f64 / size as f64,
             off * 100.0
         );
+        table.push(format!(
+            "| {name} | {size} bytes | 1/{:.1} | {:.2}% |",
+            hdr as f64 / size as f64,
+            off * 100.0
+        ));
         assert!(
             off < 0.02 && size * 8 < hdr,
             "{name}: {:.2}%, {size} of {hdr} bytes",
@@ -238,6 +248,29 @@ fn real_panoramas_keep_their_light_in_ultrahdr_and_in_three() {
         crate::ibl::ibl(&src, &out, "three", &[]);
         threes.push((name, src, out));
     }
+    crate::figures::check("docs/formats.md", "ultrahdr real", &table.join("\n"));
+    // What a reader of the format's own arithmetic (Android, Chrome, libultrahdr below its
+    // clamp) gets from the three.js-fitted env.jpg: the same file with its mark blanked (same
+    // length, so the MPF offsets hold), read by cubeforge the format's way.
+    let mut standard = Vec::new();
+    for (name, src, out) in &threes {
+        let mut bytes = std::fs::read(out.join("env.jpg")).unwrap();
+        let mark = cubeforge::io::ultrahdr::THREE_MARK;
+        let at = bytes
+            .windows(mark.len())
+            .position(|w| w == mark)
+            .expect("env.jpg carries the three.js mark");
+        bytes[at..at + mark.len()].fill(b'-');
+        let plain = dir.path().join(format!("{name}_plain.jpg"));
+        std::fs::write(&plain, bytes).unwrap();
+        let off = flux_off(&read_image(&plain), &read_image(src));
+        standard.push(format!("{:.1}% ({name})", off * 100.0));
+    }
+    let text = format!(
+        "read by the format's own arithmetic, its light is off by {}",
+        standard.join(", ")
+    );
+    crate::figures::check("docs/formats.md", "three fitted standard", &text);
     let files: Vec<PathBuf> = threes
         .iter()
         .flat_map(|(_, _, o)| [o.join("env.jpg"), o.join("env.hdr")])
@@ -246,6 +279,7 @@ fn real_panoramas_keep_their_light_in_ultrahdr_and_in_three() {
     let Some(read) = three_reads(&refs) else {
         return;
     };
+    let (mut within, mut ratios) = (Vec::new(), Vec::new());
     for (i, (name, src, out)) in threes.iter().enumerate() {
         let (jpg, hdr) = (&read[2 * i], &read[2 * i + 1]);
         let source = read_image(src);
@@ -262,11 +296,20 @@ fn real_panoramas_keep_their_light_in_ultrahdr_and_in_three() {
             off_hdr * 100.0
         );
         assert!(a * 8 < b, "{name}: {a} of {b} bytes");
+        within.push(format!("{:.2}% ({name})", off * 100.0));
+        ratios.push(format!("1/{:.1}", b as f64 / a as f64));
         assert_eq!(
             jpg.width, 1024,
             "{name}: PMREM's faces are a quarter of the width, a power of two"
         );
     }
+    let text = format!(
+        "three.js reads `env.jpg`'s light within {} of the source, and `env.jpg` is {} of \
+         `env.hdr`",
+        within.join(", "),
+        ratios.join(", ")
+    );
+    crate::figures::check("docs/engines.md", "three ultrahdr", &text);
 }
 
 /// The marks of `tests/it/ibl`'s panorama (red at +Z, green 35 degrees right of it, blue 35

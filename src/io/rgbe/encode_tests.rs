@@ -131,7 +131,8 @@ fn run_length_fits_its_slot() {
     }
 }
 
-/// The shared exponent the plain way: frexp, then a multiply in f64 and truncation.
+/// The shared exponent the plain way: frexp, then a multiply in f64 and rounding (one
+/// exponent higher where the largest channel would round to 256).
 fn reference(p: Vec4) -> [u8; 4] {
     let [r, g, b] = [p.x, p.y, p.z].map(|v| if v > 0.0 { v.min(f32::MAX) } else { 0.0 });
     let max = r.max(g).max(b);
@@ -141,9 +142,15 @@ fn reference(p: Vec4) -> [u8; 4] {
     if max >= 1.7e38 {
         return [255; 4];
     }
-    let e = (max as f64).log2().floor() as i32 + 1;
+    let mut e = (max as f64).log2().floor() as i32 + 1;
+    if (max as f64 * 2f64.powi(8 - e) + 0.5).floor() >= 256.0 {
+        e += 1;
+    }
+    if e + 128 > 255 {
+        return [255; 4];
+    }
     let scale = 2f64.powi(8 - e);
-    let q = |v: f32| (v as f64 * scale) as u8;
+    let q = |v: f32| (v as f64 * scale + 0.5).floor() as u8;
     [q(r), q(g), q(b), (e + 128) as u8]
 }
 
@@ -193,6 +200,8 @@ fn shared_exponents_match_the_plain_formula() {
         0.5,
         1.0,
         255.0 / 256.0,
+        255.75 / 256.0,
+        1.6985e38,
         1.7e38,
         f32::MAX,
     ];

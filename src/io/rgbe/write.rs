@@ -77,8 +77,12 @@ fn encode_row((row, planes, flat, line): (&[Vec4], &mut [u8], bool, &mut Vec<u8>
 }
 
 /// Shared-exponent form: the largest channel's exponent e (value = m 2^e, m in [0.5, 1)),
-/// each channel truncated to 8 bits of that scale, floor(v 2^(8 - e)). Worked on the floats'
-/// bits (a shift of each mantissa), without branches on the channels: no log2, no division.
+/// each channel rounded to 8 bits of that scale, floor(v 2^(8 - e) + 1/2), e one higher where
+/// the largest channel would round to 256. Rounded, not truncated as Radiance's `setcolr`
+/// does: cubeforge reads m 2^(e - 136) (as engines do), so a truncating writer lost half a
+/// step, 0.3-0.8% of a real panorama's light, on every round trip (issue 48). Worked on the
+/// floats' bits (a shift of each mantissa), without branches on the channels: no log2, no
+/// division.
 #[inline(always)]
 pub(super) fn to_rgbe(p: Vec4) -> [u8; 4] {
     // NaN and negatives to 0, infinity to the largest float.
@@ -86,19 +90,32 @@ pub(super) fn to_rgbe(p: Vec4) -> [u8; 4] {
     let max = r.max(g).max(b);
     // The biased exponent of the largest channel: 0 for zero and subnormals (stored as 0).
     let top = max.to_bits() >> 23;
-    // v = m 2^(ev - 150) with a 24-bit m, so v 2^(8 - e) = m 2^(ev - top - 16), e = top - 126.
+    // v = m 2^(ev - 150) with a 24-bit m, so v 2^(8 - e) = m 2^(ev - top - 16), e = top - 126;
+    // rounded: (m + 2^(shift - 1)) >> shift, 0 from a shift of 25 on (under a half).
     // Selects, not branches, so that rows vectorize.
-    let q = |v: f32| {
+    let q = |v: f32, top: u32| {
         let bits = v.to_bits();
         let ev = bits >> 23;
         let m = (bits & 0x7f_ffff) | if ev > 0 { 0x80_0000 } else { 0 };
         let shift = (16 + top).wrapping_sub(ev.max(1));
-        (if shift < 24 { m >> (shift & 31) } else { 0 }) as u8
+        if shift <= 24 {
+            (m + (1 << ((shift - 1) & 31))) >> (shift & 31)
+        } else {
+            0
+        }
     };
-    let out = [q(r), q(g), q(b), (top + 2) as u8];
-    if top == 0 {
+    // The largest channel rounds to 256 from 255.5 up: one exponent higher, it is 128.
+    let top = top + (q(max, top) > 255) as u32;
+    let out = [
+        q(r, top) as u8,
+        q(g, top) as u8,
+        q(b, top) as u8,
+        (top + 2) as u8,
+    ];
+    if max.to_bits() >> 23 == 0 {
         [0; 4]
-    } else if max >= 1.7e38 {
+    } else if max >= 1.7e38 || top > 253 {
+        // Past the largest exponent byte: the largest value RGBE holds.
         [255; 4]
     } else {
         out
