@@ -5,7 +5,7 @@
 
 use crate::cube::{
     face_of_stem, faces_from_images, CubeMap, CubeSampler, EdgeFixup, Environment, FaceNaming,
-    FACE_LONG_NAMES, FACE_NAMES, SKYBOX_WORDS,
+    FACE_LONG_NAMES, FACE_NAMES, FACE_NAMINGS, SKYBOX_WORDS,
 };
 use crate::error::{Error, Result};
 use crate::flux::{Grid, Peaks};
@@ -291,9 +291,12 @@ pub fn load(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Resul
 pub fn load_planned(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Result<Loaded> {
     match inputs {
         [] => Err(Error::usage("no input given")),
-        [dir] if dir.is_dir() => load_faces(&find_faces(dir)?.0, opts),
+        [dir] if dir.is_dir() => {
+            let (files, naming) = find_faces(dir)?;
+            load_faces(&files, naming, opts)
+        }
         [file] => load_single(file, from, opts),
-        files if files.len() == 6 => load_faces(files, opts),
+        files if files.len() == 6 => load_faces(files, naming_of(files), opts),
         files => Err(Error::usage(format!(
             "give one image, a folder of faces, or six face images in px nx py ny pz nz order ({} given)",
             files.len()
@@ -301,8 +304,25 @@ pub fn load_planned(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) 
     }
 }
 
-/// Finds px/nx/... or posx/negx/... files (any supported extension) in a folder, or else a
-/// skybox pack's (right left top bottom front back, or NAME_rt NAME_lf ...), and says which.
+/// How six face files given one by one are named: OpenEXR's where all six carry its
+/// suffixes in its order, else the OpenGL table the argument order gives.
+fn naming_of(files: &[PathBuf]) -> FaceNaming {
+    let openexr = files.iter().enumerate().all(|(i, f)| {
+        f.file_stem()
+            .and_then(|s| face_of_stem(&s.to_string_lossy()))
+            .is_some_and(|(face, naming)| face == i && naming == FaceNaming::OpenExr)
+    });
+    if openexr {
+        FaceNaming::OpenExr
+    } else {
+        FaceNaming::Axes
+    }
+}
+
+/// Finds a folder's six faces (any supported extension) by the first naming that names one:
+/// the axes (px/nx/..., posx/negx/..., Unity's PositiveX/...), OpenEXR's exrenvmap
+/// (NAME+X/NAME-X/...), a skybox pack's words (right left top bottom front back, or NAME_rt
+/// NAME_lf ...); and says which.
 pub(crate) fn find_faces(dir: &Path) -> Result<(Vec<PathBuf>, FaceNaming)> {
     let entries: Vec<(PathBuf, usize, FaceNaming)> = std::fs::read_dir(dir)
         .map_err(|e| Error::io(dir, e))?
@@ -313,12 +333,11 @@ pub(crate) fn find_faces(dir: &Path) -> Result<(Vec<PathBuf>, FaceNaming)> {
             Some((p, face, naming))
         })
         .collect();
-    // Axis names win over skybox words when a folder holds both.
-    let naming = if entries.iter().any(|e| e.2 == FaceNaming::Axes) {
-        FaceNaming::Axes
-    } else {
-        FaceNaming::Skybox
-    };
+    // Axis names win over OpenEXR's, and both over skybox words, when a folder holds several.
+    let naming = [FaceNaming::Axes, FaceNaming::OpenExr]
+        .into_iter()
+        .find(|n| entries.iter().any(|e| e.2 == *n))
+        .unwrap_or(FaceNaming::Skybox);
     let mut found = Vec::new();
     for i in 0..6 {
         let mut hits: Vec<&PathBuf> = entries
@@ -328,6 +347,12 @@ pub(crate) fn find_faces(dir: &Path) -> Result<(Vec<PathBuf>, FaceNaming)> {
             .collect();
         hits.sort();
         match hits.as_slice() {
+            [] if entries.is_empty() => {
+                return Err(Error::file(
+                    dir,
+                    format!("holds no face images; faces are named {FACE_NAMINGS}"),
+                ));
+            }
             [] if naming == FaceNaming::Skybox => {
                 let word = SKYBOX_WORDS[i];
                 return Err(Error::file(
@@ -342,12 +367,21 @@ pub(crate) fn find_faces(dir: &Path) -> Result<(Vec<PathBuf>, FaceNaming)> {
                     ),
                 ));
             }
+            [] if naming == FaceNaming::OpenExr => {
+                return Err(Error::file(
+                    dir,
+                    format!(
+                        "face {} of OpenEXR's split faces is missing (expected NAME{}.EXT)",
+                        OPENEXR_FACES[i], OPENEXR_FACES[i]
+                    ),
+                ))
+            }
             [] => {
                 return Err(Error::file(
                     dir,
                     format!(
-                        "face {} is missing (expected {}.EXT or {}.EXT)",
-                        FACE_NAMES[i], FACE_NAMES[i], FACE_LONG_NAMES[i]
+                        "face {} is missing (expected {}.EXT, {}.EXT or NAME_{}.EXT)",
+                        FACE_NAMES[i], FACE_NAMES[i], FACE_LONG_NAMES[i], FACE_NAMES[i]
                     ),
                 ))
             }
@@ -383,10 +417,21 @@ pub fn part_note(loaded: &Loaded, read: &ReadOptions) -> Option<String> {
     ))
 }
 
-/// The warning that says how a folder's skybox names were read (None for any other input).
+/// OpenEXR's face suffixes, as messages write them.
+const OPENEXR_FACES: [&str; 6] = ["+X", "-X", "+Y", "-Y", "+Z", "-Z"];
+
+/// The warning that says how a folder's skybox names, or OpenEXR's split faces, were read
+/// (None for any other input).
 pub fn skybox_note(inputs: &[PathBuf]) -> Option<String> {
     let [dir] = inputs else { return None };
     match find_faces(dir) {
+        Ok((_, FaceNaming::OpenExr)) if dir.is_dir() => Some(format!(
+            "{}: OpenEXR's split faces (exrenvmap's NAME+X ... NAME-Z), read by OpenEXR's face \
+             orientation; if they came from a cubeforge panorama through `exrenvmap -li`, they \
+             are its mirror image (OpenEXR's latlong runs the other way: write the panorama \
+             with --mirror first)",
+            dir.display()
+        )),
         Ok((files, FaceNaming::Skybox)) if dir.is_dir() => {
             let names: Vec<String> = files
                 .iter()
@@ -404,7 +449,7 @@ pub fn skybox_note(inputs: &[PathBuf]) -> Option<String> {
     }
 }
 
-fn load_faces(files: &[PathBuf], opts: &ReadOptions) -> Result<Loaded> {
+fn load_faces(files: &[PathBuf], naming: FaceNaming, opts: &ReadOptions) -> Result<Loaded> {
     let mut images = Vec::with_capacity(6);
     let mut meta: Option<Meta> = None;
     let mut replaced = 0;
@@ -433,7 +478,12 @@ fn load_faces(files: &[PathBuf], opts: &ReadOptions) -> Result<Loaded> {
     if formats.len() > 1 {
         meta.pixel_format = format!("mixed: {}", formats.join(", "));
     }
-    let cube = faces_from_images(images, files)?;
+    let cube = if naming == FaceNaming::OpenExr {
+        let faces = io::exr::split_cube(&images).map_err(|e| Error::file(&files[0], e))?;
+        CubeMap::from_faces(faces)?
+    } else {
+        faces_from_images(images, files)?
+    };
     Ok(Loaded {
         source: Source::Cube(cube),
         kind: Kind::Faces.into(),

@@ -393,7 +393,11 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
             // Say what a folder may hold when it holds none of it.
             return Err(Error::file(
                 dir,
-                "holds neither six faces (px.EXT nx.EXT ... or posx.EXT negx.EXT ...) nor a prefiltered chain (m0/ m1/ ... and levels.json)",
+                format!(
+                    "holds neither six faces ({}) nor a prefiltered chain (m0/ m1/ ... and \
+                     levels.json)",
+                    crate::cube::FACE_NAMINGS
+                ),
             ));
         }
         let loaded = convert::load(&[dir.to_path_buf()], None, opts)?;

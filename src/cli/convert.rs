@@ -42,7 +42,9 @@ pub struct Args {
     /// Rotate the environment about +Z, degrees.
     #[arg(value_parser = super::angle, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub roll: f32,
-    /// Flip handedness (mirror X) for engines with the other convention.
+    /// Flip handedness (mirror X) for engines with the other convention, and for OpenEXR's
+    /// exrenvmap, whose latlong maps are cubeforge's equirect mirrored (`exrenvmap -li` of a
+    /// panorama written without it gives mirrored faces).
     #[arg(long)]
     pub mirror: bool,
     /// Write 16-bit PNG instead of 8-bit.

@@ -13,13 +13,37 @@ pub const FACE_LONG_NAMES: [&str; 6] = ["posx", "negx", "posy", "negy", "posz", 
 /// How a face image's file name says which face it is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FaceNaming {
-    /// `px nx py ny pz nz` or `posx negx ...`: the axes themselves.
+    /// `px nx py ny pz nz`, `posx negx ...` or `positivex negativex ...` (Unity's
+    /// `CubemapFace` names), alone or after `NAME_`: the axes themselves, in OpenGL's face
+    /// table.
     Axes,
+    /// OpenEXR's `exrenvmap` split faces, `NAME+X NAME-X ... NAME-Z` (its `%` replaced by the
+    /// axis): each face oriented as OpenEXR's `CubeMap::pixelPosition` says, which is not the
+    /// OpenGL table, so the six are read as OpenEXR's cube.
+    OpenExr,
     /// Skybox packs' words (`right left top bottom front back`, or `up down`) or their
     /// two-letter suffixes (`_rt _lf _up _dn _ft _bk`): read in OpenGL's order, right +X,
     /// left -X, top +Y, bottom -Y, front +Z, back -Z (as LearnOpenGL loads its skybox).
     Skybox,
 }
+
+/// OpenEXR's `exrenvmap` face suffixes, lower case (+X -X +Y -Y +Z -Z).
+const OPENEXR_AXES: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
+
+/// Unity's `CubemapFace` names, lower case, as scripts that save a cube's faces name them.
+const UNITY_AXES: [&str; 6] = [
+    "positivex",
+    "negativex",
+    "positivey",
+    "negativey",
+    "positivez",
+    "negativez",
+];
+
+/// The face namings a folder of faces may use, for messages that list them.
+pub const FACE_NAMINGS: &str = "px nx py ny pz nz or posx negx ... (alone or as NAME_px ...), \
+     NAME_+X NAME_-X ... (OpenEXR's exrenvmap), NAME_PositiveX ... (Unity), or a skybox pack's \
+     right left top bottom front back (or NAME_rt NAME_lf NAME_up NAME_dn NAME_ft NAME_bk)";
 
 /// Skybox words for each face (+X -X +Y -Y +Z -Z), whole or after `_`, `-`, `.` or a space.
 pub(crate) const SKYBOX_WORDS: [&[&str]; 6] = [
@@ -36,11 +60,17 @@ pub(crate) const SKYBOX_WORDS: [&[&str]; 6] = [
 /// (`rt` alone is no face).
 pub fn face_of_stem(stem: &str) -> Option<(usize, FaceNaming)> {
     let stem = stem.to_ascii_lowercase();
-    if let Some(i) = (0..6).find(|&i| stem == FACE_NAMES[i] || stem == FACE_LONG_NAMES[i]) {
-        return Some((i, FaceNaming::Axes));
+    if let Some(i) = (0..6).find(|&i| stem.ends_with(OPENEXR_AXES[i])) {
+        return Some((i, FaceNaming::OpenExr));
     }
     let last = stem.rsplit(['_', '-', '.', ' ']).next().unwrap_or_default();
     let suffixed = last.len() < stem.len();
+    let axis = |w: &str| {
+        (0..6).find(|&i| w == FACE_NAMES[i] || w == FACE_LONG_NAMES[i] || w == UNITY_AXES[i])
+    };
+    if let Some(i) = axis(&stem).or_else(|| axis(last).filter(|_| suffixed)) {
+        return Some((i, FaceNaming::Axes));
+    }
     (0..6)
         .find(|&i| {
             SKYBOX_WORDS[i]

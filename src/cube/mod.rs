@@ -16,7 +16,7 @@ pub use environment::{Dirs, Environment, Interp, BATCH};
 pub(crate) use face::SKYBOX_WORDS;
 pub use face::{
     dir_face, face_dir, face_of_stem, solid_angle_table, texel_dir, FaceNaming, FACE_LONG_NAMES,
-    FACE_NAMES,
+    FACE_NAMES, FACE_NAMINGS,
 };
 pub(crate) use face::{texel_angle, texel_density, texel_footprint, texel_solid_angle};
 pub use fixup::EdgeFixup;

@@ -117,6 +117,8 @@ pub fn scene_script(env: &LoadedEnv, setup: &PbrSetup, extras: &Extras) -> Strin
         .collect();
     let scene = json!({
         "name": extras.name,
+        // Values above 1: the page's tone curve is ACES unless its query names one.
+        "hdr": env.hdr,
         "env": chain_json(&env.sampler),
         "pbr": {
             "chain": setup.chain.as_ref().map(chain_json),

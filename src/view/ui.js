@@ -68,6 +68,13 @@ window.cubeforgeUi = function (state, mat, scene, redraw) {
   }
   select('material', Object.keys(scene.materials), state.material);
   select('tonemap', ['none', 'reinhard', 'aces'], state.tonemap);
+  if (scene.hdr && !query.has('tonemap')) {
+    // Say why the curve is not `none`, preview's default.
+    const note = document.createElement('span');
+    note.className = 'note';
+    note.textContent = 'ACES: the input is HDR';
+    panel.lastChild.appendChild(note);
+  }
   select('layout', ['sphere', 'cross'], state.layout);
   select('shading', ['per-fragment', 'per-vertex'], state.shading);
   select('refraction', ['texts', 'exact'], state.refraction);

@@ -51,9 +51,9 @@
     problems.push(k + ' must be ' + what + ' (got ' + JSON.stringify(q.get(k)) + ')');
     return d;
   }
-  // One of `options` (the first without the key).
-  function choice(k, options) {
-    if (!q.has(k)) return options[0];
+  // One of `options` (`d`, or else the first, without the key).
+  function choice(k, options, d) {
+    if (!q.has(k)) return d || options[0];
     const v = q.get(k);
     if (options.includes(v)) return v;
     problems.push('unknown ' + k + ' ' + JSON.stringify(v) + ': use one of ' + options.join(', '));
@@ -63,7 +63,8 @@
     material: q.get('material') || 'chrome',
     size: Math.max(16, Math.min(4096, Math.round(num('size', 512, ANY)))),
     exposure: num('exposure', 0, [(v) => v >= -32 && v <= 32, 'between -32 and 32 stops']),
-    tonemap: choice('tonemap', TONEMAPS),
+    // An HDR input shown as it is blows out: ACES unless the query says otherwise.
+    tonemap: choice('tonemap', TONEMAPS, scene.hdr ? 'aces' : 'none'),
     lod_bias: num('lod_bias', 0, ANY),
     level: num('level', 0, ANY),
     yaw: num('yaw', 0, ANGLE),
@@ -274,7 +275,9 @@
     const cross = state.layout === 'cross';
     canvas.width = cross ? n : n * cells.length;
     canvas.height = cross ? Math.round(n * 3 / 4) : n;
-    canvas.style.width = canvas.width / (window.devicePixelRatio || 1) + 'px';
+    // A sweep's row of cells is scaled down to the window's width rather than overflowing it.
+    const room = Math.max(160, (window.innerWidth || canvas.width) - canvas.offsetLeft - 16);
+    canvas.style.width = Math.min(canvas.width / (window.devicePixelRatio || 1), room) + 'px';
     labels(cross, cells, n);
     for (const [k, cell] of cells.entries()) {
       gl.viewport(k * n, 0, cross ? canvas.width : n, canvas.height);
@@ -299,7 +302,8 @@
       Object.assign(l.style, { left: x + 'px', top: y + 'px' });
       box.appendChild(l);
     };
-    const dpr = window.devicePixelRatio || 1;
+    // Canvas pixels per CSS pixel, as the canvas is shown (scaled down for a wide sweep).
+    const dpr = canvas.width / (parseFloat(canvas.style.width) || canvas.width);
     const at = canvas.offsetLeft, top = canvas.offsetTop;
     if (cross) {
       const c = n / 4 / dpr;

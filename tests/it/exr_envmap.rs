@@ -237,6 +237,74 @@ fn exrenvmaps_own_files_land_every_texel_at_its_direction() {
     assert!(worst <= 0.25 * texel, "{worst} > {texel} / 4");
 }
 
+/// exrenvmap's split faces (`-c` with `%` in the output name: `NAME+X.exr` ... `NAME-Z.exr`,
+/// each face oriented as OpenEXR's cube and carrying no envmap attribute) read as a folder of
+/// faces and as six files: every texel at its direction, and the warning names them and the
+/// mirror a cubeforge panorama gets through `exrenvmap -li`.
+#[test]
+fn exrenvmaps_split_faces_read_as_a_cube() {
+    if !common::exrenvmap() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (128, 64);
+    let ll = dir.path().join("latlong.exr");
+    write(&ll, w, h, EnvironmentMap::LatitudeLongitude, |x, y| {
+        latlong_dir(x, y, w, h)
+    });
+    let faces = dir.path().join("faces");
+    std::fs::create_dir(&faces).unwrap();
+    let o = std::process::Command::new("exrenvmap")
+        .args(["-c".as_ref(), "-w".as_ref(), "32".as_ref(), ll.as_os_str()])
+        .arg(faces.join("sky_%.exr"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let names = ["+X", "-X", "+Y", "-Y", "+Z", "-Z"].map(|a| faces.join(format!("sky_{a}.exr")));
+    assert!(
+        names.iter().all(|n| n.is_file()),
+        "exrenvmap wrote its six faces"
+    );
+    let out = dir.path().join("cube.ktx2");
+    for input in [vec![faces.clone()], names.to_vec()] {
+        let mut args: Vec<std::ffi::OsString> = vec!["convert".into()];
+        args.extend(input.iter().map(|p| p.clone().into_os_string()));
+        args.extend([
+            "-o".into(),
+            out.clone().into_os_string(),
+            "--gpu-format".into(),
+        ]);
+        args.push("rgba32f".into());
+        let o = common::run(&args);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        if input.len() == 1 {
+            let err = common::stderr(&o);
+            assert!(
+                err.contains("OpenEXR's split faces") && err.contains("--mirror"),
+                "{err}"
+            );
+        }
+        let Decoded::Cube(cube) = read(&out).0 else {
+            panic!("a cube")
+        };
+        let texel = (2.0 / cube.size() as f32).atan().to_degrees();
+        let worst = worst_cube(&cube);
+        println!("exrenvmap's split faces: {worst:.2} degrees at worst, a texel {texel:.2}");
+        assert!(worst <= 0.25 * texel, "{worst} > {texel} / 4");
+    }
+    // A folder with no faces lists every naming cubeforge reads.
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    std::fs::write(empty.join("notes.txt"), b"no faces here").unwrap();
+    let o = common::run(["info".as_ref(), empty.as_os_str()]);
+    assert!(!o.status.success());
+    let err = common::stderr(&o);
+    assert!(
+        err.contains("exrenvmap") && err.contains("posx") && err.contains("skybox"),
+        "{err}"
+    );
+}
+
 #[test]
 fn info_names_exr_compressions_and_mixed_channel_types() {
     let dir = tempfile::tempdir().unwrap();

@@ -84,6 +84,22 @@ pub(super) fn cube(img: &Image) -> Result<Faces, String> {
             })
         })
         .collect();
+    from_stored(&stored)
+}
+
+/// OpenEXR's six faces (+X -X +Y -Y +Z -Z, each square, of one size, as `exrenvmap` splits
+/// them into `NAME+X.exr` ...) as cubeforge's faces, or why they are none.
+pub(crate) fn split_cube(faces: &[Image]) -> Result<Faces, String> {
+    let sof = faces.first().map_or(0, |f| f.width);
+    if faces.len() != 6 || faces.iter().any(|f| f.width != sof || f.height != sof) || sof == 0 {
+        return Err("OpenEXR's split faces must be six square images of one size".into());
+    }
+    from_stored(faces)
+}
+
+/// The faces as OpenEXR stores them, resampled into cubeforge's.
+fn from_stored(stored: &[Image]) -> Result<Faces, String> {
+    let sof = stored[0].width;
     let inv = 1.0 / sof as f32;
     let faces: Vec<Image> = (0..6)
         .into_par_iter()

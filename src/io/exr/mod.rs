@@ -28,6 +28,12 @@ mod planes;
 mod select;
 mod zstd;
 use checks::{read_chunks, read_meta, RawChunk};
+pub(crate) use envmap::split_cube;
+
+/// Where a user meets OpenEXR's layouts: its latlong runs the other way round from cubeforge's
+/// equirect, so a cubeforge panorama given to `exrenvmap -li` comes back mirrored.
+const MIRROR_HINT: &str = "; a cubeforge panorama given to exrenvmap comes back mirrored \
+    unless written with --mirror";
 
 /// Decodes an OpenEXR file's first RGB(A) layer; `path` names it in errors, `limits` are checked before any pixel is allocated.
 pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
@@ -126,13 +132,13 @@ pub(crate) fn decode_with(
         None => (Decoded::Image(image), None),
         Some(exr::meta::attribute::EnvironmentMap::LatitudeLongitude) => (
             Decoded::Image(envmap::latlong(&image)),
-            Some("declared by its envmap attribute: an OpenEXR latlong map, read by OpenEXR's mapping".into()),
+            Some(format!("declared by its envmap attribute: an OpenEXR latlong map, read by OpenEXR's mapping{MIRROR_HINT}")),
         ),
         Some(exr::meta::attribute::EnvironmentMap::Cube) => (
             Decoded::Cube(crate::cube::CubeMap {
                 levels: vec![envmap::cube(&image).map_err(|e| Error::file(path, e))?],
             }),
-            Some("declared by its envmap attribute: an OpenEXR cube map, read by OpenEXR's faces".into()),
+            Some(format!("declared by its envmap attribute: an OpenEXR cube map, read by OpenEXR's faces{MIRROR_HINT}")),
         ),
     };
     let meta = Meta {

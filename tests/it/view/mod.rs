@@ -107,6 +107,20 @@ impl Shot {
 /// query order. Panics (with the tool's output) when the tool itself fails.
 pub(crate) fn shoot(page: &Path, out: &Path, queries: &[String]) -> Vec<Shot> {
     std::fs::create_dir_all(out).unwrap();
+    // The page's tone curve is ACES for an HDR input where the query names none; preview's
+    // is none: a query that names none gets preview's, unless it asks for the page's own
+    // default with the fragment `#hdr-default` (which the page's query does not see).
+    let queries: Vec<String> = queries
+        .iter()
+        .map(|q| {
+            if q.contains("tonemap=") || q.contains("#hdr-default") {
+                q.clone()
+            } else {
+                format!("{q}&tonemap=none")
+            }
+        })
+        .collect();
+    let queries = &queries[..];
     let start = std::time::Instant::now();
     let o = Command::new("node")
         .arg(SHOT_TOOL)
