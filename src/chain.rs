@@ -9,7 +9,7 @@ use crate::convert::{self, Source};
 use crate::cube::{CubeMap, Faces};
 use crate::error::{Error, Result};
 use crate::filter::{ChainOptions, FilterKind, LevelInfo, LightingModel};
-use crate::io::{self, FileFormat, GpuFormat, Meta, ReadOptions, WriteOptions};
+use crate::io::{self, FileFormat, Meta, ReadOptions, WriteOptions};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -308,50 +308,44 @@ pub(crate) fn encode_dir(
     Ok(files)
 }
 
-/// The files a chain becomes at `path`: a KTX2 with its description in the metadata, a DDS
-/// and its sidecar, or (a name with no container extension) a chain folder of
-/// `face_format` faces, in `gpu_format` (KTX2 supercompressed as `write.zstd` asks), with the
-/// count of texels every level had clamped to the format's range and a lossy format's
-/// quality, as [`crate::output::Target::encode`] reports them. Refuses to overwrite any of
-/// `inputs`.
-#[allow(clippy::too_many_arguments)]
+/// The files a chain becomes at `target` (as [`crate::output::Encoding::resolve`] decided
+/// it): a KTX2 with its description in the metadata, a DDS and its sidecar, a KTX or .env, or
+/// a chain folder of faces, with the count of texels every level had clamped to the format's
+/// range and a lossy format's quality, as [`crate::output::Target::encode`] reports them.
+/// Refuses to overwrite any of `inputs`.
 pub fn encode(
-    path: &Path,
+    target: &crate::output::Target,
     chain: &CubeMap,
     description: &LevelsFile,
-    face_format: FileFormat,
-    write: &WriteOptions,
-    gpu_format: GpuFormat,
     inputs: &[PathBuf],
 ) -> Result<crate::output::Encoded> {
+    let path = target.path.as_path();
     let refuse = |p: &[PathBuf]| crate::output::refuse_inputs(p, inputs);
-    let container = FileFormat::from_extension(path).filter(|f| f.is_container());
+    let format = target.format().ok_or_else(|| io::unknown_ext(path))?;
+    let container = format.is_container().then_some(format);
+    let opts = target.write;
     let moved;
-    let chain = match write.edge_fixup {
+    let chain = match opts.edge_fixup {
         crate::cube::EdgeFixup::None => chain,
         mode => {
             moved = crate::cube::fixup::apply_cube(chain.clone(), mode);
             &moved
         }
     };
-    let opts = WriteOptions {
-        gpu_format,
-        ..*write
-    };
-    let format = container.unwrap_or(face_format);
     let clamped = io::clamp_warning_with(path, format, &opts, chain.levels.iter().flatten());
     let files = match container {
         Some(FileFormat::Ktx2) => {
             refuse(&[path.to_path_buf()])?;
             let json = description.to_json();
-            let bytes = io::encode_cube_with(path, chain, &opts, &[(io::ktx2::LEVELS_KEY, &json)])?;
+            let bytes =
+                io::encode_cube_as(format, path, chain, &opts, &[(io::ktx2::LEVELS_KEY, &json)])?;
             vec![(path.to_path_buf(), bytes)]
         }
         Some(FileFormat::Dds) => {
             // DDS has no room for metadata: a sidecar that `info` reads.
             let side = dds_sidecar(path);
             refuse(&[path.to_path_buf(), side.clone()])?;
-            let bytes = io::encode_cube_with(path, chain, &opts, &[])?;
+            let bytes = io::encode_cube_as(format, path, chain, &opts, &[])?;
             vec![(path.to_path_buf(), bytes), (side, description.to_json())]
         }
         Some(_) => {
@@ -359,15 +353,15 @@ pub fn encode(
             refuse(&[path.to_path_buf()])?;
             vec![(
                 path.to_path_buf(),
-                io::encode_cube_with(path, chain, &opts, &[])?,
+                io::encode_cube_as(format, path, chain, &opts, &[])?,
             )]
         }
-        None => encode_dir(path, chain, description, face_format, write, inputs)?,
+        None => encode_dir(path, chain, description, format, &opts, inputs)?,
     };
     let psnr = match &files[..] {
-        [(_, bytes), ..] if container.is_some() && gpu_format.is_lossy() => {
+        [(_, bytes), ..] if container.is_some() && opts.gpu_format.is_lossy() => {
             let faces: Vec<&crate::image::Image> = chain.levels[0].iter().collect();
-            io::container_psnr(bytes, gpu_format, &faces)
+            io::container_psnr(bytes, opts.gpu_format, &faces)
         }
         _ => None,
     };

@@ -131,7 +131,7 @@ pub use jobs::{
     Progress, Quality, Report, ViewJob, Warning,
 };
 pub use layout::Kind as Layout;
-pub use output::Destination;
+pub use output::{Destination, Encoding};
 pub use preview::{Background, Options as View, Parallax, ParallaxMode, Shading};
 pub use resample::{Orientation, Resampler};
 pub use tonemap::Tonemap;

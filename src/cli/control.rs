@@ -85,9 +85,12 @@ impl KtxFormat {
 pub fn job(a: Args) -> Result<ControlJob> {
     let job = ControlJob {
         size: a.size,
-        png16: a.png16,
-        gpu_format: a.gpu_format.gpu(),
-        zstd: a.zstd.zstd,
+        encoding: cubeforge::Encoding {
+            png16: a.png16,
+            gpu_format: Some(a.gpu_format.gpu()),
+            zstd: a.zstd.zstd,
+            ..Default::default()
+        },
         levels: a.levels,
         limits: a.limits.limits(),
         ..ControlJob::new(a.recipe, a.output)

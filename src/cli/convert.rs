@@ -4,7 +4,7 @@ use cubeforge::cube::Interp;
 use cubeforge::io::{FileFormat, GpuFormat, MapKind};
 use cubeforge::output;
 use cubeforge::resample::{Orientation, Resampler};
-use cubeforge::{ConvertJob, Destination, Result};
+use cubeforge::{ConvertJob, Destination, Encoding, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -110,7 +110,6 @@ pub fn job(a: Args) -> Result<ConvertJob> {
         from: a.input.from,
         to: a.to,
         size: a.size,
-        face_format,
         resampler: Resampler {
             interp: a.interp,
             antialias: !a.no_antialias,
@@ -121,16 +120,20 @@ pub fn job(a: Args) -> Result<ConvertJob> {
                 mirror: a.mirror,
             },
         },
-        png16: a.png16,
-        ultrahdr: a.ultrahdr,
-        edge_fixup: a.fixup.edge_fixup,
-        hdr_encoding: a.hdr8.hdr_encoding,
-        gpu_format: a.gpu_format,
-        zstd: a.zstd.zstd,
+        encoding: Encoding {
+            gpu_format: a.gpu_format,
+            zstd: a.zstd.zstd,
+            exr_float: a.exr.exr_float,
+            png16: a.png16,
+            edge_fixup: a.fixup.edge_fixup,
+            hdr_encoding: a.hdr8.hdr_encoding,
+            face_format,
+            ultrahdr: a.ultrahdr,
+            exposure: a.tone.exposure,
+            tonemap: a.tone.tonemap,
+        },
         levels: a.levels,
         level: a.level,
-        tone: (a.tone.exposure, a.tone.tonemap),
-        exr_float: a.exr.exr_float,
         read: a.input.read_options(&a.inputs)?,
         ..ConvertJob::new(a.inputs, output)
     };

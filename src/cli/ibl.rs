@@ -85,11 +85,14 @@ pub fn job(a: Args) -> Result<IblJob> {
             min_size: a.min_size.map(|v| v as usize),
             diffuse_size: a.diffuse_size.map(|v| v as usize),
             samples: a.samples,
-            gpu_format: a.gpu_format,
-            zstd: a.zstd.zstd,
+            encoding: cubeforge::Encoding {
+                gpu_format: a.gpu_format,
+                zstd: a.zstd.zstd,
+                exr_float: a.exr.exr_float,
+                exposure: a.exposure.exposure,
+                ..Default::default()
+            },
             sheen: a.sheen,
-            exposure: a.exposure.exposure,
-            exr_float: a.exr.exr_float,
             yaw: a.yaw,
         },
         read: a.input.read_options(&a.inputs)?,

@@ -4,7 +4,7 @@ use cubeforge::filter::sh_bands::ShWindow;
 use cubeforge::filter::IrradianceMethod;
 use cubeforge::io::{FileFormat, GpuFormat, MapKind};
 use cubeforge::output;
-use cubeforge::{Destination, IrradianceJob, Result};
+use cubeforge::{Destination, Encoding, IrradianceJob, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -39,9 +39,9 @@ pub struct Args {
     /// File type of face images (default exr).
     #[arg(long, default_value = "exr")]
     pub format: String,
-    /// Texel format of KTX2 and DDS output.
-    #[arg(long, value_enum, default_value_t = GpuFormat::Rgba16f)]
-    pub gpu_format: GpuFormat,
+    /// Texel format of KTX2 and DDS output (default rgba16f).
+    #[arg(long, value_enum)]
+    pub gpu_format: Option<GpuFormat>,
     #[command(flatten)]
     pub zstd: super::ZstdArg,
     #[command(flatten)]
@@ -82,13 +82,17 @@ pub fn job(a: Args) -> Result<IrradianceJob> {
         method: a.method,
         sh_bands: a.sh_bands,
         sh_window: a.sh_window,
-        edge_fixup: a.fixup.edge_fixup,
-        hdr_encoding: a.hdr8.hdr_encoding,
-        face_format,
-        gpu_format: a.gpu_format,
-        zstd: a.zstd.zstd,
-        tone: (a.tone.exposure, a.tone.tonemap),
-        exr_float: a.exr.exr_float,
+        encoding: Encoding {
+            gpu_format: a.gpu_format,
+            zstd: a.zstd.zstd,
+            exr_float: a.exr.exr_float,
+            edge_fixup: a.fixup.edge_fixup,
+            hdr_encoding: a.hdr8.hdr_encoding,
+            face_format: Some(face_format),
+            exposure: a.tone.exposure,
+            tonemap: a.tone.tonemap,
+            ..Encoding::default()
+        },
         read: a.input.read_options(&a.inputs)?,
         ..IrradianceJob::new(a.inputs, output)
     };

@@ -64,7 +64,10 @@ pub fn job(a: Args) -> Result<LutJob> {
         },
         size: a.size as usize,
         samples: a.samples,
-        png16: a.png16,
+        encoding: cubeforge::Encoding {
+            png16: a.png16,
+            ..Default::default()
+        },
         limits: super::limits(u64::MAX, a.memory.max_memory),
         ..LutJob::new(a.output)
     };

@@ -2,7 +2,7 @@
 
 use cubeforge::filter::{self, ChainOptions, FilterKind, LightingModel};
 use cubeforge::io::{FileFormat, GpuFormat};
-use cubeforge::{Destination, Error, PrefilterJob, Result};
+use cubeforge::{Destination, Encoding, Error, PrefilterJob, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -48,9 +48,9 @@ pub struct Args {
     /// container written to standard output (ktx2, dds, ktx, env).
     #[arg(long, default_value = "exr")]
     pub format: String,
-    /// Texel format of KTX2 and DDS output.
-    #[arg(long, value_enum, default_value_t = GpuFormat::Rgba16f)]
-    pub gpu_format: GpuFormat,
+    /// Texel format of KTX2 and DDS output (default rgba16f).
+    #[arg(long, value_enum)]
+    pub gpu_format: Option<GpuFormat>,
     #[command(flatten)]
     pub zstd: super::ZstdArg,
     #[command(flatten)]
@@ -101,13 +101,16 @@ pub fn job(a: Args) -> Result<PrefilterJob> {
             gloss_bias: a.gloss_bias,
             lighting: a.lighting,
         },
-        face_format,
-        gpu_format: a.gpu_format,
-        zstd: a.zstd.zstd,
-        exr_float: a.exr.exr_float,
-        exposure: a.exposure.exposure,
-        edge_fixup: a.fixup.edge_fixup,
-        hdr_encoding: a.hdr8.hdr_encoding,
+        encoding: Encoding {
+            gpu_format: a.gpu_format,
+            zstd: a.zstd.zstd,
+            exr_float: a.exr.exr_float,
+            edge_fixup: a.fixup.edge_fixup,
+            hdr_encoding: a.hdr8.hdr_encoding,
+            face_format: Some(face_format),
+            exposure: a.exposure.exposure,
+            ..Encoding::default()
+        },
         read: a.input.read_options(&a.inputs)?,
         ..PrefilterJob::new(a.inputs, output)
     };

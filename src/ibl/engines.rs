@@ -51,7 +51,7 @@ struct Ktx2Pair {
 }
 
 fn ktx2_pair(l: &Lighting, ctx: &Context, spec: &str, diff: &str) -> Result<Ktx2Pair> {
-    let format = ctx.opts.gpu_format.unwrap_or(GpuFormat::Rgba16f);
+    let format = ctx.opts.encoding.gpu_format.unwrap_or(GpuFormat::Rgba16f);
     let (spec, diff) = (ctx.path(spec), ctx.path(diff));
     let files = vec![
         (
@@ -140,9 +140,10 @@ pub fn pack(engine: Engine, l: &Lighting, ctx: &Context) -> Result<Delivery> {
         }
     };
     // What a lossy format (BC6H) kept of the mirror level, as convert -v reports it.
-    let format = ctx.opts.gpu_format.unwrap_or_default();
-    if let (true, Some((path, bytes))) = (format.is_lossy(), delivery.files.first()) {
-        if FileFormat::from_extension(path) == Some(FileFormat::Ktx2) {
+    let format = ctx.opts.encoding.gpu_format.unwrap_or_default();
+    // The first file is the specular chain, a KTX2 for these engines.
+    if let (true, Some((_, bytes))) = (format.is_lossy(), delivery.files.first()) {
+        if matches!(engine, Engine::Bevy | Engine::Gltf | Engine::Generic) {
             let faces: Vec<&Image> = l.specular.levels[0].iter().collect();
             delivery.psnr = io::container_psnr(bytes, format, &faces);
         }
@@ -165,13 +166,13 @@ fn ktx2(
         .map(|j| (io::ktx2::LEVELS_KEY, j))
         .into_iter()
         .collect();
-    io::ktx2::encode_cube_with(cube, format, ctx.opts.zstd, &extra)
+    io::ktx2::encode_cube_with(cube, format, ctx.opts.encoding.zstd, &extra)
         .map_err(|e| crate::Error::file(path, e))
 }
 
 /// Refuses --zstd for targets whose containers have no supercompression.
 fn no_zstd(ctx: &Context, what: &str) -> Result<()> {
-    match ctx.opts.zstd {
+    match ctx.opts.encoding.zstd {
         Some(_) => Err(crate::Error::usage(format!(
             "{} supercompresses KTX2; {what} has none",
             crate::error::param("zstd")
@@ -252,7 +253,7 @@ fn make_lut_png(path: &Path, charlie: bool) -> Result<Vec<u8>> {
         png16: true,
         ..io::WriteOptions::default()
     };
-    io::encode_image(path, &img, &write)
+    io::encode_image_as(FileFormat::Png, path, &img, &write)
 }
 
 fn gltf(l: &Lighting, ctx: &Context) -> Result<Delivery> {
@@ -308,7 +309,7 @@ fn gltf(l: &Lighting, ctx: &Context) -> Result<Delivery> {
 fn filament(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     use io::ktx1::{self, KeyValue, Ktx1Format};
     // cmgen's own format: R11F_G11F_B10F.
-    let gpu = ctx.opts.gpu_format.unwrap_or(GpuFormat::Rg11b10);
+    let gpu = ctx.opts.encoding.gpu_format.unwrap_or(GpuFormat::Rg11b10);
     let format = Ktx1Format::from_gpu(gpu).map_err(crate::Error::usage)?;
     let sh = ktx1::filament_sh(&l.sh);
     let levels_json = describe(l).to_json();
@@ -393,7 +394,7 @@ scene.setSkybox(engine.createSkyFromKtx1('{k}'));"#,
 fn babylon(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     use io::babylon_env::{self, SphericalPolynomial};
     no_zstd(ctx, "Babylon's .env")?;
-    if ctx.opts.gpu_format.is_some() {
+    if ctx.opts.encoding.gpu_format.is_some() {
         return Err(crate::Error::usage(format!(
             "{}: Babylon's .env holds RGBD PNG faces only",
             crate::error::param("gpu_format")

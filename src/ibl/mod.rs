@@ -16,7 +16,6 @@ use crate::convert::{self, Loaded};
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
 use crate::filter::{self, ChainOptions, FilterKind, IrradianceMethod, LevelInfo};
-use crate::io::GpuFormat;
 use crate::progress::Progress;
 use crate::resample::Orientation;
 use std::path::{Path, PathBuf};
@@ -81,19 +80,16 @@ pub struct IblOptions {
     pub diffuse_size: Option<usize>,
     /// Importance samples per texel of the first convolved level.
     pub samples: Option<u32>,
-    /// Pixel format of the KTX2/DDS containers.
-    pub gpu_format: Option<GpuFormat>,
-    /// Zstandard level for KTX2 supercompression (None: none).
-    pub zstd: Option<i32>,
+    /// How the files are stored: the containers' texel format (None: each engine's own),
+    /// KTX2 supercompression, the EXR panorama's sample type, and the exposure (2^EV) the
+    /// radiance is scaled by first (a sun within a format's range). Each engine takes what its
+    /// files can hold.
+    pub encoding: crate::output::Encoding,
     /// glTF: also the Charlie (sheen) chain.
     pub sheen: bool,
     /// Turn the environment about +Y first (degrees; 90 brings +Z to +X), e.g. to put the sun
     /// where the scene wants it.
     pub yaw: f32,
-    /// Scale the radiance by 2^EV first (0 keeps it): a sun within a format's range.
-    pub exposure: f32,
-    /// Sample type of EXR files (the panorama Godot and Unity import).
-    pub exr_float: crate::io::ExrFloat,
 }
 
 /// The files for one engine, and how to load them.

@@ -23,21 +23,21 @@ pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<De
     if engine == Engine::Three {
         return three(ctx, size);
     }
-    let (ext, snippet) = match engine {
+    let (format, snippet) = match engine {
         Engine::Godot => (
-            "exr",
+            FileFormat::Exr,
             "Godot 4: WorldEnvironment > Environment > Sky > PanoramaSkyMaterial, panorama = {f}\n\
              (Sky: Radiance Size 256 or more, Process Mode Automatic or High Quality Incremental).\n\
              The panorama's centre faces world +Z (behind the default camera, which looks along -Z).",
         ),
         Engine::Unity => (
-            "exr",
+            FileFormat::Exr,
             "Unity: import {f} with Texture Shape = Cube, Mapping = Latitude-Longitude Layout\n\
              (Cylindrical), Convolution Type = Specular (Glossy Reflection); use it as the skybox\n\
              (Skybox/Cubemap material) or a Reflection Probe's custom cubemap.",
         ),
         _ => (
-            "hdr",
+            FileFormat::Hdr,
             "Unreal: import {f}: a long-lat .hdr becomes a TextureCube; set it as the Sky Light's\n\
              Cubemap (Source Type: SLS Specified Cubemap) and in an HDRI Backdrop. The panorama's\n\
              centre faces world -Y.",
@@ -47,21 +47,16 @@ pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<De
         .unwrap_or_else(|| ctx.loaded.face_size())
         .clamp(1, 8192);
     let img = crate::convert::to_image(ctx.loaded, Kind::Equirect, face, &ctx.resampler());
-    if let (Engine::Godot, Some(format)) = (engine, ctx.opts.gpu_format) {
+    if let (Engine::Godot, Some(format)) = (engine, ctx.opts.encoding.gpu_format) {
         return godot_ktx2(ctx, img, format);
     }
-    let path = ctx.path(&format!(".{ext}"));
+    let path = ctx.path(&format!(".{}", format.extension()));
     let write = io::WriteOptions {
-        exr_float: ctx.opts.exr_float,
+        exr_float: ctx.opts.encoding.exr_float,
         ..Default::default()
     };
-    let bytes = io::encode_image(&path, &img, &write)?;
-    let clamped = io::clamp_warning_with(
-        &path,
-        FileFormat::from_ext_str(ext).unwrap_or(FileFormat::Exr),
-        &write,
-        [&img],
-    );
+    let bytes = io::encode_image_as(format, &path, &img, &write)?;
+    let clamped = io::clamp_warning_with(&path, format, &write, [&img]);
     let snippet = snippet.replace("{f}", &file_name(&path));
     Ok(Delivery::new(vec![(path, bytes)], snippet, clamped))
 }
@@ -87,9 +82,9 @@ fn panorama_ktx2(
     let encoded = if bottom_up {
         let flipped: Vec<Image> = levels.iter().map(Image::flipped_rows).collect();
         let ru: &[(&str, &[u8])] = &[(io::ktx2::ORIENTATION_KEY, b"ru")];
-        io::ktx2::encode_2d_with(&flipped, format, ctx.opts.zstd, ru)
+        io::ktx2::encode_2d_with(&flipped, format, ctx.opts.encoding.zstd, ru)
     } else {
-        io::ktx2::encode_2d_with(&levels, format, ctx.opts.zstd, &[])
+        io::ktx2::encode_2d_with(&levels, format, ctx.opts.encoding.zstd, &[])
     };
     let bytes = encoded.map_err(|e| crate::Error::file(&path, e))?;
     let write = io::WriteOptions {
@@ -155,9 +150,9 @@ fn three(ctx: &Context, size: Option<usize>) -> Result<Delivery> {
     let (jpg, hdr) = (ctx.path(".jpg"), ctx.path(".hdr"));
     let (bytes, stats) = ultrahdr::encode(&img, Tonemap::Aces, Reader::Three, true)
         .map_err(|e| crate::error::Error::file(&jpg, e))?;
-    let fallback = io::encode_image(&hdr, &img, &io::WriteOptions::default())?;
+    let fallback = io::encode_image_as(FileFormat::Hdr, &hdr, &img, &io::WriteOptions::default())?;
     // UASTC HDR: the same panorama with its mips, which KTX2Loader transcodes per device.
-    let ktx2 = match ctx.opts.gpu_format {
+    let ktx2 = match ctx.opts.encoding.gpu_format {
         Some(format) => Some(panorama_ktx2(ctx, img, format, true)?),
         None => None,
     };

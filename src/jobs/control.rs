@@ -5,8 +5,8 @@ use super::{Job, Progress, Quality, Report, Warning, Warnings};
 use crate::control::{self, Size};
 use crate::cube::CubeMap;
 use crate::error::{param, Error, Result};
-use crate::io::{self, ktx2, FileFormat, GpuFormat, Limits, WriteOptions};
-use crate::output::{self, Destination, Files};
+use crate::io::{self, ktx2, FileFormat, GpuFormat, Limits};
+use crate::output::{self, Destination, Encoding, Files};
 use std::path::{Path, PathBuf};
 
 /// Bakes a control map (reflectivity, transmittance, blur, Fresnel mask) from a recipe into
@@ -19,12 +19,9 @@ pub struct ControlJob {
     pub output: PathBuf,
     /// Output size (None: the recipe's, else its first image's).
     pub size: Option<Size>,
-    /// 16-bit PNG.
-    pub png16: bool,
-    /// Texel format of KTX2 output: rgba8, bc7, rgba16f or rgba32f (data, never sRGB).
-    pub gpu_format: GpuFormat,
-    /// Zstandard level of KTX2 supercompression.
-    pub zstd: Option<i32>,
+    /// How the map is stored: 16-bit PNG, the KTX2 texel format (rgba8 by default; bc7,
+    /// rgba16f or rgba32f: data, never sRGB) and its supercompression, the EXR sample type.
+    pub encoding: Encoding,
     /// Mip levels of KTX2 output (None: the full chain).
     pub levels: Option<usize>,
     /// Limits on the recipe's images and the memory budget.
@@ -38,16 +35,19 @@ impl ControlJob {
             recipe,
             output,
             size: None,
-            png16: false,
-            gpu_format: GpuFormat::Rgba8,
-            zstd: None,
+            encoding: Encoding::default(),
             levels: None,
             limits: Limits::default(),
         }
     }
 
     fn format(&self) -> Result<FileFormat> {
-        super::lut::table_format(&self.output, "a control map", self.png16)
+        super::lut::table_format(&self.output, "a control map", self.encoding.png16)
+    }
+
+    /// The KTX2 texel format: linear RGBA8 unless the encoding names another.
+    fn gpu_format(&self) -> GpuFormat {
+        self.encoding.gpu_format.unwrap_or(GpuFormat::Rgba8)
     }
 
     /// `mask.png` -> `mask.png.json`.
@@ -65,17 +65,17 @@ impl Job for ControlJob {
                 param("levels")
             )));
         }
-        if self.zstd.is_some() && format != FileFormat::Ktx2 {
+        if self.encoding.zstd.is_some() && format != FileFormat::Ktx2 {
             return Err(io::zstd_needs_ktx2(&self.output));
         }
         if !matches!(
-            self.gpu_format,
+            self.gpu_format(),
             GpuFormat::Rgba8 | GpuFormat::Bc7 | GpuFormat::Rgba16f | GpuFormat::Rgba32f
         ) {
             return Err(Error::usage(format!(
                 "{} {}: control maps are rgba8, bc7, rgba16f or rgba32f (linear RGBA)",
                 param("gpu_format"),
-                self.gpu_format.name()
+                self.gpu_format().name()
             )));
         }
         Ok(Vec::new())
@@ -139,15 +139,17 @@ impl Job for ControlJob {
         progress.stage("bake");
 
         let mut quality = None;
+        // Data, not colour: no sRGB encode.
+        let write = self.encoding.write_options(true);
         let (bytes, what) = match format {
             FileFormat::Ktx2 => {
                 let levels = baked.image.mip_chain(self.levels.unwrap_or(full_chain));
-                let gpu = self.gpu_format;
+                let gpu = self.gpu_format();
                 let mut what = format!("KTX2 {} with {} mip levels", gpu.name(), levels.len());
-                if let Some(z) = self.zstd {
+                if let Some(z) = self.encoding.zstd {
                     what.push_str(&format!(", Zstandard level {z}"));
                 }
-                let bytes = ktx2::encode_2d_with(&levels, gpu, self.zstd, &[])
+                let bytes = ktx2::encode_2d_with(&levels, gpu, self.encoding.zstd, &[])
                     .map_err(|e| Error::file(&self.output, e))?;
                 if gpu.is_lossy() {
                     quality =
@@ -159,18 +161,13 @@ impl Job for ControlJob {
                 (bytes, what)
             }
             FileFormat::Exr => (
-                io::encode_image(&self.output, &baked.image, &WriteOptions::default())?,
+                io::encode_image_as(format, &self.output, &baked.image, &write)?,
                 "half-float EXR".to_string(),
             ),
             _ => {
-                let write = WriteOptions {
-                    linear: true,
-                    png16: self.png16,
-                    ..WriteOptions::default()
-                };
-                let bits = if self.png16 { 16 } else { 8 };
+                let bits = if self.encoding.png16 { 16 } else { 8 };
                 (
-                    io::encode_image(&self.output, &baked.image, &write)?,
+                    io::encode_image_as(format, &self.output, &baked.image, &write)?,
                     format!("{bits}-bit PNG"),
                 )
             }

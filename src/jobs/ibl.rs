@@ -98,16 +98,21 @@ impl IblJob {
         let (size, diffuse) = self.sizes(input_face);
         let face = |n: u64| 6 * 16 * n * n;
         let chains = if self.options.sheen { 2 } else { 1 };
-        // three.js's panorama: 4 x 2 faces of a power of two from 256, and its UltraHDR fit;
-        // with a GPU format also its mips (4/3), their upside-down copy and the encoding.
+        // three.js's panorama: 4 x 2 faces of a power of two from 256 and what its UltraHDR
+        // encoding takes; with a GPU format also its mips (4/3), their upside-down copy and
+        // the encoding.
         let three = if self.engine == Engine::Three {
             let s = size.next_power_of_two().clamp(256, 4096);
-            let ktx2 = if self.options.gpu_format.is_some() {
+            let ktx2 = if self.options.encoding.gpu_format.is_some() {
                 3 * 16
             } else {
                 0
             };
-            8 * s * s * (16 + crate::io::ultrahdr::ENCODE_BYTES_PER_TEXEL + ktx2)
+            let uhdr = crate::output::Encoding {
+                ultrahdr: true,
+                ..self.options.encoding
+            };
+            (8 * s * s * (16 + ktx2)).saturating_add(uhdr.plan_bytes(8 * s * s))
         } else {
             0
         };
@@ -161,7 +166,7 @@ impl Job for IblJob {
                 "-o - (standard output) takes one file, and ibl writes several (a specular chain, a diffuse map, tables): name a folder",
             ));
         }
-        if let Some(format) = self.options.gpu_format {
+        if let Some(format) = self.options.encoding.gpu_format {
             self.check_gpu_format(format)?;
         }
         Ok(Vec::new())
@@ -188,7 +193,7 @@ impl Job for IblJob {
             self.plan_bytes(plan.face_size, plan.working_bytes()),
         )?;
         let mut loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
-        loaded.expose(self.options.exposure);
+        loaded.expose(self.options.encoding.exposure);
         progress.stage("decode");
         if let Some(w) = convert::skybox_note(&self.inputs) {
             warnings.push(w);
@@ -227,7 +232,7 @@ impl Job for IblJob {
         if let Some(w) = &delivery.clamped {
             warnings.push(w);
         }
-        let quality = match (self.options.gpu_format, delivery.psnr) {
+        let quality = match (self.options.encoding.gpu_format, delivery.psnr) {
             (Some(format), Some(psnr_db)) => Some(Quality { format, psnr_db }),
             _ => None,
         };

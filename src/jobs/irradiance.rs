@@ -6,13 +6,10 @@ use crate::convert::{self, Loaded};
 use crate::error::{param, Error, Result};
 use crate::filter::sh_bands::{self, ShSet, ShWindow};
 use crate::filter::{self, sh, IrradianceMethod};
-use crate::io::{
-    self, Container, ExrFloat, FileFormat, GpuFormat, MapKind, ReadOptions, WriteOptions,
-};
+use crate::io::{MapKind, ReadOptions};
 use crate::layout::Kind;
-use crate::output::{self, Destination, Target};
+use crate::output::{self, Destination, Encoding, Target};
 use crate::resample::Resampler;
-use crate::tonemap::Tonemap;
 use std::path::PathBuf;
 
 /// The largest face edge of an irradiance map (it holds no detail).
@@ -43,20 +40,9 @@ pub struct IrradianceJob {
     pub sh_bands: usize,
     /// cmgen's windowing of the coefficients (none by default).
     pub sh_window: ShWindow,
-    /// Texel centres moved for per-face (non-seamless) samplers.
-    pub edge_fixup: crate::cube::EdgeFixup,
-    /// 8-bit outputs as RGBM or RGBD (PNG, or KTX2/DDS of rgba8): HDR kept in 8 bits.
-    pub hdr_encoding: Option<crate::io::HdrEncoding>,
-    /// File type of face images.
-    pub face_format: FileFormat,
-    /// Texel format of KTX2 and DDS output.
-    pub gpu_format: GpuFormat,
-    /// Zstandard level of KTX2 supercompression.
-    pub zstd: Option<i32>,
-    /// Sample type of EXR output (half by default; f32 keeps radiance beyond 65504).
-    pub exr_float: ExrFloat,
-    /// Exposure (stops) and tone curve for 8-bit outputs.
-    pub tone: (f32, Tonemap),
+    /// How the map is stored (faces EXR unless it says otherwise), and its exposure and
+    /// tone curve for 8-bit outputs (the exposure scales the SH coefficients too).
+    pub encoding: Encoding,
     /// Limits and colour handling of the inputs.
     pub read: ReadOptions,
 }
@@ -74,36 +60,18 @@ impl IrradianceJob {
             method: IrradianceMethod::Brute,
             sh_bands: 3,
             sh_window: ShWindow::None,
-            edge_fixup: crate::cube::EdgeFixup::None,
-            hdr_encoding: None,
-            face_format: FileFormat::Exr,
-            gpu_format: GpuFormat::Rgba16f,
-            zstd: None,
-            exr_float: ExrFloat::Half,
-            tone: (0.0, Tonemap::None),
+            encoding: Encoding::default(),
             read: ReadOptions::default(),
         }
     }
 
-    /// The output before the input is known, with its options and a tone warning.
-    fn target(&self) -> Result<(Target, Option<String>)> {
-        let mut target = Target::new(&self.output.name(), self.to, true)?;
-        if !self.output.is_stdout() {
-            target.face_format = self.face_format;
-        }
-        target.write = WriteOptions {
-            linear: self.read.linear,
-            gpu_format: self.gpu_format,
-            zstd: self.zstd,
-            exr_float: self.exr_float,
-            edge_fixup: self.edge_fixup,
-            hdr_encoding: self.hdr_encoding,
-            ..WriteOptions::default()
-        };
+    /// The map's output: one level, faces EXR unless the encoding says otherwise.
+    fn target(&self) -> Result<Target> {
+        let mut target =
+            self.encoding
+                .resolve(&self.output.name(), self.to, Some(true), self.read.linear)?;
         target.levels = Some(1);
-        let (tone, warning) = output::tone_for(&target, self.tone.0, self.tone.1);
-        target.tone = tone;
-        Ok((target, warning))
+        Ok(target)
     }
 
     /// The input, the base faces it is resampled to, the map (faces, encoding, a sampler
@@ -111,10 +79,10 @@ impl IrradianceJob {
     fn plan_bytes(&self, input_face: Option<usize>, input: u64) -> u64 {
         let base = input_face.unwrap_or(BASE).min(BASE) as u64;
         let face = |n: u64| 6 * 16 * n * n;
-        // An edge fixup or an 8-bit encoding writes from a moved or encoded copy.
-        let copy = super::writes_a_copy(self.edge_fixup, self.hdr_encoding);
-        let maps = if copy { 5 } else { 3 };
-        (2 * face(base) + maps * face(self.size as u64)).saturating_add(input)
+        let texels = 6 * (self.size as u64).pow(2);
+        (2 * face(base) + 3 * face(self.size as u64))
+            .saturating_add(self.encoding.plan_bytes(texels))
+            .saturating_add(input)
     }
 }
 
@@ -127,36 +95,12 @@ impl Job for IrradianceJob {
                 param("sh")
             )));
         }
-        let (target, tone_warning) = self.target()?;
+        let target = self.target()?;
         if target.kind == MapKind::Layout(Kind::Faces) {
             // Replaced whole: refuse a folder that is not cubeforge's before the work.
             output::check_folder_output(&name, &self.inputs, self.sh.as_slice())?;
-            if self.face_format.is_container() {
-                return Err(Error::usage(format!(
-                    "{} {}: face images are {}",
-                    param("format"),
-                    self.face_format.extension(),
-                    FileFormat::list(FileFormat::is_image, false)
-                )));
-            }
         }
-        if let Some(c) = target.kind.container() {
-            io::check_gpu_format(&name, c.format(), self.gpu_format)?;
-        }
-        output::check_hdr_encoding(&name, target.format(), &target.write)?;
-        let mut warnings: Vec<Warning> = super::fixup_ignored(target.kind, self.edge_fixup)
-            .into_iter()
-            .collect();
-        match target.kind.container() {
-            Some(Container::Ktx2) => {}
-            Some(Container::Dds) if self.zstd.is_some() => return Err(io::zstd_needs_ktx2(&name)),
-            _ if self.zstd.is_some() => warnings.push(Warning::new(format!(
-                "{} applies to KTX2 outputs: ignored",
-                param("zstd")
-            ))),
-            _ => {}
-        }
-        warnings.extend(tone_warning.map(Warning::new));
+        let mut warnings = target.warnings;
         if !(1..=sh_bands::MAX_BANDS).contains(&self.sh_bands) {
             return Err(Error::usage(format!(
                 "{} {}: use 1 to {}",
@@ -193,7 +137,7 @@ impl Job for IrradianceJob {
     fn run(&self, progress: &dyn Progress) -> Result<Report> {
         let mut warnings = Warnings::new(progress);
         warnings.extend(self.validate()?);
-        let (target, _) = self.target()?;
+        let target = self.target()?;
         // The whole plan against the budget before any file is decoded.
         self.read.limits.check_memory(
             format_args!("{} {}", param("size"), self.size),
@@ -232,19 +176,19 @@ impl Job for IrradianceJob {
             target.kind.layout(),
             self.size,
             &Resampler::default(),
-            self.edge_fixup,
+            self.encoding.edge_fixup,
         );
         let encoded = target.encode(out, &loaded.files)?;
         if let Some(w) = &encoded.clamped {
             warnings.push(w);
         }
         let quality = encoded.psnr.map(|psnr_db| Quality {
-            format: self.gpu_format,
+            format: target.write.gpu_format,
             psnr_db,
         });
         let mut files = encoded.into_files();
         // The exposure scales the map as it is written, and the coefficients here.
-        let k = f64::from(self.tone.0).exp2();
+        let k = f64::from(self.encoding.exposure).exp2();
         let set = set.scaled(k);
         if let Some(p) = &self.sh {
             let json = serde_json::to_vec_pretty(&sh_bands::ShFile::from_set(&set))

@@ -2,9 +2,9 @@
 
 use super::{Job, Progress, Report, Text, Warning, Warnings};
 use crate::error::{param, Error, Result};
-use crate::io::{self, ktx2, FileFormat, GpuFormat, Limits, WriteOptions};
+use crate::io::{self, ktx2, FileFormat, GpuFormat, Limits};
 use crate::lut::{self, LutOptions};
-use crate::output::{self, Destination, Files};
+use crate::output::{self, Destination, Encoding, Files};
 use std::path::{Path, PathBuf};
 
 /// The files a table (or a control map) is written as: 8- or 16-bit PNG, half-float EXR,
@@ -34,8 +34,8 @@ pub struct LutJob {
     pub size: usize,
     /// Hammersley samples per texel.
     pub samples: u32,
-    /// 16-bit PNG.
-    pub png16: bool,
+    /// How the table is stored: 16-bit PNG, the EXR sample type.
+    pub encoding: Encoding,
     /// The memory budget (only `max_memory` applies).
     pub limits: Limits,
 }
@@ -48,13 +48,13 @@ impl LutJob {
             kind: LutKind::Dfg,
             size: lut::DEFAULT_SIZE,
             samples: lut::DEFAULT_SAMPLES,
-            png16: false,
+            encoding: Encoding::default(),
             limits: Limits::default(),
         }
     }
 
     fn format(&self) -> Result<FileFormat> {
-        table_format(&self.output, "a lookup table", self.png16)
+        table_format(&self.output, "a lookup table", self.encoding.png16)
     }
 }
 
@@ -125,13 +125,15 @@ impl Job for LutJob {
         };
         progress.stage("integrate");
 
+        // Data, not colour: no sRGB encode.
+        let write = self.encoding.write_options(true);
         let (bytes, encoding) = match format {
             FileFormat::Ktx2 => (
                 ktx2::encode_2d(std::slice::from_ref(&table), GpuFormat::Rgba16f),
                 "KTX2 RGBA16F".to_string(),
             ),
             FileFormat::Exr => (
-                io::encode_image(&self.output, &table, &WriteOptions::default())?,
+                io::encode_image_as(format, &self.output, &table, &write)?,
                 "half-float EXR".to_string(),
             ),
             _ => {
@@ -142,14 +144,9 @@ impl Job for LutJob {
                         self.output.display()
                     ));
                 }
-                let write = WriteOptions {
-                    linear: true,
-                    png16: self.png16,
-                    ..WriteOptions::default()
-                };
-                let bits = if self.png16 { 16 } else { 8 };
+                let bits = if self.encoding.png16 { 16 } else { 8 };
                 (
-                    io::encode_image(&self.output, &table, &write)?,
+                    io::encode_image_as(format, &self.output, &table, &write)?,
                     format!("{bits}-bit PNG, linear"),
                 )
             }

@@ -139,29 +139,3 @@ pub(crate) fn replaced_values(file: &std::path::Path, n: u64) -> Option<String> 
         )
     })
 }
-
-/// Whether the encoders write from a moved (edge fixup) or encoded (RGBM/RGBD) copy of the
-/// map, which the memory plans count.
-pub(crate) fn writes_a_copy(
-    fixup: crate::cube::EdgeFixup,
-    encoding: Option<crate::io::HdrEncoding>,
-) -> bool {
-    fixup != crate::cube::EdgeFixup::None || encoding.is_some()
-}
-
-/// The warning for an edge fixup asked of an output that is not a cube: projections
-/// (equirect, mirror ball, angular, octahedral) have no face edges to fix.
-pub(crate) fn fixup_ignored(
-    kind: crate::io::MapKind,
-    fixup: crate::cube::EdgeFixup,
-) -> Option<Warning> {
-    let cube = kind.is_cube() || kind.layout().cells().is_some();
-    (fixup != crate::cube::EdgeFixup::None && !cube).then(|| {
-        Warning::new(format!(
-            "{} {} moves the texels of cube faces, and {} has none: ignored",
-            crate::error::param("edge_fixup"),
-            fixup.name(),
-            kind.name()
-        ))
-    })
-}

@@ -6,8 +6,8 @@ use crate::convert;
 use crate::cube::CubeMap;
 use crate::error::{param, Error, Result};
 use crate::filter::{self, ChainOptions, LevelInfo};
-use crate::io::{self, ExrFloat, FileFormat, GpuFormat, ReadOptions, WriteOptions};
-use crate::output::{self, Destination, Files};
+use crate::io::{self, FileFormat, ReadOptions};
+use crate::output::{self, Destination, Encoding, Files, Target};
 use crate::resample::Resampler;
 use crate::tonemap::{self, Tonemap};
 use std::path::PathBuf;
@@ -50,20 +50,10 @@ pub struct PrefilterJob {
     /// The filter and the levels. With neither `levels` nor `min_size` set the chain stops at
     /// [`filter::DEFAULT_MIN_SIZE`] px faces; `min_size: Some(1)` makes the full chain.
     pub chain: ChainOptions,
-    /// File type of a folder's level images.
-    pub face_format: FileFormat,
-    /// Texel format of container output.
-    pub gpu_format: GpuFormat,
-    /// Zstandard level of KTX2 supercompression.
-    pub zstd: Option<i32>,
-    /// Sample type of EXR output (half by default; f32 keeps radiance beyond 65504).
-    pub exr_float: ExrFloat,
-    /// Scale the radiance by 2^EV before filtering (0 keeps it).
-    pub exposure: f32,
-    /// Texel centres moved for per-face (non-seamless) samplers, every level on its own grid.
-    pub edge_fixup: crate::cube::EdgeFixup,
-    /// 8-bit outputs as RGBM or RGBD (PNG, or KTX2/DDS of rgba8): HDR kept in 8 bits.
-    pub hdr_encoding: Option<crate::io::HdrEncoding>,
+    /// How the chain is stored: texel format, compression, sample type, 8-bit encoding, edge
+    /// fixup, the folder's face type (EXR by default), and the exposure (2^EV) the radiance is
+    /// scaled by before filtering.
+    pub encoding: Encoding,
     /// Limits and colour handling of the inputs.
     pub read: ReadOptions,
 }
@@ -89,13 +79,7 @@ impl PrefilterJob {
             from: None,
             size: None,
             chain: ChainOptions::default(),
-            face_format: FileFormat::Exr,
-            gpu_format: GpuFormat::Rgba16f,
-            zstd: None,
-            exr_float: ExrFloat::Half,
-            exposure: 0.0,
-            edge_fixup: crate::cube::EdgeFixup::None,
-            hdr_encoding: None,
+            encoding: Encoding::default(),
             read: ReadOptions::default(),
         }
     }
@@ -104,16 +88,24 @@ impl PrefilterJob {
         FileFormat::from_extension(&self.output.name()).filter(|f| f.is_container())
     }
 
+    /// The chain's output: a container by its name, else a folder of faces (EXR unless the
+    /// encoding says otherwise).
+    fn target(&self) -> Result<Target> {
+        let to = match self.container() {
+            Some(_) => None,
+            None => Some(crate::layout::Kind::Faces.into()),
+        };
+        self.encoding
+            .resolve(&self.output.name(), to, Some(true), self.read.linear)
+    }
+
     /// The base faces, the chain (4/3 of them), a bordered sampler copy and the encoding,
     /// beside the input's texels and pyramid (`input` bytes).
     fn plan_bytes(&self, size: usize, input: u64) -> u64 {
-        // An edge fixup or an 8-bit encoding writes from a moved or encoded copy of the chain.
-        let copies = if super::writes_a_copy(self.edge_fixup, self.hdr_encoding) {
-            6
-        } else {
-            4
-        };
-        (6 * 16 * copies * (size as u64).pow(2)).saturating_add(input)
+        let texels = 6 * (size as u64).pow(2);
+        (16 * 4 * texels)
+            .saturating_add(self.encoding.plan_bytes(texels))
+            .saturating_add(input)
     }
 
     fn check_memory(&self, size: usize, input: u64) -> Result<()> {
@@ -147,33 +139,7 @@ impl Job for PrefilterJob {
                 ),
             ));
         }
-        if self.face_format.is_container() {
-            return Err(Error::usage(format!(
-                "{} {}: use {}",
-                param("format"),
-                self.face_format.extension(),
-                FileFormat::list(FileFormat::is_image, false)
-            )));
-        }
-        if let Some(c) = container {
-            io::check_gpu_format(&name, c, self.gpu_format)?;
-        }
-        let write = WriteOptions {
-            gpu_format: self.gpu_format,
-            hdr_encoding: self.hdr_encoding,
-            ..WriteOptions::default()
-        };
-        output::check_hdr_encoding(&name, Some(container.unwrap_or(self.face_format)), &write)?;
-        let mut warnings = Vec::new();
-        match container {
-            Some(FileFormat::Ktx2) => {}
-            Some(_) if self.zstd.is_some() => return Err(io::zstd_needs_ktx2(&name)),
-            _ if self.zstd.is_some() => warnings.push(Warning::new(format!(
-                "{} applies to KTX2 outputs: ignored",
-                param("zstd")
-            ))),
-            _ => {}
-        }
+        let warnings = self.target()?.warnings;
         if self.chain.samples == 0 {
             return Err(Error::usage(format!(
                 "{} must be at least 1",
@@ -202,7 +168,7 @@ impl Job for PrefilterJob {
     fn run(&self, progress: &dyn Progress) -> Result<Report> {
         let mut warnings = Warnings::new(progress);
         warnings.extend(self.validate()?);
-        let container = self.container();
+        let target = self.target()?;
         // The whole plan against the budget before any file is decoded.
         let plan = chain::plan(&self.inputs, self.from, &self.read)?;
         if let Some(size) = self.size.or(plan.face_size) {
@@ -231,7 +197,7 @@ impl Job for PrefilterJob {
         let mut base = convert::to_cube(&loaded, size, &Resampler::default());
         base.levels[0]
             .iter_mut()
-            .for_each(|f| crate::tonemap::scale(f, self.exposure));
+            .for_each(|f| crate::tonemap::scale(f, self.encoding.exposure));
         progress.stage("resample");
 
         let chain_options = self.chain_for(size);
@@ -240,38 +206,25 @@ impl Job for PrefilterJob {
         progress.stage("filter");
 
         let description = LevelsFile::new(&chain_options, size, infos);
-        let write = WriteOptions {
-            linear: self.read.linear,
-            zstd: self.zstd.filter(|_| container == Some(FileFormat::Ktx2)),
-            exr_float: self.exr_float,
-            edge_fixup: self.edge_fixup,
-            hdr_encoding: self.hdr_encoding,
-            ..WriteOptions::default()
-        };
-        let encoded = chain::encode(
-            &self.output.name(),
-            &chain,
-            &description,
-            self.face_format,
-            &write,
-            self.gpu_format,
-            &loaded.files,
-        )?;
+        let encoded = chain::encode(&target, &chain, &description, &loaded.files)?;
         if let Some(w) = &encoded.clamped {
             warnings.push(w);
         }
         // 8-bit files clip at 1, unless an HDR encoding holds more (its own range is the
         // clamp warning's above).
-        let format = container.unwrap_or(self.face_format);
-        if io::largest_value(format, self.gpu_format).is_none() && self.hdr_encoding.is_none() {
+        let eight_bit = target
+            .format()
+            .is_some_and(|f| io::largest_value(f, target.write.gpu_format).is_none());
+        if eight_bit && target.write.hdr_encoding.is_none() {
             let (n, top) = tonemap::clipped(chain.levels.iter().flatten(), Tonemap::None, 0.0);
             if n > 0 {
                 let name = self.output.name();
-                warnings.push(output::clip_warning(&name, n, top, self.exposure, false));
+                let exposure = self.encoding.exposure;
+                warnings.push(output::clip_warning(&name, n, top, exposure, false));
             }
         }
         let quality = encoded.psnr.map(|psnr_db| Quality {
-            format: self.gpu_format,
+            format: target.write.gpu_format,
             psnr_db,
         });
         progress.stage("encode");

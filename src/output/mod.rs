@@ -14,19 +14,23 @@ use crate::tonemap::Tonemap;
 use std::path::{Path, PathBuf};
 
 mod deliver;
+mod encoding;
 pub use deliver::{
     deliver, is_closed_pipe, stdout_open, write_stdout, write_summary, Destination, Files,
 };
+pub use encoding::Encoding;
 
-/// An output: where, in which layout and format, with which options.
+/// An output as [`Encoding::resolve`] decided it: where, in which layout and format, with
+/// which options, and what did not apply.
 #[derive(Clone, Debug)]
 pub struct Target {
     /// Where the result goes (a folder for faces).
     pub path: PathBuf,
     /// The layout or container written.
     pub kind: MapKind,
-    /// File type of face images (faces only; others take theirs from the name).
-    pub face_format: FileFormat,
+    /// The file type written (of each face for faces; None: faces whose type follows the
+    /// input, not known yet).
+    pub format: Option<FileFormat>,
     /// Pixel format, colour space and compression of the written files.
     pub write: WriteOptions,
     /// Mip levels of a KTX2 or DDS container (None: the full chain down to 1x1).
@@ -34,6 +38,8 @@ pub struct Target {
     /// Exposure (stops) and tone curve: both for 8-bit outputs; float outputs stay linear,
     /// scaled by the exposure alone.
     pub tone: Option<(f32, Tonemap)>,
+    /// The options that do not apply to this output, each ignored with a warning.
+    pub warnings: Vec<crate::error::Text>,
 }
 
 /// A result as the bytes of its files, with what the encoders had to clamp.
@@ -67,49 +73,10 @@ impl Encoded {
     }
 }
 
-/// Refuses an 8-bit HDR encoding (`--hdr-encoding`) for an output of `format` that cannot hold
-/// it, so a job says so in `validate`, before any work (the encoder would refuse it after).
-/// A format not known yet (faces whose type follows the input) is checked when encoded.
-pub fn check_hdr_encoding(
-    path: &Path,
-    format: Option<FileFormat>,
-    write: &WriteOptions,
-) -> Result<()> {
-    match (write.hdr_encoding, format) {
-        (Some(_), Some(f)) => io::hdr8::check(path, f, write).map(|_| ()),
-        _ => Ok(()),
-    }
-}
-
 impl Target {
-    /// The output at `path`: layout `to`, or what the name implies (a container for .ktx2 and
-    /// .dds, a horizontal cross for other images, six faces for a name with no extension).
-    /// Faces are EXR for HDR results and PNG otherwise until `face_format` is set.
-    pub fn new(path: &Path, to: Option<MapKind>, hdr: bool) -> Result<Target> {
-        Ok(Target {
-            path: path.to_path_buf(),
-            kind: kind_for(path, to)?,
-            face_format: if hdr {
-                FileFormat::Exr
-            } else {
-                FileFormat::Png
-            },
-            write: WriteOptions::default(),
-            levels: None,
-            tone: None,
-        })
-    }
-
-    /// The file type the result is encoded in (None: a name with an unknown extension).
+    /// The file type the result is encoded in (None: faces whose type is not known yet).
     pub fn format(&self) -> Option<FileFormat> {
-        let f = match self.kind {
-            MapKind::Layout(Kind::Faces) => Some(self.face_format),
-            _ => FileFormat::from_extension(&self.path),
-        };
-        match f {
-            Some(FileFormat::Jpeg) if self.write.gain_map.is_some() => Some(FileFormat::UltraHdr),
-            f => f,
-        }
+        self.format
     }
 
     /// Whether the result is stored in 8 bits a channel, where a tone curve applies.
@@ -175,13 +142,8 @@ impl Target {
             Output::Cube(cube) if faces => {
                 refuse_folder(&self.path, inputs)?;
                 let cube = fixup::apply_cube(cube, self.write.edge_fixup);
-                encode_faces(
-                    &self.path,
-                    &cube.levels[0],
-                    self.face_format,
-                    &self.write,
-                    inputs,
-                )?
+                let format = self.format.ok_or_else(|| io::unknown_ext(&self.path))?;
+                encode_faces(&self.path, &cube.levels[0], format, &self.write, inputs)?
             }
             Output::Cube(cube) => {
                 refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
@@ -194,7 +156,8 @@ impl Target {
                 // Each level moved on its own grid, after the mips are made from the unmoved one.
                 let cube: CubeMap =
                     fixup::apply_cube(cube.with_box_mips(levels), self.write.edge_fixup);
-                let bytes = io::encode_cube_with(&self.path, &cube, &self.write, &[])?;
+                let format = self.format.ok_or_else(|| io::unknown_ext(&self.path))?;
+                let bytes = io::encode_cube_as(format, &self.path, &cube, &self.write, &[])?;
                 if self.write.gpu_format.is_lossy() {
                     let faces: Vec<&Image> = cube.levels[0].iter().collect();
                     psnr = io::container_psnr(&bytes, self.write.gpu_format, &faces);
@@ -213,7 +176,8 @@ impl Target {
             }
             Output::Image(img) => {
                 refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
-                let bytes = io::encode_image(&self.path, &img, &self.write)?;
+                let format = self.format.ok_or_else(|| io::unknown_ext(&self.path))?;
+                let bytes = io::encode_image_as(format, &self.path, &img, &self.write)?;
                 vec![(self.path.clone(), bytes)]
             }
         };
@@ -313,7 +277,7 @@ pub(crate) fn encode_faces(
         paths
             .par_iter()
             .zip(faces.par_iter())
-            .map(|(p, f)| io::encode_image(p, f, write))
+            .map(|(p, f)| io::encode_image_as(format, p, f, write))
             .collect()
     };
     paths
@@ -384,28 +348,6 @@ pub fn refuse_folder(dir: &Path, inputs: &[PathBuf]) -> Result<()> {
 /// Refuses to write over any input file, or where no regular file can be ([`check_outputs`]).
 pub fn refuse_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<()> {
     check_outputs(outputs, &[], inputs)
-}
-
-/// The exposure and tone curve `target` gets: both for 8-bit outputs; for others the exposure
-/// alone (linear radiance scaled by 2^EV), and a warning when a curve was asked for.
-pub fn tone_for(
-    target: &Target,
-    exposure: f32,
-    tonemap: Tonemap,
-) -> (Option<(f32, Tonemap)>, Option<String>) {
-    let given = exposure != 0.0 || tonemap != Tonemap::None;
-    if target.format() == Some(FileFormat::UltraHdr) {
-        // The curve makes the SDR picture ([`WriteOptions::gain_map`]); the radiance is kept.
-        return ((exposure != 0.0).then_some((exposure, Tonemap::None)), None);
-    }
-    if target.is_8bit() {
-        return (given.then_some((exposure, tonemap)), None);
-    }
-    let warning = (tonemap != Tonemap::None).then(|| tone_ignored(&target.path));
-    (
-        (exposure != 0.0).then_some((exposure, Tonemap::None)),
-        warning,
-    )
 }
 
 /// The warning for a tone curve given for an output that keeps linear radiance.

@@ -279,17 +279,21 @@ fn the_jobs_refuse_an_encoding_in_validate() {
     let missing = vec![dir.path().join("nowhere.exr")];
     let out = |name: &str| Destination::Path(dir.path().join(name));
     let e = Some(HdrEncoding::Rgbm6);
+    let enc = cubeforge::Encoding {
+        hdr_encoding: e,
+        ..Default::default()
+    };
     let jobs: Vec<Box<dyn Job>> = vec![
         Box::new(ConvertJob {
-            hdr_encoding: e,
+            encoding: enc,
             ..ConvertJob::new(missing.clone(), out("a.exr"))
         }),
         Box::new(PrefilterJob {
-            hdr_encoding: e,
+            encoding: enc,
             ..PrefilterJob::new(missing.clone(), out("b.ktx2"))
         }),
         Box::new(IrradianceJob {
-            hdr_encoding: e,
+            encoding: enc,
             ..IrradianceJob::new(missing.clone(), out("c.hdr"))
         }),
     ];
@@ -299,7 +303,7 @@ fn the_jobs_refuse_an_encoding_in_validate() {
     }
     // And what holds one passes.
     let ok = ConvertJob {
-        hdr_encoding: e,
+        encoding: enc,
         ..ConvertJob::new(missing, out("d.png"))
     };
     assert!(ok.validate().is_ok());

@@ -48,7 +48,10 @@ fn a_conversion_reports_its_stages_files_and_warnings() {
     let out = dir.path().join("cross.png");
     let job = ConvertJob {
         size: Some(16),
-        gpu_format: Some(GpuFormat::Bc7),
+        encoding: cubeforge::Encoding {
+            gpu_format: Some(GpuFormat::Bc7),
+            ..Default::default()
+        },
         ..ConvertJob::new(vec![sky()], Destination::Path(out.clone()))
     };
     let record = Record::default();
@@ -91,7 +94,10 @@ fn a_chain_counts_its_progress_and_lists_its_levels() {
 fn validate_refuses_before_any_file_is_read() {
     // The input does not exist: validate never looks at it.
     let job = ConvertJob {
-        zstd: Some(3),
+        encoding: cubeforge::Encoding {
+            zstd: Some(3),
+            ..Default::default()
+        },
         ..ConvertJob::new(
             vec!["no/such/input.exr".into()],
             Destination::Path("out.dds".into()),
@@ -100,7 +106,10 @@ fn validate_refuses_before_any_file_is_read() {
     let e = job.validate().unwrap_err();
     assert!(e.to_string().contains("`zstd`"), "{e}");
     let lut = LutJob {
-        png16: true,
+        encoding: cubeforge::Encoding {
+            png16: true,
+            ..Default::default()
+        },
         ..LutJob::new("table.exr".into())
     };
     assert!(lut.validate().unwrap_err().to_string().contains("`png16`"));
@@ -250,7 +259,10 @@ fn ibl_three_counts_its_ktx2_panorama_in_the_budget() {
     let dir = tempfile::tempdir().unwrap();
     let job = |gpu_format| cubeforge::IblJob {
         options: cubeforge::IblOptions {
-            gpu_format,
+            encoding: cubeforge::Encoding {
+                gpu_format,
+                ..Default::default()
+            },
             ..Default::default()
         },
         ..cubeforge::IblJob::new(

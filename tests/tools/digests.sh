@@ -57,6 +57,77 @@ run preview $s -o $o/chrome_prev.png --size 48
 run preview $s -o $o/glass_prev.png --size 48 --material glass
 run preview $o/ggx.ktx2 -o $o/pbr_prev.exr --size 48 --material pbr
 run preview $s -o - --format png --size 32 --material crystal
+# The output options (issue 46's Encoding): every texel format, sample type, 8-bit HDR encoding,
+# edge fixup and face format, across the jobs that take them.
+run convert $s -o $o/f32.exr --size 16 --exr-float f32
+run convert $s -o $o/faces_f32 --to faces --size 16 --exr-float f32
+run convert $s -o $o/faces_hdr --to faces --format hdr --size 16
+run convert $s -o $o/faces_jpg --to faces --format jpg --size 16 --tonemap reinhard
+run convert $s -o $o/equirect.png --to equirect --size 16 --tonemap aces --exposure -2
+run convert $s -o $o/rgbm6.png --size 16 --hdr-encoding rgbm6
+run convert $s -o $o/rgbd.png --to equirect --size 16 --hdr-encoding rgbd
+run convert $s -o $o/rgbm8.ktx2 --size 16 --gpu-format rgba8 --hdr-encoding rgbm8
+run convert $s -o $o/rgbd.dds --size 16 --gpu-format rgba8 --hdr-encoding rgbd
+run convert $s -o $o/faces_rgbm --to faces --format png --size 16 --hdr-encoding rgbm6
+run convert $s -o $o/uhdr.jpg --to equirect --size 16 --ultrahdr
+run convert $s -o $o/uhdr_cross.jpg --size 16 --ultrahdr --tonemap reinhard
+run convert $s -o $o/plain.jpg --size 16
+run convert $s -o $o/warp.ktx2 --size 16 --edge-fixup warp
+run convert $s -o $o/stretch.dds --size 16 --edge-fixup stretch
+run convert $s -o $o/stretch_faces --to faces --size 16 --edge-fixup stretch
+run convert $s -o $o/warp.png --size 16 --edge-fixup warp
+run convert $s -o $o/warp_equirect.exr --to equirect --size 16 --edge-fixup warp
+run convert $s -o $o/rgba32f.ktx2 --size 16 --gpu-format rgba32f --zstd=3
+run convert $s -o $o/rgb9e5.ktx2 --size 16 --gpu-format rgb9e5
+run convert $s -o $o/rg11b10.dds --size 16 --gpu-format rg11b10
+run convert $s -o $o/bc7.ktx2 --size 16 --gpu-format bc7 --linear
+run convert $s -o $o/rgba8.ktx2 --size 16 --gpu-format rgba8 --tonemap aces
+run convert $s -o $o/rgba8_srgb.ktx --size 16 --gpu-format rgba8-srgb
+run convert $s -o $o/bc6h.ktx --size 16 --gpu-format bc6h
+run convert $s -o $o/levels.ktx --size 16 --levels 3
+run convert $s -o $o/sky_f32.env --size 16 --zstd
+run convert $s -o $o/ignored.exr --size 16 --gpu-format bc6h --zstd --hdr-encoding rgbm6
+run convert $s -o - --format png --size 16 --hdr-encoding rgbd
+run convert $s -o - --format dds --size 16 --gpu-format rgb9e5
+run prefilter $s -o $o/pf_png --format png --filter ggx --size 16 --samples 4 --hdr-encoding rgbm6
+run prefilter $s -o $o/pf_hdr --format hdr --filter gaussian --size 16
+run prefilter $s -o $o/pf_f32 --exr-float f32 --filter gaussian --size 16
+run prefilter $s -o $o/pf_warp.ktx2 --filter ggx --size 16 --samples 4 --edge-fixup warp --gpu-format bc6h --zstd
+run prefilter $s -o $o/pf_stretch.dds --filter gaussian --size 16 --edge-fixup stretch --gpu-format rgba8 --hdr-encoding rgbd
+run prefilter $s -o $o/pf.ktx --filter gaussian --size 16 --gpu-format rgb9e5
+run prefilter $s -o $o/pf.env --filter ggx --size 16 --samples 4
+run prefilter $s -o $o/pf_stretch_dir --filter gaussian --size 16 --edge-fixup stretch --exposure 1
+run irradiance $s -o $o/irr_f32 --size 8 --exr-float f32 --edge-fixup warp
+run irradiance $s -o $o/irr.dds --size 8 --gpu-format rgba8 --hdr-encoding rgbm8
+run irradiance $s -o $o/irr_rgb9e5.ktx2 --size 8 --gpu-format rgb9e5 --zstd=5
+run irradiance $s -o $o/irr.ktx --size 8
+run irradiance $s -o $o/irr_cross.exr --to hcross --size 8
+run irradiance $s -o $o/irr_equirect.png --to equirect --size 8 --tonemap aces --hdr-encoding rgbd
+run irradiance $s -o $o/irr_jpg --format jpg --size 8
+run ibl $s -o $o/ibl_bevy_bc6h --target bevy --size 32 --samples 4 --gpu-format bc6h --zstd
+run ibl $s -o $o/ibl_three --target three --size 32 --samples 4
+run ibl $s -o $o/ibl_gltf_f32 --target gltf --size 32 --samples 4 --exr-float f32 --exposure 1
+run ibl $s -o $o/ibl_babylon_rgba --target babylon --size 32 --samples 4 --gpu-format rgba32f
+run ibl $s -o $o/ibl_filament_zstd --target filament --size 32 --samples 4 --zstd
+run control fixtures/control/chrome_and_paint.toml -o $o/chrome_bc7.ktx2 --size 32x32 --gpu-format bc7 --zstd --levels 2
+run control fixtures/control/wet_ground.json -o $o/wet.dds --size 32x32 --gpu-format rgba8
+run control fixtures/control/frosted_glass.toml -o $o/frosted16.png --size 32x32 --png16
+run lut -o $o/dfg16.png --size 16 --png16
+run lut -o $o/dfg.dds --size 16
+run preview $s -o $o/prev.jpg --size 32
+run preview $s -o $o/prev.hdr --size 32 --material pbr
+run convert $s -o $o/warned.exr --size 16 --gpu-format bc6h --tonemap aces --zstd
+run convert $s -o $o/warned_faces --to faces --size 16 --levels 3 --zstd=4
+run prefilter $s -o $o/warned_dir --filter gaussian --size 16 --gpu-format bc7 --zstd
+run irradiance $s -o $o/warned_irr.exr --to equirect --size 8 --gpu-format bc6h --edge-fixup warp
+run ibl $s -o $o/warned_ibl --target gltf --size 32 --samples 4 --zstd --exr-float f32
+run convert $s -o $o/bad_env.env --size 16 --edge-fixup warp
+run convert $s -o $o/bad_rgbm.exr --size 16 --hdr-encoding rgbm6 --to equirect
+run convert $s -o $o/bad_rgbm_bc6h.ktx2 --size 16 --hdr-encoding rgbm6 --gpu-format bc6h
+run convert $s -o $o/bad_uhdr.png --size 16 --ultrahdr
+run prefilter $s -o $o/bad_pf.ktx2 --size 16 --format png
+run irradiance $s -o $o/bad_irr.ktx --size 8 --zstd
+run ibl $s -o $o/bad_ibl --target bevy --size 32 --gpu-format rgba8
 # Refusals: their messages (with KEEP_STDERR) and exit codes.
 run convert $s -o $o/bad.dds --zstd --size 8
 run convert $s -o $o/bad.png --size 0
@@ -74,6 +145,8 @@ run preview $s -o $o/bad.png --grid-roughness 0.5
 run preview $s -o $o/bad.png --size 64 --max-memory 1K
 run convert $s -o $o/bad.ktx2 --size 4096 --max-memory 10M
 cd "$o"
+# UltraHDR JPEGs carry an ICC profile whose header holds the time it was made: zeroed here.
+find . -name '*.jpg' -type f -exec perl -0777 -pi -e 's/(mntrRGB XYZ ).{12}/$1 . ("\0" x 12)/se' {} +
 # Printed paths name the work folder, which differs between runs.
 sed -i "s|$o|OUT|g" stdout.* stderr.*
 if [ -n "${KEEP_STDERR:-}" ]; then
