@@ -53,7 +53,7 @@ fn astc_without_the_feature_is_refused_before_any_work() {
 }
 
 #[cfg(feature = "astc")]
-mod with_astc {
+pub(crate) mod with_astc {
     use super::*;
     use cubeforge::convert;
     use cubeforge::cube::CubeMap;
@@ -83,6 +83,23 @@ mod with_astc {
         (GpuFormat::AstcHdr6x6, 37.0, 4.0, 20.0),
     ];
 
+    /// A panorama's name as the docs' tables head it.
+    pub(crate) fn stem(p: &Path) -> String {
+        p.file_stem().map_or(String::new(), |s| s.to_string_lossy().into_owned())
+    }
+
+    /// A markdown table: a blank corner over the panoramas' names, one row per label.
+    pub(crate) fn table(names: &[String], rows: &[(String, Vec<String>)]) -> String {
+        let mut out = vec![
+            format!("| | {} |", names.join(" | ")),
+            format!("| --- |{}", " --- |".repeat(names.len())),
+        ];
+        for (label, cells) in rows {
+            out.push(format!("| {label} | {} |", cells.join(" | ")));
+        }
+        out.join("\n")
+    }
+
     fn cube_of(bytes: &[u8]) -> CubeMap {
         match ktx2::decode(bytes, Path::new("t"), &Limits::default())
             .unwrap()
@@ -95,7 +112,19 @@ mod with_astc {
 
     #[test]
     fn astc_keeps_real_panoramas_within_the_stated_psnr_and_light() {
+        // docs/formats.md's table: per format, its PSNR row and its light row.
+        let mut rows: Vec<(String, Vec<String>)> = BOUNDS
+            .iter()
+            .flat_map(|(f, ..)| {
+                [
+                    (format!("`{}` PSNR", f.name()), Vec::new()),
+                    (format!("`{}` light kept within", f.name()), Vec::new()),
+                ]
+            })
+            .collect();
+        let mut names = Vec::new();
         for pano in panoramas() {
+            names.push(stem(&pano));
             let loaded = convert::load(std::slice::from_ref(&pano), None, &ReadOptions::default())
                 .expect("loads");
             let cube = convert::to_cube(&loaded, 256, &Resampler::default()).with_box_mips(None);
@@ -104,7 +133,7 @@ mod with_astc {
                 flux::mean_radiance(flux::Grid::Cube(c.size()), &faces)
             };
             let source = light(&cube);
-            for (format, bound, within, mip_bound) in BOUNDS {
+            for (i, (format, bound, within, mip_bound)) in BOUNDS.into_iter().enumerate() {
                 let bytes = ktx2::encode(&cube, format);
                 // The same bytes on one thread.
                 let one = rayon::ThreadPoolBuilder::new()
@@ -125,6 +154,8 @@ mod with_astc {
                     pano.display(),
                     format.name()
                 );
+                rows[2 * i].1.push(format!("{p:.1} dB"));
+                rows[2 * i + 1].1.push(format!("{worst:.2}%"));
                 assert!(p >= bound, "{}: {p:.2} dB < {bound}", pano.display());
                 assert!(
                     worst <= within,
@@ -138,6 +169,9 @@ mod with_astc {
                 println!("  smaller levels: at least {mips:.2} dB");
                 assert!(mips >= mip_bound, "{}: {mips:.2} dB", pano.display());
             }
+        }
+        if !names.is_empty() {
+            crate::figures::check("docs/formats.md", "astc real", &table(&names, &rows));
         }
     }
 

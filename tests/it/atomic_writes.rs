@@ -104,7 +104,7 @@ fn a_replaced_file_is_never_missing_or_partial() {
     let p = t.path().join("px.txt");
     let body = |i: usize| format!("{i:06}").repeat(20_000);
     std::fs::write(&p, body(0)).unwrap();
-    let done = AtomicBool::new(false);
+    let (done, reading) = (AtomicBool::new(false), AtomicBool::new(false));
     std::thread::scope(|s| {
         let reader = s.spawn(|| {
             let mut reads = 0;
@@ -113,9 +113,14 @@ fn a_replaced_file_is_never_missing_or_partial() {
                 assert_eq!(got.len(), 120_000, "a whole file");
                 assert_eq!(got, got[..6].repeat(20_000), "one file's bytes");
                 reads += 1;
+                reading.store(true, Ordering::Relaxed);
             }
             reads
         });
+        // On a loaded machine the reader may start late: the replacing waits for it.
+        while !reading.load(Ordering::Relaxed) {
+            std::thread::yield_now();
+        }
         for i in 1..=200 {
             write_all_atomic(&[(p.clone(), body(i).into_bytes())]).unwrap();
         }
