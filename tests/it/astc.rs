@@ -85,7 +85,8 @@ pub(crate) mod with_astc {
 
     /// A panorama's name as the docs' tables head it.
     pub(crate) fn stem(p: &Path) -> String {
-        p.file_stem().map_or(String::new(), |s| s.to_string_lossy().into_owned())
+        p.file_stem()
+            .map_or(String::new(), |s| s.to_string_lossy().into_owned())
     }
 
     /// A markdown table: a blank corner over the panoramas' names, one row per label.
@@ -116,9 +117,14 @@ pub(crate) mod with_astc {
         let mut rows: Vec<(String, Vec<String>)> = BOUNDS
             .iter()
             .flat_map(|(f, ..)| {
+                // As the command line names them.
+                let flag = match f {
+                    GpuFormat::AstcHdr4x4 => "astc-hdr-4x4",
+                    _ => "astc-hdr-6x6",
+                };
                 [
-                    (format!("`{}` PSNR", f.name()), Vec::new()),
-                    (format!("`{}` light kept within", f.name()), Vec::new()),
+                    (format!("`{flag}` PSNR"), Vec::new()),
+                    (format!("`{flag}` light kept within"), Vec::new()),
                 ]
             })
             .collect();

@@ -103,7 +103,9 @@ fn bc6h_keeps_real_panoramas_within_the_stated_psnr() {
                     cubeforge::flux::mean_radiance(cubeforge::flux::Grid::Cube(c.size()), &faces)
                 };
                 let (a, b) = (light(&cube), light(&back));
-                let off = (0..3).map(|c| (b[c] / a[c] - 1.0).abs()).fold(0.0, f64::max);
+                let off = (0..3)
+                    .map(|c| (b[c] / a[c] - 1.0).abs())
+                    .fold(0.0, f64::max);
                 let name = pano.file_stem().unwrap_or_default().to_string_lossy();
                 cells.push(format!("{p:.1} dB / {:.2}% ({name})", off * 100.0));
             }

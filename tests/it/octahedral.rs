@@ -80,6 +80,7 @@ fn octahedral_matches_ground_truth_texel_by_texel() {
     let n = 32;
     let truth_cube = CubeMap::from_fn(n, wavy);
     let truth_octa = exact(Projection::Octahedral, 2 * n, 2 * n, wavy);
+    let mut figures = Vec::new();
     for (interp, min_psnr, max_e) in [
         (Interp::Bilinear, 52.0, 0.01),
         (Interp::Bicubic, 62.0, 0.005),
@@ -93,6 +94,13 @@ fn octahedral_matches_ground_truth_texel_by_texel() {
         assert_eq!((out.width, out.height), (2 * n, 2 * n));
         let (p, e) = scores(&out, &truth_octa);
         println!("{interp:?}: faces {n} -> octahedral: {p:.1} dB, max {e:.5}");
+        if interp == Interp::Bilinear {
+            figures.push(format!(
+                "faces of {n} to a {} x {} octahedral map {p:.1} dB PSNR (largest error {e:.4})",
+                2 * n,
+                2 * n
+            ));
+        }
         assert!(p >= min_psnr && e <= max_e, "to octahedral: {p:.1} dB, {e}");
         let octa = loaded(
             Source::Projection(Projection::Octahedral, truth_octa.clone()),
@@ -101,11 +109,15 @@ fn octahedral_matches_ground_truth_texel_by_texel() {
         let back = cube(convert::convert(&octa, Kind::Faces, n, &rs));
         let (p, e) = cube_scores(&back, &truth_cube);
         println!("{interp:?}: octahedral -> faces {n}: {p:.1} dB, max {e:.5}");
+        if interp == Interp::Bilinear {
+            figures.push(format!("back {p:.1} dB ({e:.4})"));
+        }
         assert!(
             p >= min_psnr && e <= max_e,
             "from octahedral: {p:.1} dB, {e}"
         );
     }
+    crate::figures::check("docs/conventions.md", "octahedral", &figures.join(", "));
 }
 
 /// Lookups within half a texel of the square's edges read across them (each edge is itself
@@ -201,6 +213,7 @@ fn round_trips_through_an_octahedral_map() {
     ));
     let (p, e) = scores(&back, &pano);
     println!("equirect -> octahedral -> equirect: {p:.1} dB, max {e:.5}");
+    let from_pano = format!("{p:.1} dB from a panorama");
     assert!(p >= 58.0 && e <= 0.01, "{p:.1} dB, {e}");
 
     let faces = CubeMap::from_fn(n, wavy);
@@ -208,6 +221,8 @@ fn round_trips_through_an_octahedral_map() {
     let back = cube(convert::convert(&via_octahedral(&src), Kind::Faces, n, &rs));
     let (p, e) = cube_scores(&back, &faces);
     println!("faces -> octahedral -> faces: {p:.1} dB, max {e:.5}");
+    let text = format!("{from_pano}, {p:.1} dB from faces of {n}");
+    crate::figures::check("docs/conventions.md", "octahedral round trips", &text);
     assert!(p >= 58.0 && e <= 0.01, "{p:.1} dB, {e}");
 }
 
