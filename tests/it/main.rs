@@ -46,6 +46,7 @@ mod real_images;
 mod rgbe;
 mod sh_bands;
 mod simd;
+mod streamed;
 mod texel_truth;
 mod uastc;
 mod ultrahdr;
