@@ -16,12 +16,17 @@ use crate::resample::Resampler;
 use glam::Vec4;
 use std::path::{Path, PathBuf};
 
+pub mod stream;
+pub use stream::Reduced;
+
 /// A loaded input: a cube map (faces, cross, strip, container) or a single-image projection.
 pub enum Source {
     /// Six faces with their mip levels.
     Cube(CubeMap),
     /// A panorama, mirror ball, angular or octahedral map, looked up by direction.
     Projection(layout::Projection, Image),
+    /// A panorama reduced as it was decoded, its peaks at full resolution ([`stream`]).
+    Reduced(Box<Reduced>),
 }
 
 /// An input with what was learned while reading it.
@@ -73,6 +78,12 @@ impl Loaded {
                 .flatten()
                 .for_each(|f| crate::tonemap::scale(f, exposure)),
             Source::Projection(_, img) => crate::tonemap::scale(img, exposure),
+            Source::Reduced(r) => {
+                crate::tonemap::scale(&mut r.image, exposure);
+                if let Some(p) = &mut r.peaks {
+                    p.expose(exposure);
+                }
+            }
         }
     }
 
@@ -81,7 +92,7 @@ impl Loaded {
     pub fn keep_level(&mut self, n: usize) -> Result<()> {
         let count = match &self.source {
             Source::Cube(c) => c.levels.len(),
-            Source::Projection(..) => 1,
+            Source::Projection(..) | Source::Reduced(_) => 1,
         };
         if n >= count {
             return Err(Error::file(
@@ -115,6 +126,7 @@ impl Loaded {
         match &self.source {
             Source::Cube(c) => c.size(),
             Source::Projection(_, img) => self.kind.layout().face_size(img.width, img.height),
+            Source::Reduced(r) => Kind::Equirect.face_size(r.full.0, r.full.1),
         }
     }
 
@@ -140,6 +152,12 @@ impl Loaded {
                 let env = ImageEnv::below(*p, img, levels(angle), ceiling(&peaks));
                 (Box::new(env), peaks)
             }
+            Source::Reduced(r) => {
+                let equirect = layout::Projection::Equirect;
+                let angle = ImageEnv::new(equirect, &r.image, Some(1)).texel_angle();
+                let env = ImageEnv::below(equirect, &r.image, levels(angle), ceiling(&r.peaks));
+                (Box::new(env), r.peaks.clone())
+            }
             Source::Cube(c) => {
                 let peaks = self.peaks();
                 // Box mips of level 0 (stored levels may be prefiltered, not plain mips).
@@ -156,6 +174,9 @@ impl Loaded {
         match &self.source {
             Source::Cube(c) => Grid::Cube(c.size()),
             Source::Projection(p, img) => Grid::Projection(*p, img.width, img.height),
+            Source::Reduced(r) => {
+                Grid::Projection(layout::Projection::Equirect, r.image.width, r.image.height)
+            }
         }
     }
 
@@ -164,17 +185,30 @@ impl Loaded {
         match &self.source {
             Source::Cube(c) => c.levels[0].iter().collect(),
             Source::Projection(_, img) => vec![img],
+            Source::Reduced(r) => vec![&r.image],
         }
     }
 
     /// The input's texels above `flux::PEAK_RATIO` times its mean luminance, if any.
     pub fn peaks(&self) -> Option<Peaks> {
-        Peaks::find(self.grid(), &self.images())
+        match &self.source {
+            Source::Reduced(r) => r.peaks.clone(),
+            _ => Peaks::find(self.grid(), &self.images()),
+        }
     }
 
     /// The input's flux: solid-angle-weighted mean radiance per channel.
     pub fn mean_radiance(&self) -> [f64; 3] {
-        crate::flux::mean_radiance(self.grid(), &self.images())
+        let mut mean = crate::flux::mean_radiance(self.grid(), &self.images());
+        // A reduced panorama holds the part below the ceiling; its peaks hold the rest.
+        if let Source::Reduced(r) = &self.source {
+            let Some(p) = &r.peaks else { return mean };
+            let flux = p.flux();
+            for (m, f) in mean.iter_mut().zip(flux) {
+                *m += f / (4.0 * std::f64::consts::PI);
+            }
+        }
+        mean
     }
 }
 

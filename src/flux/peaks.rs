@@ -16,6 +16,29 @@ struct Peak {
     excess: Vec3,
 }
 
+/// One streamed row's peak texels (see `Peaks::from_streamed`).
+pub(crate) struct PeakRow(Vec<Peak>);
+
+/// The texels of row `y` of `face` above `ceiling`, with their excess.
+fn row_peaks(
+    grid: Grid,
+    face: usize,
+    y: usize,
+    row: &[Vec4],
+    ceiling: Vec3,
+) -> impl Iterator<Item = Peak> + '_ {
+    row.iter().enumerate().filter_map(move |(x, p)| {
+        let excess = (p.truncate() - ceiling).max(Vec3::ZERO);
+        let covers = || grid.solid_angle(x, y) > 0.0;
+        (excess != Vec3::ZERO && covers()).then_some(Peak {
+            face: face as u8,
+            x: x as u32,
+            y: y as u32,
+            excess,
+        })
+    })
+}
+
 /// The part of an input above its ceiling, to be splatted into outputs.
 #[derive(Clone, Debug)]
 pub struct Peaks {
@@ -27,16 +50,25 @@ pub struct Peaks {
 
 /// One row's weighted sums (for the means) and maximum (to skip rows without peaks).
 #[derive(Clone, Copy)]
-struct RowStats {
+pub(crate) struct RowStats {
     sum: [f64; 3],
     weight: f64,
     max: Vec3,
 }
 
 impl RowStats {
+    /// Whether the row holds a texel with a channel above `ceiling`.
+    pub(crate) fn above(&self, ceiling: Vec3) -> bool {
+        self.max.cmpgt(ceiling).any()
+    }
+
     fn of(grid: Grid, image: &Image, y: usize) -> RowStats {
         let w = grid.dims().0;
-        let row = &image.pixels[y * w..(y + 1) * w];
+        Self::of_row(grid, &image.pixels[y * w..(y + 1) * w], y)
+    }
+
+    /// `of` for row `y` of face 0 given as its texels (a band of a panorama being decoded).
+    pub(crate) fn of_row(grid: Grid, row: &[Vec4], y: usize) -> RowStats {
         let mut sum = [0.0f64; 3];
         let mut weight = 0.0f64;
         let mut max = Vec3::ZERO;
@@ -56,7 +88,7 @@ impl RowStats {
                     *t += s[c] as f64 * a as f64;
                 }
             }
-            let weight = a as f64 * w as f64;
+            let weight = a as f64 * row.len() as f64;
             return RowStats {
                 sum,
                 weight,
@@ -129,6 +161,69 @@ impl Peaks {
     /// The ceiling from the rows' sums, and the peak texels of the rows whose maximum is above it.
     fn from_rows(grid: Grid, images: &[&Image], rows: &[RowStats]) -> Option<Peaks> {
         let (w, h) = grid.dims();
+        let ceiling = Self::ceiling_of(rows)?;
+        let texels: Vec<Peak> = rows
+            .par_iter()
+            .enumerate()
+            .filter(|(_, r)| r.max.cmpgt(ceiling).any())
+            .flat_map_iter(|(fy, _)| {
+                let (face, y) = (fy / h, fy % h);
+                row_peaks(
+                    grid,
+                    face,
+                    y,
+                    &images[face].pixels[y * w..(y + 1) * w],
+                    ceiling,
+                )
+            })
+            .collect();
+        (!texels.is_empty()).then_some(Peaks {
+            ceiling,
+            grid,
+            texels,
+        })
+    }
+
+    /// A panorama's peaks found as it streams by (`convert::stream`): the ceiling from every
+    /// row's stats ([`RowStats::of_row`]), then the peaks of the rows above it, in row order.
+    pub(crate) fn from_streamed(grid: Grid, ceiling: Vec3, rows: Vec<PeakRow>) -> Option<Peaks> {
+        let texels: Vec<Peak> = rows.into_iter().flat_map(|r| r.0).collect();
+        (!texels.is_empty()).then_some(Peaks {
+            ceiling,
+            grid,
+            texels,
+        })
+    }
+
+    /// The peak texels of row `y` of a streamed panorama (see `from_streamed`).
+    pub(crate) fn of_row(grid: Grid, y: usize, row: &[Vec4], ceiling: Vec3) -> PeakRow {
+        PeakRow(row_peaks(grid, 0, y, row, ceiling).collect())
+    }
+
+    /// Scales the peaks' excess and ceiling by 2^`exposure` (`Loaded::expose`).
+    pub(crate) fn expose(&mut self, exposure: f32) {
+        let k = exposure.exp2();
+        self.ceiling *= k;
+        for t in &mut self.texels {
+            t.excess *= k;
+        }
+    }
+
+    /// The peaks' flux: excess radiance times solid angle, summed (per channel).
+    pub(crate) fn flux(&self) -> [f64; 3] {
+        let mut sum = [0.0f64; 3];
+        for p in &self.texels {
+            let omega = self.grid.solid_angle(p.x as usize, p.y as usize);
+            for (c, s) in sum.iter_mut().enumerate() {
+                *s += p.excess[c] as f64 * omega;
+            }
+        }
+        sum
+    }
+
+    /// Each channel's ceiling, `PEAK_RATIO` times its weighted mean over `rows`; None when
+    /// the rows weigh nothing.
+    pub(crate) fn ceiling_of(rows: &[RowStats]) -> Option<Vec3> {
         let (mut sum, mut weight) = ([0.0f64; 3], 0.0);
         for r in rows {
             for (s, v) in sum.iter_mut().zip(r.sum) {
@@ -140,35 +235,12 @@ impl Peaks {
             return None;
         }
         // A channel that is black everywhere has no peaks.
-        let ceiling =
-            Vec3::from_array(sum.map(|s| match (PEAK_RATIO as f64 * s / weight) as f32 {
+        Some(Vec3::from_array(sum.map(|s| {
+            match (PEAK_RATIO as f64 * s / weight) as f32 {
                 c if c > 0.0 => c,
                 _ => f32::INFINITY,
-            }));
-        let texels: Vec<Peak> = rows
-            .par_iter()
-            .enumerate()
-            .filter(|(_, r)| r.max.cmpgt(ceiling).any())
-            .flat_map_iter(|(fy, _)| {
-                let (face, y) = (fy / h, fy % h);
-                let row = &images[face].pixels[y * w..(y + 1) * w];
-                row.iter().enumerate().filter_map(move |(x, p)| {
-                    let excess = (p.truncate() - ceiling).max(Vec3::ZERO);
-                    let covers = || grid.solid_angle(x, y) > 0.0;
-                    (excess != Vec3::ZERO && covers()).then_some(Peak {
-                        face: face as u8,
-                        x: x as u32,
-                        y: y as u32,
-                        excess,
-                    })
-                })
-            })
-            .collect();
-        (!texels.is_empty()).then_some(Peaks {
-            ceiling,
-            grid,
-            texels,
-        })
+            }
+        })))
     }
 
     /// Number of peak texels.

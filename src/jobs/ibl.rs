@@ -124,6 +124,26 @@ impl IblJob {
 }
 
 impl IblJob {
+    /// A large panorama reduced as it is decoded (`convert::stream`) when every output is a
+    /// cube much coarser than it (the engines whose files all come from the specular base);
+    /// None: loaded whole.
+    fn streamed(&self, input_face: Option<usize>) -> Result<Option<convert::Loaded>> {
+        let cubes_only = matches!(
+            self.engine,
+            Engine::Bevy | Engine::Gltf | Engine::Babylon | Engine::Generic
+        );
+        let [input] = self.inputs.as_slice() else {
+            return Ok(None);
+        };
+        if !cubes_only || !matches!(self.from, None | Some(crate::layout::Kind::Equirect)) {
+            return Ok(None);
+        }
+        // The finest texel of the specular base: a face's corner, 2 sqrt(2) / 3 of its centre.
+        let size = self.specular_size(input_face) as f32;
+        let corner = 2.0 * std::f32::consts::SQRT_2 / 3.0 / size;
+        convert::stream::load(input, &self.read, corner)
+    }
+
     /// Refuses a `--gpu-format` the target has no file for, before any work.
     fn check_gpu_format(&self, format: GpuFormat) -> Result<()> {
         let flag = param("gpu_format");
@@ -192,7 +212,10 @@ impl Job for IblJob {
             ),
             self.plan_bytes(plan.face_size, plan.working_bytes()),
         )?;
-        let mut loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
+        let mut loaded = match self.streamed(plan.face_size)? {
+            Some(loaded) => loaded,
+            None => convert::load_planned(&self.inputs, self.from, &self.read)?,
+        };
         loaded.expose(self.options.encoding.exposure);
         progress.stage("decode");
         if let Some(w) = convert::skybox_note(&self.inputs) {

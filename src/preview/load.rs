@@ -50,7 +50,7 @@ pub fn load_environment(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> 
                 .and_then(|f| crate::chain::container_levels(path, f, opts.limits.session));
             (CubeSampler::new(c), levels)
         }
-        Source::Projection(..) => {
+        Source::Projection(..) | Source::Reduced(_) => {
             let size = loaded.face_size().max(1);
             let cube = convert::to_cube(&loaded, size, &Resampler::default());
             (CubeSampler::new(&cube), None)

@@ -80,7 +80,106 @@ pub(super) fn decode_blocks(
         .iter()
         .map(|(_, t)| t.bytes_per_sample() / 2)
         .collect();
-    let scratch = || Scratch {
+    let replaced = jobs
+        .into_par_iter()
+        .map_init(scratch(w), |s, (y, chunk, rows)| {
+            let block = Block {
+                meta,
+                slots,
+                alpha: *alpha,
+                words: &words,
+                line_bytes,
+                zstd,
+            };
+            block.decode(s, y, &chunk, rows, sanitize)
+        })
+        .try_reduce(|| 0, |a, b| Ok(a + b))?;
+    Ok((img, replaced))
+}
+
+/// The layer in bands of `lines` rows (a power of two no smaller than any block's lines),
+/// the bands `pick` keeps decoded in parallel, each into a thread's buffer (sanitized) and
+/// handed to `fold(first row, rows)`: how a panorama is reduced as it is decoded, the whole
+/// never held. The folds in band order (None where not picked) and the values replaced.
+pub(super) fn map_bands<T: Send>(
+    meta: &MetaData,
+    (slots, alpha): &Layout,
+    chunks: &[RawChunk],
+    zstd: bool,
+    lines: usize,
+    pick: &(dyn Fn(usize) -> bool + Sync),
+    fold: &(dyn Fn(usize, &[Vec4]) -> T + Sync),
+) -> std::result::Result<(Vec<Option<T>>, usize), String> {
+    let header = &meta.headers[0];
+    let (w, h) = (header.layer_size.0, header.layer_size.1);
+    let mut bands: Vec<Vec<&RawChunk>> = vec![Vec::new(); h.div_ceil(lines)];
+    for c in chunks {
+        let (y, n) = (c.bounds.position.1 as usize, c.bounds.size.1);
+        if n == 0 || y + n > h || y / lines != (y + n - 1) / lines {
+            return Err(format!("the block at line {y} crosses a band"));
+        }
+        bands[y / lines].push(c);
+    }
+    for (i, band) in bands.iter_mut().enumerate() {
+        band.sort_by_key(|c| c.bounds.position.1);
+        let mut next = i * lines;
+        for c in band.iter() {
+            if c.bounds.position.1 as usize != next {
+                return Err(format!(
+                    "scan lines {next} to {} are missing",
+                    c.bounds.position.1
+                ));
+            }
+            next += c.bounds.size.1;
+        }
+        if next != h.min((i + 1) * lines) {
+            return Err(format!(
+                "scan lines {next} to {} are missing",
+                h.min((i + 1) * lines)
+            ));
+        }
+    }
+    let line_bytes: usize = slots.iter().map(|(_, t)| t.bytes_per_sample() * w).sum();
+    let words: Vec<usize> = slots
+        .iter()
+        .map(|(_, t)| t.bytes_per_sample() / 2)
+        .collect();
+    let block = Block {
+        meta,
+        slots,
+        alpha: *alpha,
+        words: &words,
+        line_bytes,
+        zstd,
+    };
+    let each = |(s, buf): &mut (Scratch, Vec<Vec4>), (i, band): (usize, Vec<&RawChunk>)| {
+        if !pick(i) {
+            return Ok((None, 0));
+        }
+        let y0 = i * lines;
+        let n = h.min(y0 + lines) - y0;
+        buf.resize(n * w, Vec4::ZERO);
+        let mut replaced = 0;
+        for c in band {
+            let y = c.bounds.position.1 as usize;
+            let rows = &mut buf[(y - y0) * w..(y - y0 + c.bounds.size.1) * w];
+            replaced += block.decode(s, y, c, rows, true)?;
+        }
+        Ok((Some(fold(y0, &buf[..n * w])), replaced))
+    };
+    let make = scratch(w);
+    let done: Vec<(Option<T>, usize)> = bands
+        .into_par_iter()
+        .enumerate()
+        .map_init(|| (make(), Vec::new()), each)
+        .collect::<std::result::Result<_, String>>()?;
+    let replaced = done.iter().map(|d| d.1).sum();
+    Ok((done.into_iter().map(|d| d.0).collect(), replaced))
+}
+
+/// A thread's scratch for lines of `w` texels.
+fn scratch(w: usize) -> impl Fn() -> Scratch + Sync {
+    move || Scratch {
         inflate: libdeflater::Decompressor::new(),
         piz: Default::default(),
         zstd: None,
@@ -88,83 +187,112 @@ pub(super) fn decode_blocks(
         bytes: Vec::new(),
         floats: vec![0.0; w],
         halves: vec![f16::ZERO; w],
-    };
-    let replaced = jobs
-        .into_par_iter()
-        .map_init(scratch, |s, (y, chunk, rows)| {
-            let Scratch {
-                inflate,
-                piz,
-                zstd: inflate_zstd,
-                inner,
-                bytes,
-                floats,
-                halves,
-            } = s;
-            let expected = line_bytes * (rows.len() / w);
-            let owned;
-            let samples = match (header.compression, chunk.data) {
-                // A block that would not shrink is stored as it is, whatever the compression.
-                (_, data) if data.len() == expected => Samples::Plain(data),
-                (_, data) if zstd => {
-                    super::zstd::unpack(data, header, &chunk.bounds, inflate_zstd, inner, bytes)
-                        .map_err(|e| format!("{e} (block at line {y})"))?;
-                    Samples::Plain(&bytes[..])
-                }
-                (Compression::ZIP1 | Compression::ZIP16, data) => {
-                    bytes.resize(expected, 0);
-                    let n = inflate.zlib_decompress(data, &mut bytes[..expected]);
-                    if n != Ok(expected) {
-                        return Err(format!(
-                            "the ZIP block at line {y} is corrupt (zlib: {})",
-                            n.map_or_else(|e| e.to_string(), |n| format!("{n} bytes"))
-                        ));
-                    }
-                    undo_differences(&mut bytes[..expected]);
-                    Samples::Split(&bytes[..expected])
-                }
-                (Compression::RLE, data) => {
-                    bytes.resize(expected, 0);
-                    unpack_rle(data, &mut bytes[..expected])
-                        .map_err(|e| format!("the RLE block at line {y} {e}"))?;
-                    undo_differences(&mut bytes[..expected]);
-                    Samples::Split(&bytes[..expected])
-                }
-                (Compression::PIZ, data) => {
-                    super::piz::decompress(data, &words, w, rows.len() / w, piz, bytes)
-                        .map_err(|e| format!("{e} (block at line {y})"))?;
-                    Samples::Plain(&bytes[..])
-                }
-                (Compression::Uncompressed, data) => Samples::Plain(data),
-                _ => {
-                    let chunk = chunk.to_chunk();
-                    owned = guarded(|| UncompressedBlock::decompress_chunk(chunk, meta, false))?;
-                    Samples::Plain(&owned.data)
-                }
-            };
-            let data = match samples {
-                Samples::Plain(d) | Samples::Split(d) => d,
-            };
-            if data.len() != expected {
-                return Err(format!(
-                    "the block at line {y} decompresses to the wrong size"
-                ));
+    }
+}
+
+/// What decoding any block of the common layout needs to know.
+struct Block<'m> {
+    meta: &'m MetaData,
+    slots: &'m [(Option<usize>, SampleType)],
+    alpha: bool,
+    /// 16-bit words per sample of each channel, for PIZ.
+    words: &'m [usize],
+    line_bytes: usize,
+    zstd: bool,
+}
+
+impl Block<'_> {
+    /// Decompresses `chunk` (its first line `y`) and converts it into `rows`, sanitized with
+    /// `sanitize`: the count of values replaced.
+    fn decode(
+        &self,
+        s: &mut Scratch,
+        y: usize,
+        chunk: &RawChunk,
+        rows: &mut [Vec4],
+        sanitize: bool,
+    ) -> std::result::Result<usize, String> {
+        let Block {
+            meta,
+            slots,
+            alpha,
+            words,
+            line_bytes,
+            zstd,
+        } = *self;
+        let header = &meta.headers[0];
+        let w = header.layer_size.0;
+        let Scratch {
+            inflate,
+            piz,
+            zstd: inflate_zstd,
+            inner,
+            bytes,
+            floats,
+            halves,
+        } = s;
+        let expected = line_bytes * (rows.len() / w);
+        let owned;
+        let samples = match (header.compression, chunk.data) {
+            // A block that would not shrink is stored as it is, whatever the compression.
+            (_, data) if data.len() == expected => Samples::Plain(data),
+            (_, data) if zstd => {
+                super::zstd::unpack(data, header, &chunk.bounds, inflate_zstd, inner, bytes)
+                    .map_err(|e| format!("{e} (block at line {y})"))?;
+                Samples::Plain(&bytes[..])
             }
-            let mut count = 0;
-            for (line, row) in rows.chunks_exact_mut(w).enumerate() {
-                let start = line * line_bytes;
-                fill_row(samples, start, slots, *alpha, row, floats, halves);
-                if sanitize {
-                    count += row
-                        .iter_mut()
-                        .map(crate::image::sanitize_texel)
-                        .sum::<usize>();
+            (Compression::ZIP1 | Compression::ZIP16, data) => {
+                bytes.resize(expected, 0);
+                let n = inflate.zlib_decompress(data, &mut bytes[..expected]);
+                if n != Ok(expected) {
+                    return Err(format!(
+                        "the ZIP block at line {y} is corrupt (zlib: {})",
+                        n.map_or_else(|e| e.to_string(), |n| format!("{n} bytes"))
+                    ));
                 }
+                undo_differences(&mut bytes[..expected]);
+                Samples::Split(&bytes[..expected])
             }
-            Ok(count)
-        })
-        .try_reduce(|| 0, |a, b| Ok(a + b))?;
-    Ok((img, replaced))
+            (Compression::RLE, data) => {
+                bytes.resize(expected, 0);
+                unpack_rle(data, &mut bytes[..expected])
+                    .map_err(|e| format!("the RLE block at line {y} {e}"))?;
+                undo_differences(&mut bytes[..expected]);
+                Samples::Split(&bytes[..expected])
+            }
+            (Compression::PIZ, data) => {
+                super::piz::decompress(data, words, w, rows.len() / w, piz, bytes)
+                    .map_err(|e| format!("{e} (block at line {y})"))?;
+                Samples::Plain(&bytes[..])
+            }
+            (Compression::Uncompressed, data) => Samples::Plain(data),
+            _ => {
+                let chunk = chunk.to_chunk();
+                owned = guarded(|| UncompressedBlock::decompress_chunk(chunk, meta, false))?;
+                Samples::Plain(&owned.data)
+            }
+        };
+        let data = match samples {
+            Samples::Plain(d) | Samples::Split(d) => d,
+        };
+        if data.len() != expected {
+            return Err(format!(
+                "the block at line {y} decompresses to the wrong size"
+            ));
+        }
+        let mut count = 0;
+        for (line, row) in rows.chunks_exact_mut(w).enumerate() {
+            let start = line * line_bytes;
+            fill_row(samples, start, slots, alpha, row, floats, halves);
+            if sanitize {
+                count += row
+                    .iter_mut()
+                    .map(crate::image::sanitize_texel)
+                    .sum::<usize>();
+            }
+        }
+        Ok(count)
+    }
 }
 
 /// Converts the line starting at byte `start` of the stored form into texels: each R G B A

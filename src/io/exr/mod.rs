@@ -26,6 +26,7 @@ mod envmap;
 mod piz;
 mod planes;
 mod select;
+pub mod stream;
 mod zstd;
 use checks::{read_chunks, read_meta, RawChunk};
 pub(crate) use envmap::split_cube;
