@@ -21,6 +21,7 @@ use rayon::prelude::*;
 use std::f64::consts::PI;
 
 mod peaks;
+pub mod sun;
 pub use peaks::Peaks;
 pub(crate) use peaks::{PeakRow, RowStats};
 
