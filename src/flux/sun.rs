@@ -72,6 +72,8 @@ pub struct Lights {
     pub others: Vec<Light>,
     /// The sky's median luminance the threshold is taken from.
     pub sky: f64,
+    /// The luminance above which a texel belongs to a light ([`SUN_RATIO`] times `sky`).
+    pub threshold: f64,
 }
 
 fn luminance(c: [f64; 3]) -> f64 {
@@ -153,7 +155,89 @@ pub fn find(grid: Grid, images: &[&Image]) -> Lights {
         sun,
         others: lights,
         sky,
+        threshold,
     }
+}
+
+/// Most sky texels a filled texel is interpolated from (the nearest ones).
+const FILL_SAMPLES: usize = 4096;
+
+/// Takes `light` out of the map: its texels (above `threshold`, within [`REACH_DEG`] of it)
+/// are replaced by the sky around them, each the inverse-square-distance mean of the nearest
+/// texels that are not its (its glow and the sky), so the fill continues what surrounds it.
+/// Returns the light taken out per channel: the texels' radiance less their fill, times their
+/// solid angle (the map's flux drops by it over 4 pi).
+pub fn remove(grid: Grid, images: &mut [Image], light: &Light, threshold: f64) -> [f64; 3] {
+    let (w, h) = grid.dims();
+    let axis = light.direction.as_dvec3();
+    let reach = REACH_DEG.to_radians().cos();
+    let around = (2.0 * REACH_DEG).to_radians().cos();
+    // Each row's texels near the light, rows in parallel, in the grid's order.
+    enum Near {
+        Member(usize, usize, usize),
+        Sky(f64, DVec3, [f64; 3]),
+    }
+    let imgs: &[Image] = images;
+    let near: Vec<Near> = (0..grid.faces() * h)
+        .into_par_iter()
+        .flat_map_iter(|fy| {
+            let (face, y) = (fy / h, fy % h);
+            (0..w).filter_map(move |x| {
+                let d = grid.dir(face, x as f32 + 0.5, y as f32 + 0.5)?.as_dvec3();
+                let c = d.dot(axis);
+                if c < around || grid.solid_angle(x, y) <= 0.0 {
+                    return None;
+                }
+                let p = imgs[face].pixels[y * w + x];
+                let rgb = [p.x as f64, p.y as f64, p.z as f64];
+                Some(if c >= reach && luminance(rgb) > threshold {
+                    Near::Member(face, x, y)
+                } else {
+                    Near::Sky(1.0 - c, d, rgb)
+                })
+            })
+        })
+        .collect();
+    let mut members = Vec::new();
+    let mut sky: Vec<(f64, DVec3, [f64; 3])> = Vec::new();
+    for n in near {
+        match n {
+            Near::Member(face, x, y) => {
+                let d = grid
+                    .dir(face, x as f32 + 0.5, y as f32 + 0.5)
+                    .unwrap_or(Vec3::Z);
+                members.push((face, x, y, d.as_dvec3()));
+            }
+            Near::Sky(u, d, rgb) => sky.push((u, d, rgb)),
+        }
+    }
+    // The nearest sky texels to the light (ties in the grid's order: the sort is stable).
+    sky.sort_by(|a, b| a.0.total_cmp(&b.0));
+    sky.truncate(FILL_SAMPLES);
+    let mut taken = [0.0f64; 3];
+    for (face, x, y, d) in members {
+        let (mut sum, mut weight) = ([0.0f64; 3], 0.0f64);
+        for (_, s, rgb) in &sky {
+            // 1 - cos is half the squared chord: an inverse-square weight of the distance.
+            let wgt = 1.0 / (1.0 - d.dot(*s)).max(1e-12);
+            for k in 0..3 {
+                sum[k] += wgt * rgb[k];
+            }
+            weight += wgt;
+        }
+        let fill = if weight > 0.0 {
+            sum.map(|v| v / weight)
+        } else {
+            [0.0; 3]
+        };
+        let p = &mut images[face].pixels[y * w + x];
+        let omega = grid.solid_angle(x, y);
+        for k in 0..3 {
+            taken[k] += (p[k] as f64 - fill[k]) * omega;
+        }
+        *p = glam::Vec4::new(fill[0] as f32, fill[1] as f32, fill[2] as f32, p.w);
+    }
+    taken
 }
 
 /// The solid-angle-weighted median luminance, from a histogram of log2 luminance.
@@ -345,6 +429,36 @@ mod tests {
             "diameter {}",
             s.angular_diameter_deg
         );
+    }
+
+    /// Taking a known disc out: no texel left far above the sky, and the map's flux drops by
+    /// the sun's irradiance over 4 pi, within 0.5% of the flux.
+    #[test]
+    fn a_removed_sun_leaves_the_sky_and_its_light() {
+        let at = Vec3::new(-0.3, 0.6, 0.5).normalize();
+        let mut img = sky_with_sun(1024, at, 1.5, Vec3::new(25000.0, 22000.0, 18000.0));
+        let grid = Grid::Projection(Projection::Equirect, 1024, 512);
+        let before = super::super::mean_radiance(grid, &[&img]);
+        let lights = find(grid, &[&img]);
+        let s = lights.sun.expect("a sun");
+        let taken = remove(grid, std::slice::from_mut(&mut img), &s, lights.threshold);
+        let after = super::super::mean_radiance(grid, &[&img]);
+        let four_pi = 4.0 * std::f64::consts::PI;
+        for c in 0..3 {
+            let want = before[c] - s.irradiance[c] / four_pi;
+            assert!(
+                (after[c] / want - 1.0).abs() < 5e-3,
+                "channel {c}: {} vs {want}",
+                after[c]
+            );
+            assert!((after[c] - (before[c] - taken[c] / four_pi)).abs() < 1e-6 * before[c]);
+        }
+        let top = img
+            .pixels
+            .iter()
+            .map(|p| p.truncate().max_element())
+            .fold(0.0, f32::max);
+        assert!(top < 1.5, "the brightest texel left is {top}");
     }
 
     /// A sun on the panorama's seam is one light, at its place.

@@ -82,6 +82,20 @@ fn esplanade_has_a_sun_where_its_bright_texels_are() {
         s.texels
     );
     assert!(off < 1.0, "{off} degrees");
+    // Taken out, the sun leaves the map's flux less its irradiance over 4 pi.
+    let mut img = img;
+    let before = cubeforge::flux::mean_radiance(grid, &[&img]);
+    sun::remove(grid, std::slice::from_mut(&mut img), &s, lights.threshold);
+    let after = cubeforge::flux::mean_radiance(grid, &[&img]);
+    for c in 0..3 {
+        let want = before[c] - s.irradiance[c] / (4.0 * std::f64::consts::PI);
+        let moved = after[c] / want - 1.0;
+        println!(
+            "esplanade without its sun: channel {c} flux {:.5} against {want:.5}",
+            after[c]
+        );
+        assert!(moved.abs() < 5e-3, "channel {c}: {moved}");
+    }
     assert!(
         s.luminance() >= hi && s.luminance() <= lo,
         "{} not in {hi}..{lo}",
