@@ -47,6 +47,7 @@ mod real_images;
 mod rgbe;
 mod sh_bands;
 mod simd;
+mod surface;
 mod texel_truth;
 mod uastc;
 mod ultrahdr;
