@@ -10,13 +10,14 @@
 //! written as OpenEXR by the exr crate (full-float ZIP, half ZIP, full-float PIZ) for the
 //! decode stage and the EXR job.
 
-use cubeforge::convert::{self, Output, Source};
-use cubeforge::cube::FACE_NAMES;
-use cubeforge::image::Image;
-use cubeforge::io::{self, Decoded, ReadOptions, WriteOptions};
-use cubeforge::layout::{Kind, Projection};
-use cubeforge::resample::{FnEnv, Orientation, Resampler};
-use cubeforge::synthetic;
+use cubeforge::internals::convert::{self, Output, Source};
+use cubeforge::internals::cube::FACE_NAMES;
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, Decoded, ReadOptions, WriteOptions};
+use cubeforge::internals::layout::{Kind, Projection};
+use cubeforge::internals::output::{self, Destination, Files};
+use cubeforge::internals::resample::{FnEnv, Orientation, Resampler};
+use cubeforge::internals::synthetic;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -336,7 +337,8 @@ fn faces(input: &Path, name: &str, dir: &Path, ext: &str) {
             .collect();
         let t3 = Instant::now();
         std::fs::create_dir_all(&out).unwrap();
-        io::write_all_atomic(&files).unwrap();
+        // The one write path, as the command writes them.
+        output::deliver(&Files::new(files), &Destination::Path(out.clone()), &[]).unwrap();
         let t4 = Instant::now();
         let times = [t1 - t0, t2 - t1, t3 - t2, t4 - t3, t4 - t0].map(|d| d.as_secs_f64());
         for (b, t) in best.iter_mut().zip(times) {
@@ -374,7 +376,7 @@ fn others(input: &Path, dir: &Path) {
         ..Resampler::default()
     };
     let bicubic = Resampler {
-        interp: cubeforge::cube::Interp::Bicubic,
+        interp: cubeforge::internals::cube::Interp::Bicubic,
         ..Resampler::default()
     };
     let cases: [(&str, &convert::Loaded, Kind, usize, &Resampler); 7] = [

@@ -4,11 +4,11 @@
 //! each lossy format at level 0. Run with `cargo bench --bench gpu_encode` (add `--features astc`
 //! for ASTC HDR 4x4 and 6x6, `--features uastc` for those and UASTC HDR 4x4).
 
-use cubeforge::cube::CubeMap;
-use cubeforge::filter::{self, ChainOptions, FilterKind};
-use cubeforge::image::Image;
-use cubeforge::io::{self, ktx2, GpuFormat};
-use cubeforge::synthetic;
+use cubeforge::internals::cube::CubeMap;
+use cubeforge::internals::filter::{self, ChainOptions, FilterKind};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, ktx2, GpuFormat};
+use cubeforge::internals::synthetic;
 use std::time::Instant;
 
 fn main() {

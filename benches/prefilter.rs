@@ -6,14 +6,14 @@
 //! and the 128 BRDF lookup tables. Honours RAYON_NUM_THREADS (run it with 2 and 16).
 //! Run with `cargo bench --bench prefilter`.
 
-use cubeforge::convert::{self, Loaded};
-use cubeforge::cube::CubeMap;
-use cubeforge::filter::{self, brute, lobe, ChainOptions, FilterKind, LightingModel};
-use cubeforge::image::Image;
-use cubeforge::io::{self, Decoded, ReadOptions, WriteOptions};
-use cubeforge::layout::Projection;
-use cubeforge::resample::{FnEnv, Resampler};
-use cubeforge::synthetic;
+use cubeforge::internals::convert::{self, Loaded};
+use cubeforge::internals::cube::CubeMap;
+use cubeforge::internals::filter::{self, brute, lobe, ChainOptions, FilterKind, LightingModel};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, Decoded, ReadOptions, WriteOptions};
+use cubeforge::internals::layout::Projection;
+use cubeforge::internals::resample::{FnEnv, Resampler};
+use cubeforge::internals::synthetic;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -210,7 +210,7 @@ fn level0(base: &CubeMap, cosine: &ChainOptions) {
 
 /// The 128 lookup tables at the default sample count.
 fn lut() {
-    use cubeforge::lut::{self, LutOptions};
+    use cubeforge::internals::lut::{self, LutOptions};
     let opts = LutOptions::default();
     let (dfg, _) = best(|| lut::dfg(128, &opts));
     let (sheen, _) = best(|| lut::charlie(128, &opts));

@@ -3,10 +3,10 @@
 //! and the pbr gold for comparison.
 //! Run with `cargo bench --bench preview`. Target: under 0.5 s on 2 cores.
 
-use cubeforge::cube::{CubeMap, CubeSampler};
-use cubeforge::preview::pbr::{LevelMapping, SplitSum};
-use cubeforge::preview::{self, material, Options, Shading, Surface};
-use cubeforge::synthetic;
+use cubeforge::internals::cube::{CubeMap, CubeSampler};
+use cubeforge::internals::preview::pbr::{LevelMapping, SplitSum};
+use cubeforge::internals::preview::{self, material, Options, Shading, Surface};
+use cubeforge::internals::synthetic;
 use std::time::Instant;
 
 /// CPU seconds this process has used (user + system, all threads), from /proc (Linux).

@@ -6,8 +6,8 @@
 //! diffuse side, [`IblJob`] the files an engine loads, [`LutJob`] BRDF tables, [`ControlJob`]
 //! control maps, and [`PreviewJob`] a sphere lit by the map. Each [`Job`] checks its options
 //! ([`Job::validate`]), plans its memory from the inputs' headers ([`Job::memory_estimate`],
-//! refused over [`Limits::max_memory`] before anything is decoded), and writes through
-//! [`output::deliver`]: inputs are never overwritten, outputs land whole or not at all, and
+//! refused over [`Limits::max_memory`] before anything is decoded), and writes through one
+//! path (`output::deliver`): inputs are never overwritten, outputs land whole or not at all, and
 //! [`Destination::Stdout`] is standard output. [`Progress`] hears stages, progress and warnings
 //! while a job runs; `&()` hears nothing. A map is laid out as a [`Layout`] (a panorama, a
 //! ball, a cross, six faces, ...) or stored in a [`Container`] (KTX2, DDS, KTX, .env); a
@@ -70,71 +70,94 @@
 //! # }
 //! ```
 //!
-//! Below the jobs, [`convert`] loads any input as a direction-addressed environment and
-//! resamples it, [`cube`] holds cube maps and their sampler, [`image`] the one pixel type, and
-//! [`output`] encodes a result ([`output::Target`]) and writes it. The other modules are the
-//! jobs' plumbing, public for the command line and the tests but not documented as API.
+//! A [`Batch`] runs many jobs as one build step (grouped by input over one decode, skipped
+//! when up to date), and [`write_depfile`] names what one job read for Make or Ninja.
+//!
+//! The modules themselves are private: what a library user needs is re-exported here, and
+//! a test (`tests/it/surface.rs`) fails when this surface grows past 200 items. The command
+//! line, the tests and the benches reach the plumbing through `internals`, which is not API.
 //! ARCHITECTURE.md draws the layers.
 
 #![warn(missing_docs)]
 
+// Plumbing modules, documented for the crate's readers, not as API: `missing_docs` is
+// held for the modules the facade draws on most (batch, convert, cube, error, image, jobs,
+// output) as before they were made private.
 mod alloc;
-pub mod batch;
-#[doc(hidden)]
-pub mod chain;
-#[doc(hidden)]
-pub mod control;
-pub mod convert;
-pub mod cube;
-pub mod error;
-#[doc(hidden)]
-pub mod filter;
-#[doc(hidden)]
-pub mod flux;
-#[doc(hidden)]
-pub mod ibl;
-pub mod image;
-#[doc(hidden)]
-pub mod info;
-#[doc(hidden)]
-pub mod io;
-pub mod jobs;
-#[doc(hidden)]
-pub mod layout;
-#[doc(hidden)]
-pub mod lut;
-pub mod output;
-#[doc(hidden)]
-pub mod preview;
+mod batch;
+#[allow(missing_docs)]
+mod chain;
+#[allow(missing_docs)]
+mod control;
+mod convert;
+mod cube;
+mod error;
+#[allow(missing_docs)]
+mod filter;
+#[allow(missing_docs)]
+mod flux;
+#[allow(missing_docs)]
+mod ibl;
+mod image;
+#[allow(missing_docs)]
+mod info;
+#[allow(missing_docs)]
+mod io;
+mod jobs;
+#[allow(missing_docs)]
+mod layout;
+#[allow(missing_docs)]
+mod lut;
+mod output;
+#[allow(missing_docs)]
+mod preview;
 mod progress;
-#[doc(hidden)]
-pub mod resample;
+#[allow(missing_docs)]
+mod resample;
 mod simd;
-#[doc(hidden)]
-pub mod synthetic;
-#[doc(hidden)]
-pub mod tonemap;
-#[doc(hidden)]
-pub mod view;
+#[allow(missing_docs)]
+mod synthetic;
+#[allow(missing_docs)]
+mod tonemap;
+#[allow(missing_docs)]
+mod view;
 
+pub use batch::{Batch, BatchJob, BatchReport, Done, Outcome, Shard, Why};
 pub use control::Size;
-pub use cube::{CubeMap, Interp};
+pub use cube::{CubeMap, EdgeFixup, Interp};
 pub use error::{Error, LimitKind, Result};
-pub use filter::{ChainOptions, FilterKind, IrradianceMethod, LightingModel};
+pub use filter::sh_bands::ShWindow;
+pub use filter::{ChainOptions, FilterKind, IrradianceMethod, LightingModel, RoughnessMapping};
 pub use ibl::{Engine, IblOptions};
 pub use image::Image;
 pub use io::{
-    Container, ExrFloat, FileFormat, GpuFormat, Limits, MapKind, ReadOptions, Session, SessionGuard,
+    Container, ExrFloat, FileFormat, GpuFormat, HdrEncoding, Limits, MapKind, ReadOptions, Session,
+    SessionGuard,
 };
 pub use jobs::{
     ControlJob, ConvertJob, IblJob, IrradianceJob, Job, LutJob, LutKind, PrefilterJob, PreviewJob,
     Progress, Quality, Report, ViewJob, Warning,
 };
 pub use layout::Kind as Layout;
+pub use output::depfile::write as write_depfile;
 pub use output::{Destination, Encoding};
-pub use preview::{Background, Options as View, Parallax, ParallaxMode, Shading};
+pub use preview::{Background, Options as View, Parallax, ParallaxMode, Refraction, Shading};
 pub use resample::{Orientation, Resampler};
 pub use tonemap::Tonemap;
+
+/// The plumbing below the facade, each module whole, for the command line (a crate of its
+/// own), the tests and the benches. Not API: nothing here is promised to stay.
+#[doc(hidden)]
+#[allow(missing_docs)]
+pub mod internals {
+    macro_rules! whole {
+        ($($m:ident),*) => { $(pub mod $m { pub use crate::$m::*; })* };
+    }
+    whole!(
+        batch, chain, control, convert, cube, error, filter, flux, ibl, image, info, io, jobs,
+        layout, lut, output, preview, resample, synthetic, tonemap, view
+    );
+}
 
 /// The README's Rust example, compiled and run with the doctests.
 #[cfg(doctest)]

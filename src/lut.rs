@@ -89,13 +89,6 @@ pub fn dfg_at(n_dot_v: f64, roughness: f64, samples: u32) -> (f64, f64) {
     dfg_sum(n_dot_v, hs.alpha, &hs)
 }
 
-/// The Charlie sheen albedo at one point, with `samples` Hammersley samples.
-pub fn charlie_at(n_dot_v: f64, roughness: f64, samples: u32) -> f64 {
-    let mut hs = HalfVectors::default();
-    charlie_half_vectors(roughness, reset(&mut hs, samples));
-    charlie_sum(n_dot_v, &hs)
-}
-
 /// Importance-sampled half vectors of one roughness (one table row): the sampling depends on
 /// roughness only, so each row computes them once and every n.v reuses them.
 #[derive(Default)]

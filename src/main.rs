@@ -16,7 +16,7 @@ fn main() {
             .location()
             .map(|l| format!(" ({}:{})", l.file(), l.line()))
             .unwrap_or_default();
-        let msg = cubeforge::error::escape_text(&msg).into_owned();
+        let msg = cubeforge::internals::error::escape_text(&msg).into_owned();
         cli::tell(format_args!("cubeforge: error: internal error: {msg}{at}"));
     }));
     std::process::exit(cli::run());

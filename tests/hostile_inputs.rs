@@ -1,7 +1,7 @@
 //! Hostile files at every front door: seeded mutations (bit flips, overwritten bytes, header
 //! fields set to extreme values, numbers in text made huge, spans cut, repeated or inserted,
 //! truncation) of small valid files that cubeforge's own encoders make here, and of the real
-//! fixtures (../shared/fixtures/real, skipped when absent), read through `cubeforge::io::read`
+//! fixtures (../shared/fixtures/real, skipped when absent), read through `cubeforge::internals::io::read`
 //! with a small budget. Each must read or fail with a one-line error naming the file: never a
 //! panic, an abort, or an allocation beyond the budget. The text front doors (control recipes,
 //! material files, a control map's sidecar, a DDS chain's levels.json) get the same.

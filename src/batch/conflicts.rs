@@ -6,9 +6,10 @@
 //! file is none of these. With depfiles, each `OUTPUT.d` is an output too. Paths are
 //! compared as places ([`crate::io::atomic::Place`]) in hash maps: 10,000 jobs cost no pairs.
 
-use super::{depfile, BatchJob};
+use super::BatchJob;
 use crate::error::{Error, Result};
 use crate::io::atomic::{Place, Places, Resolver};
+use crate::output::depfile;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 

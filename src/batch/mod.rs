@@ -8,8 +8,7 @@
 //! them itself:
 //!
 //! ```
-//! use cubeforge::batch::{Batch, BatchJob, Outcome};
-//! use cubeforge::{Destination, PrefilterJob};
+//! use cubeforge::{Batch, BatchJob, Destination, Outcome, PrefilterJob};
 //! use std::path::PathBuf;
 //!
 //! # fn main() -> cubeforge::Result<()> {
@@ -42,7 +41,6 @@
 //! ```
 
 mod conflicts;
-pub mod depfile;
 mod state;
 
 pub use state::Why;

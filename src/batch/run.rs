@@ -2,9 +2,10 @@
 //! of one input in turn over its one decode, and the state file brought up to date.
 
 use super::state::{self, Hashes, Record, State, Why};
-use super::{conflicts, depfile, save, share, Batch, BatchJob, BatchReport, Done, Outcome};
+use super::{conflicts, save, share, Batch, BatchJob, BatchReport, Done, Outcome};
 use crate::error::{Error, Result};
 use crate::io::Session;
+use crate::output::depfile;
 use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
 use std::sync::{Condvar, Mutex};
@@ -39,17 +40,7 @@ fn groups(jobs: &[BatchJob]) -> Vec<Group> {
 
 pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<BatchReport> {
     conflicts::check(&batch.jobs, batch.depfiles, batch.state.as_deref())?;
-    if let Some(p) = &batch.state {
-        // A FIFO would block the read (and a rename would replace it): refused, before any job.
-        if let Some(kind) = crate::io::atomic::special_kind(p) {
-            return Err(Error::file(
-                p,
-                format!(
-                    "is {kind}, not a regular file: the batch's state file must be one (or absent)"
-                ),
-            ));
-        }
-    }
+    refuse_special_state(&batch)?;
     let mut report = BatchReport::default();
     let (mut state, warning) = match &batch.state {
         Some(p) => State::load(p),
@@ -58,112 +49,299 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
     report
         .warnings
         .extend(warning.map(crate::jobs::Warning::new));
-    let mine: Vec<Group> = groups(&batch.jobs)
+    let mine = shard_groups(&batch, &mut report.other_shards);
+    let hashes = Hashes::default();
+    let whys = reasons(&batch, &mine, &state, &hashes);
+    // The state the batch keeps: jobs gone from the batch dropped, each finished job's record
+    // put in as it ends, and the file rewritten as it goes (see SAVE_EVERY) and at the end.
+    let ids: Vec<String> = batch.jobs.iter().map(|j| j.id.clone()).collect();
+    let known: HashSet<&String> = ids.iter().collect();
+    state.jobs.retain(|id, _| known.contains(id));
+    let run = Running {
+        slots: ids.iter().map(|_| Mutex::new(None)).collect(),
+        outputs: batch.jobs.iter().map(|j| j.output.clone()).collect(),
+        ids,
+        whys,
+        on_done,
+        hashes,
+        depfiles: batch.depfiles,
+        keep: batch.state.clone().filter(|_| !batch.dry_run),
+        live: Mutex::new(Live {
+            state,
+            dirty: false,
+            running: true,
+        }),
+        wake: Condvar::new(),
+        jobs: Vec::new(),
+    };
+    let todo: Vec<Group> = mine
+        .iter()
+        .map(|g| run.settle(g, batch.dry_run))
+        .filter(|g| !g.is_empty())
+        .collect();
+    let run = Running {
+        jobs: batch
+            .jobs
+            .into_iter()
+            .map(|j| Mutex::new(Some(j)))
+            .collect(),
+        ..run
+    };
+    run.all(&todo, batch.max_memory);
+    report.jobs = run
+        .slots
+        .into_iter()
+        .filter_map(|s| s.into_inner().unwrap_or_else(|e| e.into_inner()))
+        .collect();
+    if let Some(path) = &run.keep {
+        let live = run.live.into_inner().unwrap_or_else(|e| e.into_inner());
+        save(path, &live.state)?;
+    }
+    Ok(report)
+}
+
+/// A state file that is a FIFO or a device: refused before any job (a FIFO would block the
+/// read, and a rename would replace it).
+fn refuse_special_state(batch: &Batch) -> Result<()> {
+    let Some(p) = &batch.state else {
+        return Ok(());
+    };
+    match crate::io::atomic::special_kind(p) {
+        Some(kind) => Err(Error::file(
+            p,
+            format!(
+                "is {kind}, not a regular file: the batch's state file must be one (or absent)"
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// This shard's groups (all of them without a shard); the jobs of the others are counted in
+/// `others`.
+fn shard_groups(batch: &Batch, others: &mut usize) -> Vec<Group> {
+    groups(&batch.jobs)
         .into_iter()
         .enumerate()
         .filter(|(g, jobs)| {
             let keep = batch.shard.is_none_or(|s| g % s.count == s.index);
             if !keep {
-                report.other_shards += jobs.len();
+                *others += jobs.len();
             }
             keep
         })
         .map(|(_, jobs)| jobs)
-        .collect();
-    let hashes = Hashes::default();
-    // For each job of this shard: why it runs (None: up to date).
-    let mut whys: Vec<Option<Option<Why>>> = vec![None; batch.jobs.len()];
+        .collect()
+}
+
+/// For each job of this shard: why it runs (`Some(None)`: up to date; `None`: another
+/// shard's).
+fn reasons(
+    batch: &Batch,
+    mine: &[Group],
+    state: &State,
+    hashes: &Hashes,
+) -> Vec<Option<Option<Why>>> {
+    let mut whys = vec![None; batch.jobs.len()];
     for &i in mine.iter().flatten() {
+        let id = &batch.jobs[i].id;
         whys[i] = Some(if batch.force {
             Some(Why::Forced)
         } else if batch.state.is_none() {
             Some(Why::NeverRan)
         } else {
-            state::why(
-                &batch.jobs[i].id,
-                state.jobs.get(&batch.jobs[i].id),
-                &hashes,
-            )
+            state::why(id, state.jobs.get(id), hashes)
         });
     }
-    let ids: Vec<String> = batch.jobs.iter().map(|j| j.id.clone()).collect();
-    let outputs: Vec<PathBuf> = batch.jobs.iter().map(|j| j.output.clone()).collect();
-    let slots: Vec<Mutex<Option<Done>>> = ids.iter().map(|_| Mutex::new(None)).collect();
-    let finish = |i: usize, outcome: Outcome, seconds: f64| {
+    whys
+}
+
+/// What the workers share while the batch runs: each job's id, output, reason, end and the
+/// job itself (taken by the worker that runs it), and the state being kept.
+struct Running<'a> {
+    ids: Vec<String>,
+    outputs: Vec<PathBuf>,
+    whys: Vec<Option<Option<Why>>>,
+    slots: Vec<Mutex<Option<Done>>>,
+    on_done: &'a (dyn Fn(&Done) + Sync),
+    hashes: Hashes,
+    depfiles: bool,
+    /// The state file, unless there is none or this is a dry run.
+    keep: Option<PathBuf>,
+    live: Mutex<Live>,
+    /// Wakes the saver when the workers are done.
+    wake: Condvar,
+    jobs: Vec<Mutex<Option<BatchJob>>>,
+}
+
+impl Running<'_> {
+    /// Job `i` ended: `on_done` hears it, and its slot keeps it for the report.
+    fn finish(&self, i: usize, outcome: Outcome, seconds: f64) {
         let done = Done {
-            id: ids[i].clone(),
+            id: self.ids[i].clone(),
             outcome,
             seconds,
         };
-        on_done(&done);
-        *slots[i].lock().unwrap_or_else(|e| e.into_inner()) = Some(done);
-    };
-    // Up-to-date jobs (and a dry run's every job) end at once.
-    let mut todo: Vec<Group> = Vec::new();
-    for g in &mine {
-        let run: Group = g
+        (self.on_done)(&done);
+        *self.slots[i].lock().unwrap_or_else(|e| e.into_inner()) = Some(done);
+    }
+
+    /// Ends a group's up-to-date jobs (and a dry run's every job) at once; returns those to
+    /// run.
+    fn settle(&self, group: &[usize], dry_run: bool) -> Group {
+        let up_to_date = |i: usize| {
+            // An up-to-date job's depfile, when asked for and missing: from its record.
+            let d = depfile::beside(&self.outputs[i]);
+            let live = self.live.lock().unwrap_or_else(|e| e.into_inner());
+            match live.state.jobs.get(&self.ids[i]) {
+                Some(r) if self.depfiles && !dry_run && !d.exists() => {
+                    let reads: Vec<PathBuf> = r.reads.iter().map(|(p, _)| p.clone()).collect();
+                    depfile::write(&d, &self.outputs[i], &reads, &r.outputs)
+                }
+                _ => Ok(()),
+            }
+        };
+        group
             .iter()
             .copied()
-            .filter(|&i| match whys[i].clone().flatten() {
+            .filter(|&i| match self.whys[i].clone().flatten() {
                 None => {
-                    // An up-to-date job's depfile, when asked for and missing: from its record.
-                    let d = depfile::beside(&outputs[i]);
-                    let written = match state.jobs.get(&ids[i]) {
-                        Some(r) if batch.depfiles && !batch.dry_run && !d.exists() => {
-                            let reads: Vec<PathBuf> =
-                                r.reads.iter().map(|(p, _)| p.clone()).collect();
-                            depfile::write(&d, &outputs[i], &reads, &r.outputs)
-                        }
-                        _ => Ok(()),
-                    };
-                    match written {
-                        Ok(()) => finish(i, Outcome::UpToDate, 0.0),
-                        Err(e) => finish(i, Outcome::Failed(e), 0.0),
+                    match up_to_date(i) {
+                        Ok(()) => self.finish(i, Outcome::UpToDate, 0.0),
+                        Err(e) => self.finish(i, Outcome::Failed(e), 0.0),
                     }
                     false
                 }
-                Some(w) if batch.dry_run => {
-                    finish(i, Outcome::WouldRun(w), 0.0);
+                Some(w) if dry_run => {
+                    self.finish(i, Outcome::WouldRun(w), 0.0);
                     false
                 }
                 Some(_) => true,
             })
-            .collect();
-        if !run.is_empty() {
-            todo.push(run);
+            .collect()
+    }
+
+    /// Runs every group of `todo`: worker threads (one per thread of the pool) take groups
+    /// in order while their memory plans fit `budget`, and a saver keeps the state file.
+    fn all(&self, todo: &[Group], budget: u64) {
+        let queue = Queue {
+            bytes: self.peaks(todo),
+            at: Mutex::new((0, 0)),
+            freed: Condvar::new(),
+            budget,
+        };
+        let workers = rayon::current_num_threads().clamp(1, todo.len().max(1));
+        std::thread::scope(|scope| {
+            scope.spawn(|| self.save_while_running());
+            let handles: Vec<_> = (0..workers)
+                .map(|_| {
+                    scope.spawn(|| {
+                        while let Some((g, held)) = queue.take() {
+                            self.group(&todo[g]);
+                            queue.give_back(held);
+                        }
+                    })
+                })
+                .collect();
+            // Join the workers, stop the saver, then pass on a worker's panic, if any.
+            let ended: Vec<_> = handles.into_iter().map(|h| h.join()).collect();
+            self.live.lock().unwrap_or_else(|e| e.into_inner()).running = false;
+            self.wake.notify_all();
+            if let Some(e) = ended.into_iter().find_map(|r| r.err()) {
+                std::panic::resume_unwind(e);
+            }
+        });
+    }
+
+    /// Each group's peak: its largest job, and the decode the group keeps beside it.
+    fn peaks(&self, todo: &[Group]) -> Vec<u64> {
+        todo.iter()
+            .map(|g| {
+                let most = g
+                    .iter()
+                    .filter_map(|&i| {
+                        let j = self.jobs[i].lock().unwrap_or_else(|e| e.into_inner());
+                        j.as_ref()?.job.memory_estimate().ok()
+                    })
+                    .max()
+                    .unwrap_or(0);
+                if g.len() > 1 {
+                    most.saturating_mul(2)
+                } else {
+                    most
+                }
+            })
+            .collect()
+    }
+
+    /// The jobs of one input, one after another in one session (shared when there are
+    /// several, so the input is decoded once).
+    fn group(&self, group: &[usize]) {
+        let guard = if group.len() > 1 {
+            Session::open_shared()
+        } else {
+            Session::open()
+        };
+        for &i in group {
+            let Some(mut bj) = self.jobs[i]
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .take()
+            else {
+                continue;
+            };
+            share(bj.job.as_mut(), guard.session());
+            let start = Instant::now();
+            let ran = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bj.job.run(&())))
+                .unwrap_or_else(|_| Err(Error::usage("the job stopped on an internal error")));
+            let reads = guard.session().take_reads();
+            let ran = ran.and_then(|report| {
+                for p in &report.written {
+                    self.hashes.forget(p);
+                }
+                if self.depfiles {
+                    let d = depfile::beside(&self.outputs[i]);
+                    depfile::write(&d, &self.outputs[i], &reads, &report.written)?;
+                }
+                Ok(report)
+            });
+            let (outcome, record) = match ran {
+                Ok(report) => {
+                    let r =
+                        state::record(&self.ids[i], reads, report.written.clone(), &self.hashes);
+                    let why = self.whys[i].clone().flatten().unwrap_or(Why::NeverRan);
+                    (Outcome::Ran(why, report), r)
+                }
+                Err(e) => (Outcome::Failed(e), None),
+            };
+            self.keep_record(&self.ids[i], record);
+            self.finish(i, outcome, start.elapsed().as_secs_f64());
         }
     }
-    // The state the batch keeps: jobs gone from the batch dropped, each finished job's record
-    // put in as it ends, and the file rewritten as it goes (see SAVE_EVERY) and at the end.
-    let keep = batch.state.clone().filter(|_| !batch.dry_run);
-    let known: HashSet<&String> = ids.iter().collect();
-    state.jobs.retain(|id, _| known.contains(id));
-    let live = Mutex::new(Live {
-        state,
-        dirty: false,
-        running: true,
-    });
-    let wake = Condvar::new();
-    let keep_record = |id: &str, record: Option<Record>| {
-        if keep.is_none() {
+
+    /// A finished job's record (None: it failed, and its old record goes) into the state kept.
+    fn keep_record(&self, id: &str, record: Option<Record>) {
+        if self.keep.is_none() {
             return;
         }
-        let mut live = live.lock().unwrap_or_else(|e| e.into_inner());
+        let mut live = self.live.lock().unwrap_or_else(|e| e.into_inner());
         match record {
             Some(r) => live.state.jobs.insert(id.to_string(), r),
             None => live.state.jobs.remove(id),
         };
         live.dirty = true;
-    };
-    // Writes the state file when a job has ended since it last did, every SAVE_EVERY, until
-    // the workers are done. A failure here is reported by the save at the end.
-    let saver = || {
-        let Some(path) = &keep else {
+    }
+
+    /// Writes the state file when a job has ended since it last did, every SAVE_EVERY, until
+    /// the workers are done. A failure here is reported by the save at the end.
+    fn save_while_running(&self) {
+        let Some(path) = &self.keep else {
             return;
         };
-        let mut l = live.lock().unwrap_or_else(|e| e.into_inner());
+        let mut l = self.live.lock().unwrap_or_else(|e| e.into_inner());
         while l.running {
-            l = wake
+            l = self
+                .wake
                 .wait_timeout(l, SAVE_EVERY)
                 .unwrap_or_else(|e| e.into_inner())
                 .0;
@@ -172,122 +350,44 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
                 l.dirty = false;
             }
         }
-    };
-    let depfiles = batch.depfiles;
-    let jobs: Vec<Mutex<Option<BatchJob>>> = batch
-        .jobs
-        .into_iter()
-        .map(|j| Mutex::new(Some(j)))
-        .collect();
-    // Each group's peak: its largest job, and the decode the group keeps beside it.
-    let bytes: Vec<u64> = todo
-        .iter()
-        .map(|g| {
-            let most = g
-                .iter()
-                .filter_map(|&i| {
-                    let j = jobs[i].lock().unwrap_or_else(|e| e.into_inner());
-                    j.as_ref()?.job.memory_estimate().ok()
-                })
-                .max()
-                .unwrap_or(0);
-            if g.len() > 1 {
-                most.saturating_mul(2)
-            } else {
-                most
-            }
-        })
-        .collect();
-    let queue = Mutex::new((0usize, 0u64));
-    let freed = Condvar::new();
-    let workers = rayon::current_num_threads().clamp(1, todo.len().max(1));
-    std::thread::scope(|scope| {
-        scope.spawn(saver);
-        let handles: Vec<_> = (0..workers)
-            .map(|_| {
-                scope.spawn(|| loop {
-                    let (g, held) = {
-                        let mut q = queue.lock().unwrap_or_else(|e| e.into_inner());
-                        loop {
-                            if q.0 >= todo.len() {
-                                return;
-                            }
-                            let b = bytes[q.0];
-                            if q.1 == 0 || q.1.saturating_add(b) <= batch.max_memory {
-                                q.0 += 1;
-                                q.1 = q.1.saturating_add(b);
-                                break (q.0 - 1, b);
-                            }
-                            q = freed.wait(q).unwrap_or_else(|e| e.into_inner());
-                        }
-                    };
-                    let guard = if todo[g].len() > 1 {
-                        Session::open_shared()
-                    } else {
-                        Session::open()
-                    };
-                    for &i in &todo[g] {
-                        let Some(mut bj) = jobs[i].lock().unwrap_or_else(|e| e.into_inner()).take()
-                        else {
-                            continue;
-                        };
-                        share(bj.job.as_mut(), guard.session());
-                        let start = Instant::now();
-                        let ran = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                            bj.job.run(&())
-                        }))
-                        .unwrap_or_else(|_| {
-                            Err(Error::usage("the job stopped on an internal error"))
-                        });
-                        let reads = guard.session().take_reads();
-                        let ran = ran.and_then(|report| {
-                            for p in &report.written {
-                                hashes.forget(p);
-                            }
-                            if depfiles {
-                                let d = depfile::beside(&outputs[i]);
-                                depfile::write(&d, &outputs[i], &reads, &report.written)?;
-                            }
-                            Ok(report)
-                        });
-                        let (outcome, record) = match ran {
-                            Ok(report) => {
-                                let r =
-                                    state::record(&ids[i], reads, report.written.clone(), &hashes);
-                                let why = whys[i].clone().flatten().unwrap_or(Why::NeverRan);
-                                (Outcome::Ran(why, report), r)
-                            }
-                            Err(e) => (Outcome::Failed(e), None),
-                        };
-                        keep_record(&ids[i], record);
-                        finish(i, outcome, start.elapsed().as_secs_f64());
-                    }
-                    drop(guard);
-                    let mut q = queue.lock().unwrap_or_else(|e| e.into_inner());
-                    q.1 = q.1.saturating_sub(held);
-                    freed.notify_all();
-                })
-            })
-            .collect();
-        // Join the workers, stop the saver, then pass on a worker's panic, if any.
-        let ended: Vec<_> = handles.into_iter().map(|h| h.join()).collect();
-        live.lock().unwrap_or_else(|e| e.into_inner()).running = false;
-        wake.notify_all();
-        if let Some(e) = ended.into_iter().find_map(|r| r.err()) {
-            std::panic::resume_unwind(e);
-        }
-    });
-    report.jobs = slots
-        .into_iter()
-        .filter_map(|s| s.into_inner().unwrap_or_else(|e| e.into_inner()))
-        .collect();
-    if let Some(path) = &keep {
-        save(
-            path,
-            &live.into_inner().unwrap_or_else(|e| e.into_inner()).state,
-        )?;
     }
-    Ok(report)
+}
+
+/// The groups to run in order, each with its memory peak, and the bytes the running ones
+/// hold within the budget.
+struct Queue {
+    bytes: Vec<u64>,
+    /// The next group, and the bytes held.
+    at: Mutex<(usize, u64)>,
+    freed: Condvar,
+    budget: u64,
+}
+
+impl Queue {
+    /// The next group and its bytes, once they fit beside those held (a group alone always
+    /// does); None when every group is taken.
+    fn take(&self) -> Option<(usize, u64)> {
+        let mut q = self.at.lock().unwrap_or_else(|e| e.into_inner());
+        loop {
+            if q.0 >= self.bytes.len() {
+                return None;
+            }
+            let b = self.bytes[q.0];
+            if q.1 == 0 || q.1.saturating_add(b) <= self.budget {
+                q.0 += 1;
+                q.1 = q.1.saturating_add(b);
+                return Some((q.0 - 1, b));
+            }
+            q = self.freed.wait(q).unwrap_or_else(|e| e.into_inner());
+        }
+    }
+
+    /// A group ended: its bytes are free for the next.
+    fn give_back(&self, held: u64) {
+        let mut q = self.at.lock().unwrap_or_else(|e| e.into_inner());
+        q.1 = q.1.saturating_sub(held);
+        self.freed.notify_all();
+    }
 }
 
 /// The state while jobs run: whether it changed since the file was last written, and whether

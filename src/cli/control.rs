@@ -1,8 +1,8 @@
 //! `cubeforge control`: bake a control map (reflectivity, transmittance, blur, Fresnel mask)
 //! from a recipe.
 
-use cubeforge::control::Size;
-use cubeforge::io::GpuFormat;
+use cubeforge::internals::control::Size;
+use cubeforge::internals::io::GpuFormat;
 use cubeforge::{ControlJob, Result};
 use std::path::PathBuf;
 

@@ -1,9 +1,9 @@
 //! `cubeforge convert`: any layout to any other.
 
-use cubeforge::cube::Interp;
-use cubeforge::io::{FileFormat, GpuFormat, MapKind};
-use cubeforge::output;
-use cubeforge::resample::{Orientation, Resampler};
+use cubeforge::internals::cube::Interp;
+use cubeforge::internals::io::{FileFormat, GpuFormat, MapKind};
+use cubeforge::internals::output;
+use cubeforge::internals::resample::{Orientation, Resampler};
 use cubeforge::{ConvertJob, Destination, Encoding, Result};
 use std::path::PathBuf;
 

@@ -1,10 +1,11 @@
 //! Writes the project's own fixtures: the demo sky the README's set-up and examples read, and
 //! a two-part OpenEXR file of it (as renderers write their passes) for `--part`.
 
-use cubeforge::io::{self, WriteOptions};
-use cubeforge::layout::Projection;
-use cubeforge::resample::{FnEnv, Resampler};
-use cubeforge::{synthetic, Result};
+use cubeforge::internals::io::{self, WriteOptions};
+use cubeforge::internals::layout::Projection;
+use cubeforge::internals::resample::{FnEnv, Resampler};
+use cubeforge::internals::synthetic;
+use cubeforge::Result;
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -20,7 +21,6 @@ pub fn run(args: Args) -> Result<()> {
     // Antialiased by supersampling the function itself: 4 x 4 exact samples per pixel.
     let big = Resampler::default().to_projection(&env, Projection::Equirect, 2048, 1024);
     let img = big.downsample_2x().downsample_2x();
-    std::fs::create_dir_all(&args.dir).map_err(|e| cubeforge::Error::io(&args.dir, e))?;
     let mut files = Vec::new();
     for name in ["sky.exr", "sky.png"] {
         let path = args.dir.join(name);
@@ -29,12 +29,13 @@ pub fn run(args: Args) -> Result<()> {
     }
     let small = img.downsample_2x();
     files.push((args.dir.join("passes.exr"), passes(&small)?));
+    // The folder, when missing, is made by the write path with the files, whole.
     super::write_files(&files)
 }
 
 /// `img` as a two-part OpenEXR file: part "sky", and part "dim" at a quarter of it (half
 /// floats, ZIP), through the exr crate.
-fn passes(img: &cubeforge::image::Image) -> Result<Vec<u8>> {
+fn passes(img: &cubeforge::internals::image::Image) -> Result<Vec<u8>> {
     use exr::prelude::*;
     let part = |name: &str, scale: f32| {
         let plane = |c: usize| {

@@ -1,7 +1,7 @@
 //! `cubeforge ibl`: the files an engine loads for image-based lighting, in one command.
 
-use cubeforge::ibl::{Engine, IblOptions};
-use cubeforge::io::GpuFormat;
+use cubeforge::internals::ibl::{Engine, IblOptions};
+use cubeforge::internals::io::GpuFormat;
 use cubeforge::{IblJob, Result};
 use std::path::PathBuf;
 

@@ -1,7 +1,8 @@
 //! `cubeforge info`: describe files and folders.
 
-use cubeforge::io::ReadOptions;
-use cubeforge::{info, Error, Result};
+use cubeforge::internals::info;
+use cubeforge::internals::io::ReadOptions;
+use cubeforge::{Error, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -14,7 +15,7 @@ pub struct Args {
     /// Layout of single images: settles a square image (sphere, angular or octahedral) and
     /// overrides what the aspect ratio says.
     #[arg(long, value_enum)]
-    pub from: Option<cubeforge::layout::Kind>,
+    pub from: Option<cubeforge::internals::layout::Kind>,
     /// Print JSON: one object for one file, an array for several.
     #[arg(long)]
     pub json: bool,
@@ -53,7 +54,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut failed = 0;
     for f in &args.files {
         // An `ibl` output folder: what its specular file holds (as `view` and `preview` read).
-        let shown = cubeforge::ibl::specular_of(f).map(|(file, _)| file);
+        let shown = cubeforge::internals::ibl::specular_of(f).map(|(file, _)| file);
         match info::describe(shown.as_ref().unwrap_or(f), args.from, &opts) {
             Ok(r) => reports.push(r),
             // One file: its error is the one line (no summary after it).
@@ -61,7 +62,7 @@ pub fn run(args: Args) -> Result<()> {
             Err(e) => {
                 // One line, even for a name that holds a line break.
                 let text = e.with_flags();
-                let e = cubeforge::error::escape_text(&text);
+                let e = cubeforge::internals::error::escape_text(&text);
                 super::tell(format_args!("cubeforge: error: {e}"));
                 failed += 1;
             }

@@ -1,9 +1,9 @@
 //! `cubeforge irradiance`: the diffuse side: an irradiance cube map and SH coefficients.
 
-use cubeforge::filter::sh_bands::ShWindow;
-use cubeforge::filter::IrradianceMethod;
-use cubeforge::io::{FileFormat, GpuFormat, MapKind};
-use cubeforge::output;
+use cubeforge::internals::filter::sh_bands::ShWindow;
+use cubeforge::internals::filter::IrradianceMethod;
+use cubeforge::internals::io::{FileFormat, GpuFormat, MapKind};
+use cubeforge::internals::output;
 use cubeforge::{Destination, Encoding, IrradianceJob, Result};
 use std::path::PathBuf;
 

@@ -1,8 +1,8 @@
 //! `cubeforge lut`: the BRDF lookup tables a split-sum shader samples beside the prefiltered
 //! chain.
 
-use cubeforge::jobs::LutKind;
-use cubeforge::lut;
+use cubeforge::internals::jobs::LutKind;
+use cubeforge::internals::lut;
 use cubeforge::{LutJob, Result};
 use std::path::PathBuf;
 

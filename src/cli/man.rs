@@ -20,7 +20,6 @@ pub fn run(args: Args) -> Result<()> {
         let name = format!("cubeforge-{}", sub.get_name());
         pages.push((format!("{name}.1"), sub.clone().name(name)));
     }
-    std::fs::create_dir_all(&args.dir).map_err(|e| Error::file(&args.dir, e.to_string()))?;
     let mut files = Vec::new();
     for (file, page) in pages {
         let mut buf = Vec::new();
@@ -29,5 +28,6 @@ pub fn run(args: Args) -> Result<()> {
             .map_err(|e| Error::file(&file, e.to_string()))?;
         files.push((args.dir.join(file), buf));
     }
+    // The folder, when missing, is made by the write path with the pages, whole.
     super::write_files(&files)
 }

@@ -20,7 +20,7 @@ mod signals;
 mod view;
 
 use clap::{Parser, Subcommand};
-use cubeforge::tonemap::Tonemap;
+use cubeforge::internals::tonemap::Tonemap;
 pub use observer::Observer;
 pub use out::{destination, write_files};
 use out::{write_stdout, DATA_ON_STDOUT};
@@ -110,7 +110,7 @@ pub struct InputArgs {
     /// Input layout (detected from the aspect ratio; square images need sphere, angular
     /// or octahedral).
     #[arg(long, value_enum)]
-    pub from: Option<cubeforge::layout::Kind>,
+    pub from: Option<cubeforge::internals::layout::Kind>,
     /// 8- and 16-bit files hold data, not colour: no sRGB decode on read or encode on write.
     #[arg(long)]
     pub linear: bool,
@@ -123,7 +123,7 @@ pub struct InputArgs {
 }
 
 impl InputArgs {
-    pub fn limits(&self) -> cubeforge::io::Limits {
+    pub fn limits(&self) -> cubeforge::internals::io::Limits {
         self.limits.limits()
     }
 
@@ -131,8 +131,8 @@ impl InputArgs {
     pub fn read_options(
         &self,
         inputs: &[std::path::PathBuf],
-    ) -> cubeforge::Result<cubeforge::io::ReadOptions> {
-        Ok(cubeforge::io::ReadOptions {
+    ) -> cubeforge::Result<cubeforge::internals::io::ReadOptions> {
+        Ok(cubeforge::internals::io::ReadOptions {
             limits: self.limits(),
             linear: self.linear,
             as_stored: false,
@@ -147,14 +147,14 @@ impl InputArgs {
 #[derive(clap::Args, Debug)]
 pub struct LimitArgs {
     /// Refuse images with more pixels than this (checked before decoding).
-    #[arg(long, default_value_t = cubeforge::io::Limits::default().max_pixels)]
+    #[arg(long, default_value_t = cubeforge::internals::io::Limits::default().max_pixels)]
     pub max_pixels: u64,
     #[command(flatten)]
     pub memory: MemoryArg,
 }
 
 impl LimitArgs {
-    pub fn limits(&self) -> cubeforge::io::Limits {
+    pub fn limits(&self) -> cubeforge::internals::io::Limits {
         limits(self.max_pixels, self.memory.max_memory)
     }
 }
@@ -174,8 +174,8 @@ pub struct MemoryArg {
 pub struct ExrArg {
     /// Sample type of EXR output: half (16-bit floats, largest 65504) or f32 (twice the size;
     /// keeps an unclipped sun, which photographs put at 1e5 and more).
-    #[arg(long, value_enum, value_name = "TYPE", default_value_t = cubeforge::io::ExrFloat::Half)]
-    pub exr_float: cubeforge::io::ExrFloat,
+    #[arg(long, value_enum, value_name = "TYPE", default_value_t = cubeforge::internals::io::ExrFloat::Half)]
+    pub exr_float: cubeforge::internals::io::ExrFloat,
 }
 
 /// Radiance scaled for outputs that keep it linear.
@@ -226,7 +226,7 @@ pub fn execute(
         ));
     }
     if let Some(path) = depfile {
-        cubeforge::batch::depfile::check(path, output)?;
+        cubeforge::internals::output::depfile::check(path, output)?;
     }
     let guard = depfile.map(|_| cubeforge::Session::open());
     if let Some(g) = &guard {
@@ -236,7 +236,7 @@ pub fn execute(
     let report = job.run(&observer)?;
     if let (Some(path), Some(g)) = (depfile, &guard) {
         let reads = g.session().take_reads();
-        cubeforge::batch::depfile::write(path, output, &reads, &report.written)?;
+        cubeforge::internals::output::depfile::write(path, output, &reads, &report.written)?;
     }
     observer.report(&report)
 }
@@ -275,7 +275,7 @@ impl Stages {
         }
     }
     /// With -v, a lossy container format's quality (level 0 read back against the map).
-    pub fn quality(&self, format: cubeforge::io::GpuFormat, psnr: Option<f64>) {
+    pub fn quality(&self, format: cubeforge::internals::io::GpuFormat, psnr: Option<f64>) {
         if let Some(db) = psnr {
             let how = if format.is_float() {
                 "RGB after v/(1+v)"
@@ -308,10 +308,10 @@ pub fn quiet() -> bool {
 
 pub fn warn(msg: impl std::fmt::Display) {
     if !quiet() {
-        let text = cubeforge::error::name_params(&msg.to_string(), true);
+        let text = cubeforge::internals::error::name_params(&msg.to_string(), true);
         tell(format_args!(
             "cubeforge: warning: {}",
-            cubeforge::error::escape_text(&text)
+            cubeforge::internals::error::escape_text(&text)
         ));
     }
 }
@@ -328,7 +328,7 @@ pub fn report(text: impl std::fmt::Display) -> cubeforge::Result<()> {
         return Ok(());
     }
     // A summary, not the command's data: a closed standard output is no reason to fail.
-    let text = cubeforge::error::name_params(&text.to_string(), true);
+    let text = cubeforge::internals::error::name_params(&text.to_string(), true);
     out::write_summary(&text)
 }
 
@@ -356,7 +356,7 @@ pub fn progress(total: u64, prefix: String) -> Option<indicatif::ProgressBar> {
 pub fn say(text: impl std::fmt::Display) -> cubeforge::Result<()> {
     use std::io::Write;
     // Parameters named by the library are flags here (`--from`).
-    let text = cubeforge::error::name_params(&text.to_string(), true);
+    let text = cubeforge::internals::error::name_params(&text.to_string(), true);
     write_stdout(|out| writeln!(out, "{text}"))
 }
 
@@ -367,9 +367,9 @@ pub fn tell(text: impl std::fmt::Display) {
 }
 
 /// The limits from the size options.
-pub fn limits(max_pixels: u64, max_memory: Option<u64>) -> cubeforge::io::Limits {
-    let default = cubeforge::io::Limits::default();
-    cubeforge::io::Limits {
+pub fn limits(max_pixels: u64, max_memory: Option<u64>) -> cubeforge::internals::io::Limits {
+    let default = cubeforge::internals::io::Limits::default();
+    cubeforge::internals::io::Limits {
         max_pixels,
         max_memory: max_memory.unwrap_or(default.max_memory),
         ..default
@@ -511,7 +511,7 @@ pub fn run() -> i32 {
             // One line, whatever the message holds (a file's text, a JSON error, a name with
             // a line break or an escape sequence), every control character written out.
             let text = e.with_flags();
-            let line = cubeforge::error::escape_text(&text);
+            let line = cubeforge::internals::error::escape_text(&text);
             tell(format_args!("cubeforge: error: {line}{}", how_to_raise(&e)));
             1
         }

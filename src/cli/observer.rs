@@ -38,7 +38,7 @@ impl Progress for Observer {
         use std::io::IsTerminal;
         // On a terminal, as the progress bars: logs and pipelines get the report alone.
         if !super::quiet() && std::io::stderr().is_terminal() {
-            super::tell(cubeforge::error::name_params(what, true));
+            super::tell(cubeforge::internals::error::name_params(what, true));
         }
     }
     fn stage(&self, name: &str) {
@@ -68,6 +68,6 @@ impl Progress for Observer {
         self.stages
             .lock()
             .unwrap_or_else(|e| e.into_inner())
-            .note(cubeforge::error::name_params(text, true));
+            .note(cubeforge::internals::error::name_params(text, true));
     }
 }

@@ -1,9 +1,9 @@
 //! Where a command's output goes, as the command line names it: `-o -` with `--format` is
 //! standard output ([`Destination::Stdout`]); the writing itself is the library's
-//! ([`cubeforge::output::deliver`]).
+//! ([`cubeforge::internals::output::deliver`]).
 
-use cubeforge::io::FileFormat;
-use cubeforge::output::{self, Destination, Files};
+use cubeforge::internals::io::FileFormat;
+use cubeforge::internals::output::{self, Destination, Files};
 
 /// Set when the command's output file goes to standard output (`-o -`): summaries then go
 /// to standard error.
@@ -49,7 +49,8 @@ pub fn destination(
     Ok(dest)
 }
 
-/// Writes a command's files, all or none (see [`cubeforge::io::atomic`]).
+/// Writes a command's files through the library's one write path, all or none: a missing
+/// folder is made with them (see [`cubeforge::internals::io::atomic`]).
 pub fn write_files(files: &[(std::path::PathBuf, Vec<u8>)]) -> cubeforge::Result<()> {
     output::deliver(
         &Files::new(files.to_vec()),
@@ -65,8 +66,8 @@ pub struct EdgeFixupArg {
     /// texel centres pulled out by t + a t^3, a = n^2/(n-1)^3) or stretch (spread edge to
     /// edge; shaders scale the lookup's minor axes by (n-1)/n), every level; see
     /// docs/conventions.md.
-    #[arg(long, value_enum, default_value_t = cubeforge::cube::EdgeFixup::None)]
-    pub edge_fixup: cubeforge::cube::EdgeFixup,
+    #[arg(long, value_enum, default_value_t = cubeforge::internals::cube::EdgeFixup::None)]
+    pub edge_fixup: cubeforge::internals::cube::EdgeFixup,
 }
 
 /// `--hdr-encoding`, shared by the commands that write maps.
@@ -76,5 +77,5 @@ pub struct HdrEncodingArg {
     /// Babylon's RGBD (L = rgb^2.2 / a, up to 255), into an 8-bit PNG or a KTX2/DDS with
     /// --gpu-format rgba8; read back with --decode (KTX2s say so themselves).
     #[arg(long, value_enum, value_name = "ENCODING")]
-    pub hdr_encoding: Option<cubeforge::io::HdrEncoding>,
+    pub hdr_encoding: Option<cubeforge::internals::io::HdrEncoding>,
 }

@@ -1,7 +1,7 @@
 //! `cubeforge prefilter`: mip chains for blurred and glossy reflections.
 
-use cubeforge::filter::{self, ChainOptions, FilterKind, LightingModel};
-use cubeforge::io::{FileFormat, GpuFormat};
+use cubeforge::internals::filter::{self, ChainOptions, FilterKind, LightingModel};
+use cubeforge::internals::io::{FileFormat, GpuFormat};
 use cubeforge::{Destination, Encoding, Error, PrefilterJob, Result};
 use std::path::PathBuf;
 

@@ -1,13 +1,15 @@
 //! `cubeforge preview`: a material on a sphere lit by an environment map, shaded by the
 //! programs of The Cg Tutorial, chapter 7.
 
-use cubeforge::ibl::Engine;
-use cubeforge::image::srgb_to_linear;
-use cubeforge::io::FileFormat;
-use cubeforge::layout::Kind;
-use cubeforge::preview::material;
-use cubeforge::preview::{Background, Options, Parallax, ParallaxMode, Refraction, Shading};
-use cubeforge::tonemap::Tonemap;
+use cubeforge::internals::ibl::Engine;
+use cubeforge::internals::image::srgb_to_linear;
+use cubeforge::internals::io::FileFormat;
+use cubeforge::internals::layout::Kind;
+use cubeforge::internals::preview::material;
+use cubeforge::internals::preview::{
+    Background, Options, Parallax, ParallaxMode, Refraction, Shading,
+};
+use cubeforge::internals::tonemap::Tonemap;
 use cubeforge::{Error, PreviewJob, Result};
 use glam::{Vec3, Vec4};
 use std::path::PathBuf;
@@ -195,7 +197,7 @@ pub fn job(a: Args) -> Result<PreviewJob> {
     };
     // An `ibl` output folder: its specular chain (or panorama), as `view` shows it; a pbr
     // material reads the chain by the engine --target names.
-    let env = cubeforge::ibl::specular_of(&env).map_or(env, |(file, _)| file);
+    let env = cubeforge::internals::ibl::specular_of(&env).map_or(env, |(file, _)| file);
     let output = super::destination(&output, a.format.as_deref(), FileFormat::is_image)?;
     if a.env_radius.is_none() && (a.env_center.is_some() || a.parallax.is_some()) {
         return Err(Error::usage(

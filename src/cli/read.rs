@@ -17,7 +17,7 @@ impl PartArg {
             return Ok(None);
         };
         match inputs {
-            [file] => cubeforge::io::exr_part(file, choice).map(Some),
+            [file] => cubeforge::internals::io::exr_part(file, choice).map(Some),
             _ => choice.parse().map(Some).map_err(|_| {
                 cubeforge::Error::usage(format!(
                     "--part {choice:?}: a part's name needs one OpenEXR input"
@@ -33,5 +33,5 @@ pub struct DecodeArg {
     /// Read an 8-bit PNG, TGA or RGBA8 KTX2/DDS as RGBM (L = rgb a 6 or 8) or Babylon's RGBD
     /// (L = rgb^2.2 / a): HDR radiance. KTX2 files cubeforge wrote say so themselves.
     #[arg(long, value_enum, value_name = "ENCODING")]
-    pub decode: Option<cubeforge::io::HdrEncoding>,
+    pub decode: Option<cubeforge::internals::io::HdrEncoding>,
 }

@@ -14,7 +14,7 @@ pub(super) fn remove_temporaries_on_signals() {
         };
         std::thread::spawn(move || {
             if let Some(sig) = signals.forever().next() {
-                let kept = cubeforge::io::remove_temporaries();
+                let kept = cubeforge::internals::io::remove_temporaries();
                 let name = match sig {
                     SIGINT => "interrupted (SIGINT)",
                     SIGTERM => "stopped (SIGTERM)",

@@ -1,7 +1,7 @@
 //! `cubeforge view`: a static page that draws the preview's scene live on the GPU, opened
 //! from disk or served on this machine (`--serve`).
 
-use cubeforge::ibl::Engine;
+use cubeforge::internals::ibl::Engine;
 use cubeforge::{Result, ViewJob};
 use std::path::PathBuf;
 
@@ -72,7 +72,7 @@ pub fn run(a: Args, verbose: bool, depfile: Option<&std::path::Path>) -> Result<
     super::execute(job(a)?, &output, verbose, depfile)?;
     if serve {
         // What the job wrote, and nothing else the folder holds.
-        super::serve::serve(&cubeforge::view::paths(&output, single), &bind)?;
+        super::serve::serve(&cubeforge::internals::view::paths(&output, single), &bind)?;
     }
     Ok(())
 }

@@ -266,84 +266,10 @@ impl Peaks {
     pub fn splat(&self, out: Grid, lookup: Option<Mat3>, images: &mut [Image]) {
         let back = lookup.map(|m| m.transpose());
         let (ow, oh) = out.dims();
-        let key = |(f, x, y): (usize, usize, usize)| ((f * oh + y) * ow + x) as u64;
         let shares: Vec<Vec<(u64, [f64; 3])>> = self
             .texels
             .par_chunks(1024)
-            .map(|chunk| {
-                let mut shares: Vec<(u64, Vec3)> = Vec::new();
-                let mut cells: Vec<(Vec3, f32)> = Vec::new();
-                // A panorama's texels of one row share a solid angle (two f64 sines).
-                let mut row_omega: Option<(u32, f64)> = None;
-                for p in chunk {
-                    let (face, x, y) = (p.face as usize, p.x as f32, p.y as f32);
-                    let Some(centre) = self.grid.dir(face, x + 0.5, y + 0.5) else {
-                        continue;
-                    };
-                    // Sub-cells per texel edge: two per output texel there (one where the
-                    // output texel spans two input texels or more).
-                    let (_, cx, cy) = out.locate(back.map_or(centre, |m| (m * centre).normalize()));
-                    let a_in = self.grid.density(x + 0.5, y + 0.5).sqrt();
-                    let a_out = out.density(cx as f32 + 0.5, cy as f32 + 0.5).sqrt();
-                    let k = (2.0 * a_in / a_out.max(1e-12)).ceil().clamp(1.0, 64.0) as usize;
-                    cells.clear();
-                    let total = self.grid.sub_cells(face, x, y, k, &mut cells);
-                    if let Some(m) = back {
-                        for c in &mut cells {
-                            c.0 = (m * c.0).normalize();
-                        }
-                    }
-                    if total <= 0.0 {
-                        continue;
-                    }
-                    let omega = match (self.grid, row_omega) {
-                        (Grid::Projection(Projection::Equirect, ..), Some((y, a))) if y == p.y => a,
-                        (g @ Grid::Projection(Projection::Equirect, ..), _) => {
-                            let a = g.solid_angle(0, p.y as usize);
-                            row_omega = Some((p.y, a));
-                            a
-                        }
-                        (g, _) => g.solid_angle(p.x as usize, p.y as usize),
-                    };
-                    let flux = p.excess * omega as f32 / total;
-                    // Each sub-cell covers a square of its own area around where it lands,
-                    // shared by overlap between the (at most 2 x 2) output texels under it,
-                    // so the peak arrives smooth; on a ball (whose outside covers nothing)
-                    // it goes whole to the texel it lands in.
-                    let side = if out.is_ball() {
-                        0.0
-                    } else {
-                        (a_in / a_out.max(1e-12) / k as f32).min(1.0)
-                    };
-                    // A peak's shares summed as they come (its sub-cells land on a few
-                    // texels, the last eight searched): fewer entries to sort.
-                    let start = shares.len();
-                    for &(d, wgt) in &cells {
-                        let (f, fx, fy) = out.position(d);
-                        let (xs, ys) = (out.spans(fx, side, ow), out.spans(fy, side, oh));
-                        for &(x, wx) in xs.iter().flatten() {
-                            for &(y, wy) in ys.iter().flatten() {
-                                let k = key((f, x, y));
-                                let share = flux * (wgt * wx * wy);
-                                let mine = &mut shares[start..];
-                                let recent = mine.len().saturating_sub(8);
-                                match mine[recent..].iter_mut().find(|s| s.0 == k) {
-                                    Some((_, s)) => *s += share,
-                                    None => shares.push((k, share)),
-                                }
-                            }
-                        }
-                    }
-                }
-                // Stable sorts: equal keys keep the peaks' order, so each texel's sum has one
-                // order. Summed per chunk first: a small output gets few keys per chunk.
-                shares.sort_by_key(|s| s.0);
-                merge(
-                    shares
-                        .iter()
-                        .map(|&(k, v)| (k, v.to_array().map(f64::from))),
-                )
-            })
+            .map(|chunk| self.shares(chunk, out, back))
             .collect();
         // Each texel once: its shares from every chunk, in the chunks' order, summed and
         // divided by its solid angle (atan2s), key ranges in parallel. Where a range ends
@@ -369,6 +295,85 @@ impl Peaks {
             let p = img.get(x, y);
             img.set(x, y, (p.truncate() + add).extend(p.w));
         }
+    }
+
+    /// One chunk of peaks' shares of the output texels, each texel's key once, in order
+    /// (see [`Peaks::splat`]).
+    fn shares(&self, chunk: &[Peak], out: Grid, back: Option<Mat3>) -> Vec<(u64, [f64; 3])> {
+        let (ow, oh) = out.dims();
+        let key = |(f, x, y): (usize, usize, usize)| ((f * oh + y) * ow + x) as u64;
+        let mut shares: Vec<(u64, Vec3)> = Vec::new();
+        let mut cells: Vec<(Vec3, f32)> = Vec::new();
+        // A panorama's texels of one row share a solid angle (two f64 sines).
+        let mut row_omega: Option<(u32, f64)> = None;
+        for p in chunk {
+            let (face, x, y) = (p.face as usize, p.x as f32, p.y as f32);
+            let Some(centre) = self.grid.dir(face, x + 0.5, y + 0.5) else {
+                continue;
+            };
+            // Sub-cells per texel edge: two per output texel there (one where the
+            // output texel spans two input texels or more).
+            let (_, cx, cy) = out.locate(back.map_or(centre, |m| (m * centre).normalize()));
+            let a_in = self.grid.density(x + 0.5, y + 0.5).sqrt();
+            let a_out = out.density(cx as f32 + 0.5, cy as f32 + 0.5).sqrt();
+            let k = (2.0 * a_in / a_out.max(1e-12)).ceil().clamp(1.0, 64.0) as usize;
+            cells.clear();
+            let total = self.grid.sub_cells(face, x, y, k, &mut cells);
+            if let Some(m) = back {
+                for c in &mut cells {
+                    c.0 = (m * c.0).normalize();
+                }
+            }
+            if total <= 0.0 {
+                continue;
+            }
+            let omega = match (self.grid, row_omega) {
+                (Grid::Projection(Projection::Equirect, ..), Some((y, a))) if y == p.y => a,
+                (g @ Grid::Projection(Projection::Equirect, ..), _) => {
+                    let a = g.solid_angle(0, p.y as usize);
+                    row_omega = Some((p.y, a));
+                    a
+                }
+                (g, _) => g.solid_angle(p.x as usize, p.y as usize),
+            };
+            let flux = p.excess * omega as f32 / total;
+            // Each sub-cell covers a square of its own area around where it lands,
+            // shared by overlap between the (at most 2 x 2) output texels under it,
+            // so the peak arrives smooth; on a ball (whose outside covers nothing)
+            // it goes whole to the texel it lands in.
+            let side = if out.is_ball() {
+                0.0
+            } else {
+                (a_in / a_out.max(1e-12) / k as f32).min(1.0)
+            };
+            // A peak's shares summed as they come (its sub-cells land on a few
+            // texels, the last eight searched): fewer entries to sort.
+            let start = shares.len();
+            for &(d, wgt) in &cells {
+                let (f, fx, fy) = out.position(d);
+                let (xs, ys) = (out.spans(fx, side, ow), out.spans(fy, side, oh));
+                for &(x, wx) in xs.iter().flatten() {
+                    for &(y, wy) in ys.iter().flatten() {
+                        let k = key((f, x, y));
+                        let share = flux * (wgt * wx * wy);
+                        let mine = &mut shares[start..];
+                        let recent = mine.len().saturating_sub(8);
+                        match mine[recent..].iter_mut().find(|s| s.0 == k) {
+                            Some((_, s)) => *s += share,
+                            None => shares.push((k, share)),
+                        }
+                    }
+                }
+            }
+        }
+        // Stable sorts: equal keys keep the peaks' order, so each texel's sum has one
+        // order. Summed per chunk first: a small output gets few keys per chunk.
+        shares.sort_by_key(|s| s.0);
+        merge(
+            shares
+                .iter()
+                .map(|&(k, v)| (k, v.to_array().map(f64::from))),
+        )
     }
 }
 

@@ -41,6 +41,23 @@ impl Context<'_> {
     }
 }
 
+/// The file that holds each engine's specular chain, by its suffix after the folder's name:
+/// written here, and looked for by `folder::specular_of` (in this order) when a folder is
+/// read back.
+pub(super) const SPECULAR_FILES: [(&str, Engine); 4] = [
+    (GLTF_SPECULAR, Engine::Gltf),
+    (FILAMENT_SPECULAR, Engine::Filament),
+    (BABYLON_SPECULAR, Engine::Babylon),
+    (BEVY_SPECULAR, Engine::Bevy),
+];
+const GLTF_SPECULAR: &str = "_ggx.ktx2";
+const FILAMENT_SPECULAR: &str = "_ibl.ktx";
+const BABYLON_SPECULAR: &str = ".env";
+/// Bevy's and the generic target's specular chain; the generic one has [`GENERIC_SH`] beside it.
+const BEVY_SPECULAR: &str = "_specular.ktx2";
+/// The generic target's SH file, which tells its folder from Bevy's.
+pub(super) const GENERIC_SH: &str = "_sh.json";
+
 /// The specular chain and the diffuse cube as KTX2 files `NAME{spec}` and `NAME{diff}`, in the
 /// caller's format (RGBA16F by default): what bevy, gltf and generic all ship.
 struct Ktx2Pair {
@@ -205,7 +222,7 @@ fn bevy(l: &Lighting, ctx: &Context) -> Result<Delivery> {
         diff,
         format,
         files,
-    } = ktx2_pair(l, ctx, "_specular.ktx2", "_diffuse.ktx2")?;
+    } = ktx2_pair(l, ctx, BEVY_SPECULAR, "_diffuse.ktx2")?;
     let snippet = format!(
         r#"// Bevy: both files in assets/; the specular chain's level m holds roughness m / (levels - 1).
 commands.spawn((
@@ -262,7 +279,7 @@ fn gltf(l: &Lighting, ctx: &Context) -> Result<Delivery> {
         diff,
         format,
         mut files,
-    } = ktx2_pair(l, ctx, "_ggx.ktx2", "_lambertian.ktx2")?;
+    } = ktx2_pair(l, ctx, GLTF_SPECULAR, "_lambertian.ktx2")?;
     let lut = ctx.out.join("lut_ggx.png");
     files.push((lut.clone(), lut_png(&lut, false)?));
     let mut cubes = vec![&l.specular, &l.diffuse];
@@ -313,7 +330,7 @@ fn filament(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     let format = Ktx1Format::from_gpu(gpu).map_err(crate::Error::usage)?;
     let sh = ktx1::filament_sh(&l.sh);
     let levels_json = describe(l).to_json();
-    let ibl = ctx.path("_ibl.ktx");
+    let ibl = ctx.path(FILAMENT_SPECULAR);
     let irr = ctx.path("_irradiance.ktx");
     let sky = ctx.path("_skybox.ktx");
     let sh_txt = ctx.out.join("sh.txt");
@@ -400,7 +417,7 @@ fn babylon(l: &Lighting, ctx: &Context) -> Result<Delivery> {
             crate::error::param("gpu_format")
         )));
     }
-    let path = ctx.path(".env");
+    let path = ctx.path(BABYLON_SPECULAR);
     let poly = SphericalPolynomial::from_radiance_sh(&l.sh);
     let bytes = babylon_env::encode(
         &l.specular,
@@ -434,8 +451,8 @@ fn generic(l: &Lighting, ctx: &Context) -> Result<Delivery> {
         diff,
         format,
         mut files,
-    } = ktx2_pair(l, ctx, "_specular.ktx2", "_diffuse.ktx2")?;
-    let shp = ctx.path("_sh.json");
+    } = ktx2_pair(l, ctx, BEVY_SPECULAR, "_diffuse.ktx2")?;
+    let shp = ctx.path(GENERIC_SH);
     let dfg = ctx.path("_dfg.png");
     let sh_json =
         serde_json::to_vec_pretty(&crate::filter::sh_bands::ShFile::new(&l.sh)).unwrap_or_default();

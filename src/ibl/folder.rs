@@ -2,6 +2,7 @@
 //! engines that filter a panorama themselves, that panorama) and the engine it was made for,
 //! so that every reading command takes the folder `ibl` wrote.
 
+use super::engines::{GENERIC_SH, SPECULAR_FILES};
 use super::Engine;
 use std::path::{Path, PathBuf};
 
@@ -17,17 +18,12 @@ pub fn specular_of(dir: &Path) -> Option<(PathBuf, Option<Engine>)> {
         .collect();
     names.sort();
     let ends = |p: &PathBuf, suffix: &str| p.to_string_lossy().ends_with(suffix);
-    for (suffix, engine) in [
-        ("_ggx.ktx2", Engine::Gltf),
-        ("_ibl.ktx", Engine::Filament),
-        (".env", Engine::Babylon),
-        ("_specular.ktx2", Engine::Bevy),
-    ] {
+    for (suffix, engine) in SPECULAR_FILES {
         if let Some(p) = names.iter().find(|p| ends(p, suffix)) {
             let stem = p.to_string_lossy();
             let stem = &stem[..stem.len() - suffix.len()];
             let generic =
-                engine == Engine::Bevy && PathBuf::from(format!("{stem}_sh.json")).is_file();
+                engine == Engine::Bevy && PathBuf::from(format!("{stem}{GENERIC_SH}")).is_file();
             return Some((
                 p.clone(),
                 Some(if generic { Engine::Generic } else { engine }),

@@ -199,9 +199,9 @@ pub struct BabylonEnv {
     pub irradiance_texture_size: Option<u64>,
 }
 
-/// Reads a `.env` file: the manifest, every specular level (checked in size and place before
-/// any PNG is decoded, each PNG checked against the size its level needs).
-pub fn read(bytes: &[u8], path: &Path, limits: &Limits) -> Result<BabylonEnv> {
+/// The manifest of a `.env` file (checked: its version and image type) and the bytes after
+/// it.
+fn manifest<'a>(bytes: &'a [u8], path: &Path) -> Result<(Manifest, &'a [u8])> {
     let err = |msg: String| Error::file(path, msg);
     if !bytes.starts_with(&MAGIC) {
         return Err(err(
@@ -236,6 +236,14 @@ pub fn read(bytes: &[u8], path: &Path, limits: &Limits) -> Result<BabylonEnv> {
             format!("a .env of {image_type} images is not supported: cubeforge reads image/png"),
         ));
     }
+    Ok((manifest, data))
+}
+
+/// Reads a `.env` file: the manifest, every specular level (checked in size and place before
+/// any PNG is decoded, each PNG checked against the size its level needs).
+pub fn read(bytes: &[u8], path: &Path, limits: &Limits) -> Result<BabylonEnv> {
+    let err = |msg: String| Error::file(path, msg);
+    let (manifest, data) = manifest(bytes, path)?;
     let n = manifest.width;
     limits.check_cube(path, n, n)?;
     if !n.is_power_of_two() {

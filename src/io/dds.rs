@@ -137,26 +137,18 @@ fn le_u32(bytes: &[u8], offset: usize) -> Option<u32> {
     Some(u32::from_le_bytes(b.try_into().ok()?))
 }
 
-/// Reads a DDS cube map with all its levels, or level 0 of a 2D texture as an image.
-pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
+/// The texel format, the order of its bytes, where the texels start and whether it is a
+/// cube map: from the DX10 header, or the legacy pixel format's masks.
+fn format_of(
+    bytes: &[u8],
+    header: &Header,
+    path: &Path,
+) -> Result<(GpuFormat, Order, usize, bool)> {
     let err = |msg: String| Error::file(path, msg);
     let file_len = bytes.len();
-    if !bytes.starts_with(MAGIC) && !MAGIC.starts_with(bytes) {
-        return Err(err("not a DDS file (its signature is missing)".into()));
-    }
-    if file_len < HEADER_END {
-        return Err(err(format!(
-            "truncated DDS file: {file_len} bytes, shorter than the {HEADER_END}-byte header"
-        )));
-    }
-    // ddsfile's parsing is caught like every third-party decoder's (`guard::caught`).
     let invalid = |e: String| err(format!("invalid DDS header: {}", one_line(&e)));
-    let header = caught(|| Header::read(&bytes[4..HEADER_END]))
-        .map_err(invalid)?
-        .map_err(|e| invalid(e.to_string()))?;
-
     let is_dx10 = header.spf.fourcc == Some(FourCC(FourCC::DX10));
-    let (format, order, data_start, cube) = if is_dx10 {
+    Ok(if is_dx10 {
         if file_len < HEADER10_END {
             return Err(err(format!(
                 "truncated DDS file: {file_len} bytes, shorter than its {HEADER10_END}-byte DX10 header"
@@ -213,7 +205,28 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             ));
         }
         (format, order, HEADER_END, cube)
-    };
+    })
+}
+
+/// Reads a DDS cube map with all its levels, or level 0 of a 2D texture as an image.
+pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
+    let err = |msg: String| Error::file(path, msg);
+    let file_len = bytes.len();
+    if !bytes.starts_with(MAGIC) && !MAGIC.starts_with(bytes) {
+        return Err(err("not a DDS file (its signature is missing)".into()));
+    }
+    if file_len < HEADER_END {
+        return Err(err(format!(
+            "truncated DDS file: {file_len} bytes, shorter than the {HEADER_END}-byte header"
+        )));
+    }
+    // ddsfile's parsing is caught like every third-party decoder's (`guard::caught`).
+    let invalid = |e: String| err(format!("invalid DDS header: {}", one_line(&e)));
+    let header = caught(|| Header::read(&bytes[4..HEADER_END]))
+        .map_err(invalid)?
+        .map_err(|e| invalid(e.to_string()))?;
+
+    let (format, order, data_start, cube) = format_of(bytes, &header, path)?;
     if header.caps2.contains(Caps2::VOLUME) || header.depth.is_some_and(|d| d > 1) {
         return Err(err(
             "a volume texture is not supported: cubeforge reads 2D textures and cube maps".into(),

@@ -66,7 +66,35 @@ pub fn decode(
     let (w, h) = (w as usize, h as usize);
     let float = matches!(color, ColorType::Rgb32F | ColorType::Rgba32F);
     let srgb = !float && !opts.linear;
-    let pixels: Vec<Vec4> = if let DynamicImage::ImageRgb32F(buf) = &img {
+    let pixels = to_rgba(img, color, float, srgb);
+    let meta = Meta {
+        file_format: f,
+        pixel_format: pixel_format_name(color, f),
+        color_space: if srgb {
+            ColorSpace::Srgb
+        } else {
+            ColorSpace::Linear
+        },
+        hdr: float,
+        replaced_values: 0,
+        stored_levels: 1,
+        declared: None,
+        part: None,
+    };
+    Ok((
+        Decoded::Image(Image {
+            width: w,
+            height: h,
+            pixels,
+        }),
+        meta,
+    ))
+}
+
+/// A decoded image's texels as linear RGBA f32: floats as they are, 8- and 16-bit values
+/// through the sRGB curve when `srgb` (8-bit ones by a table).
+fn to_rgba(img: DynamicImage, color: ColorType, float: bool, srgb: bool) -> Vec<Vec4> {
+    if let DynamicImage::ImageRgb32F(buf) = &img {
         // The common HDR case, without an intermediate RGBA copy.
         buf.as_raw()
             .par_chunks_exact(3)
@@ -116,29 +144,7 @@ pub fn decode(
                 Vec4::new(v(c[0]), v(c[1]), v(c[2]), c[3] as f32 / 65535.0)
             })
             .collect()
-    };
-    let meta = Meta {
-        file_format: f,
-        pixel_format: pixel_format_name(color, f),
-        color_space: if srgb {
-            ColorSpace::Srgb
-        } else {
-            ColorSpace::Linear
-        },
-        hdr: float,
-        replaced_values: 0,
-        stored_levels: 1,
-        declared: None,
-        part: None,
-    };
-    Ok((
-        Decoded::Image(Image {
-            width: w,
-            height: h,
-            pixels,
-        }),
-        meta,
-    ))
+    }
 }
 
 /// Refuses a JPEG too small to hold the pixels its frame header claims, before the decoder

@@ -5,6 +5,7 @@ use super::{Job, Progress, Quality, Report, Warning, Warnings};
 use crate::control::{self, Size};
 use crate::cube::CubeMap;
 use crate::error::{param, Error, Result};
+use crate::image::Image;
 use crate::io::{self, ktx2, FileFormat, GpuFormat, Limits};
 use crate::output::{self, Destination, Encoding, Files};
 use std::path::{Path, PathBuf};
@@ -53,6 +54,81 @@ impl ControlJob {
     /// `mask.png` -> `mask.png.json`.
     pub fn sidecar_path(&self) -> PathBuf {
         sidecar_path(&self.output)
+    }
+
+    /// Refuses a level count the map cannot have and a size over the limits, saying where the
+    /// size came from: the option, the recipe's line (`size_line`), or its first image.
+    fn check_size(&self, size: Size, full_chain: usize, size_line: Option<usize>) -> Result<()> {
+        let limits = &self.limits;
+        if let Some(n) = self.levels {
+            if n == 0 || n > full_chain {
+                return Err(Error::usage(format!(
+                    "{} {n}: a {size} map has 1 to {full_chain} levels",
+                    param("levels")
+                )));
+            }
+        }
+        // Say where an oversized size came from: the option, the recipe's line, or its image.
+        let (w, h) = (size.width as u64, size.height as u64);
+        if w.max(h) > limits.max_dimension as u64 || w * h > limits.max_pixels {
+            let from = match (self.size, size_line) {
+                (Some(_), _) => param("size"),
+                (None, Some(l)) => format!("{}: line {l}", self.recipe.display()),
+                (None, None) => format!("{}: its first image", self.recipe.display()),
+            };
+            return Err(Error::usage(format!(
+                "{from}: a {size} map is over the limit of {} pixels, {} per side ({})",
+                limits.max_pixels,
+                limits.max_dimension,
+                param("max_pixels")
+            )));
+        }
+        Ok(())
+    }
+
+    /// The map's bytes in `format`, what they are (for the summary) and a lossy format's
+    /// quality.
+    fn encode(
+        &self,
+        format: FileFormat,
+        image: &Image,
+        full_chain: usize,
+    ) -> Result<(Vec<u8>, String, Option<Quality>)> {
+        let mut quality = None;
+        // Data, not colour: no sRGB encode.
+        let write = self.encoding.write_options(true);
+        let (bytes, what) = match format {
+            FileFormat::Ktx2 => {
+                let levels = image.mip_chain(self.levels.unwrap_or(full_chain));
+                let gpu = self.gpu_format();
+                let mut what = format!("KTX2 {} with {} mip levels", gpu.name(), levels.len());
+                if let Some(z) = self.encoding.zstd {
+                    what.push_str(&format!(", Zstandard level {z}"));
+                }
+                let bytes = ktx2::encode_2d_with(&levels, gpu, self.encoding.zstd, &[])
+                    .map_err(|e| Error::file(&self.output, e))?;
+                if gpu.is_lossy() {
+                    quality =
+                        io::container_psnr(&bytes, gpu, &[&levels[0]]).map(|psnr_db| Quality {
+                            format: gpu,
+                            psnr_db,
+                        });
+                }
+                (bytes, what)
+            }
+            FileFormat::Exr => (
+                io::encode_image_as(format, &self.output, image, &write)?,
+                "half-float EXR".to_string(),
+            ),
+            _ => {
+                let bits = if self.encoding.png16 { 16 } else { 8 };
+                (
+                    io::encode_image_as(format, &self.output, image, &write)?,
+                    format!("{bits}-bit PNG"),
+                )
+            }
+        };
+        Ok((bytes, what, quality))
     }
 }
 
@@ -108,29 +184,8 @@ impl Job for ControlJob {
             .output_size(self.size)
             .map_err(|e| Error::file(&self.recipe, e.to_string()))?;
         let full_chain = CubeMap::full_chain_len(size.width.max(size.height));
-        if let Some(n) = self.levels {
-            if n == 0 || n > full_chain {
-                return Err(Error::usage(format!(
-                    "{} {n}: a {size} map has 1 to {full_chain} levels",
-                    param("levels")
-                )));
-            }
-        }
-        // Say where an oversized size came from: the option, the recipe's line, or its image.
+        self.check_size(size, full_chain, recipe.size_line)?;
         let (w, h) = (size.width as u64, size.height as u64);
-        if w.max(h) > limits.max_dimension as u64 || w * h > limits.max_pixels {
-            let from = match (self.size, recipe.size_line) {
-                (Some(_), _) => param("size"),
-                (None, Some(l)) => format!("{}: line {l}", self.recipe.display()),
-                (None, None) => format!("{}: its first image", self.recipe.display()),
-            };
-            return Err(Error::usage(format!(
-                "{from}: a {size} map is over the limit of {} pixels, {} per side ({})",
-                limits.max_pixels,
-                limits.max_dimension,
-                param("max_pixels")
-            )));
-        }
         limits.check_memory(
             format_args!("{}: a {size} map", self.recipe.display()),
             w * h * 16 * 4,
@@ -138,40 +193,7 @@ impl Job for ControlJob {
         let baked = recipe.bake(Some(size), limits)?;
         progress.stage("bake");
 
-        let mut quality = None;
-        // Data, not colour: no sRGB encode.
-        let write = self.encoding.write_options(true);
-        let (bytes, what) = match format {
-            FileFormat::Ktx2 => {
-                let levels = baked.image.mip_chain(self.levels.unwrap_or(full_chain));
-                let gpu = self.gpu_format();
-                let mut what = format!("KTX2 {} with {} mip levels", gpu.name(), levels.len());
-                if let Some(z) = self.encoding.zstd {
-                    what.push_str(&format!(", Zstandard level {z}"));
-                }
-                let bytes = ktx2::encode_2d_with(&levels, gpu, self.encoding.zstd, &[])
-                    .map_err(|e| Error::file(&self.output, e))?;
-                if gpu.is_lossy() {
-                    quality =
-                        io::container_psnr(&bytes, gpu, &[&levels[0]]).map(|psnr_db| Quality {
-                            format: gpu,
-                            psnr_db,
-                        });
-                }
-                (bytes, what)
-            }
-            FileFormat::Exr => (
-                io::encode_image_as(format, &self.output, &baked.image, &write)?,
-                "half-float EXR".to_string(),
-            ),
-            _ => {
-                let bits = if self.encoding.png16 { 16 } else { 8 };
-                (
-                    io::encode_image_as(format, &self.output, &baked.image, &write)?,
-                    format!("{bits}-bit PNG"),
-                )
-            }
-        };
+        let (bytes, what, quality) = self.encode(format, &baked.image, full_chain)?;
         let name = self
             .output
             .file_name()

@@ -12,8 +12,7 @@ use std::path::PathBuf;
 /// The files `engine` loads (a specular chain, a diffuse term, SH, tables) in a folder.
 ///
 /// ```
-/// use cubeforge::ibl::{Engine, IblOptions};
-/// use cubeforge::{IblJob, Job};
+/// use cubeforge::{Engine, IblJob, IblOptions, Job};
 ///
 /// # fn main() -> cubeforge::Result<()> {
 /// let dir = std::env::temp_dir().join(format!("cubeforge-doc-bevy-{}", std::process::id()));

@@ -19,8 +19,7 @@ const MOST: usize = 16384;
 /// or a folder of `m{level}/` faces with `levels.json`.
 ///
 /// ```
-/// use cubeforge::filter::{ChainOptions, FilterKind};
-/// use cubeforge::{Destination, Job, PrefilterJob};
+/// use cubeforge::{ChainOptions, Destination, FilterKind, Job, PrefilterJob};
 ///
 /// # fn main() -> cubeforge::Result<()> {
 /// let out = std::env::temp_dir().join("cubeforge-doc-ggx.ktx2");

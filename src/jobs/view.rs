@@ -3,11 +3,15 @@
 use super::{Job, Progress, Report, Warning, Warnings};
 use crate::error::{Error, Result};
 use crate::ibl::Engine;
+use crate::image::Image;
 use crate::io::{Limits, ReadOptions};
 use crate::output::{self, Destination, Files};
 use crate::preview::{self, pbr};
 use crate::view;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+/// A control map and the LOD bias its blur = 1 stands for.
+type ControlMap = (Image, f32);
 
 /// A static viewer for a map: the preview's scene drawn live by the GPU in a browser.
 ///
@@ -79,6 +83,52 @@ impl ViewJob {
         (self.input.clone(), self.target)
     }
 
+    /// The environment and the control map the page shows, and whether the input is a
+    /// control map alone: then it is on the sphere, under the demo sky with a box chain (so
+    /// its blur shows); anything else is the environment.
+    fn environment(&self, input: &Path) -> Result<(preview::LoadedEnv, Option<PathBuf>, bool)> {
+        let lone_control =
+            self.control.is_none() && input.is_file() && preview::control_sidecar(input).is_some();
+        if lone_control {
+            let sky = crate::cube::CubeMap::from_fn(128, crate::synthetic::demo_sky);
+            let env = preview::LoadedEnv {
+                sampler: crate::cube::CubeSampler::with_box_mips(&sky.levels[0], None),
+                files: Vec::new(),
+                hdr: true,
+                replaced_values: 0,
+                levels: None,
+            };
+            return Ok((env, Some(input.to_path_buf()), true));
+        }
+        let env = preview::load_environment(input, self.from, &self.read())?;
+        Ok((env, self.control.clone(), false))
+    }
+
+    /// The decal and the control map (with its blur range), their files added to `inputs`.
+    fn textures(
+        &self,
+        control: Option<&Path>,
+        inputs: &mut Vec<PathBuf>,
+    ) -> Result<(Option<Image>, Option<ControlMap>)> {
+        let decal = match &self.decal {
+            Some(p) => {
+                inputs.push(p.clone());
+                Some(preview::read_texture(p, false, &self.limits)?)
+            }
+            None => None,
+        };
+        let control = match control {
+            Some(p) => {
+                inputs.push(p.to_path_buf());
+                let (img, max, side) = preview::read_control(p, self.max_lod_bias, &self.limits)?;
+                inputs.extend(side);
+                Some((img, max))
+            }
+            None => None,
+        };
+        Ok((decal, control))
+    }
+
     fn read(&self) -> ReadOptions {
         ReadOptions {
             limits: self.limits,
@@ -141,43 +191,9 @@ impl Job for ViewJob {
             self.memory_estimate()?,
         )?;
         let (input, target) = self.shown();
-        // A control map alone: on the sphere, under the demo sky with a box chain (so its
-        // blur shows); anything else is the environment.
-        let lone_control =
-            self.control.is_none() && input.is_file() && preview::control_sidecar(&input).is_some();
-        let (env, control_path) = if lone_control {
-            let sky = crate::cube::CubeMap::from_fn(128, crate::synthetic::demo_sky);
-            let env = preview::LoadedEnv {
-                sampler: crate::cube::CubeSampler::with_box_mips(&sky.levels[0], None),
-                files: Vec::new(),
-                hdr: true,
-                replaced_values: 0,
-                levels: None,
-            };
-            (env, Some(input.clone()))
-        } else {
-            (
-                preview::load_environment(&input, self.from, &self.read())?,
-                self.control.clone(),
-            )
-        };
+        let (env, control_path, lone_control) = self.environment(&input)?;
         let mut inputs = env.files.clone();
-        let decal = match &self.decal {
-            Some(p) => {
-                inputs.push(p.clone());
-                Some(preview::read_texture(p, false, &self.limits)?)
-            }
-            None => None,
-        };
-        let control = match &control_path {
-            Some(p) => {
-                inputs.push(p.clone());
-                let (img, max, side) = preview::read_control(p, self.max_lod_bias, &self.limits)?;
-                inputs.extend(side);
-                Some((img, max))
-            }
-            None => None,
-        };
+        let (decal, control) = self.textures(control_path.as_deref(), &mut inputs)?;
         progress.stage("decode");
         let mut summary_notes = Vec::new();
         let setup = pbr::prepare(&env, &input, target)?;

@@ -14,6 +14,7 @@ use crate::tonemap::Tonemap;
 use std::path::{Path, PathBuf};
 
 mod deliver;
+pub mod depfile;
 mod encoding;
 pub use deliver::{
     deliver, is_closed_pipe, stdout_open, write_stdout, write_summary, Destination, Files,
@@ -58,12 +59,6 @@ pub struct Encoded {
 }
 
 impl Encoded {
-    /// Writes every file, all or none, folder outputs replacing theirs whole
-    /// ([`io::atomic`]).
-    pub fn write(&self) -> Result<()> {
-        io::write_all_atomic_with(&self.files, &self.folders)
-    }
-
     /// The files to hand to [`deliver`].
     pub fn into_files(self) -> Files {
         Files {
@@ -85,24 +80,10 @@ impl Target {
             .is_some_and(|f| io::largest_value(f, self.write.gpu_format).is_none())
     }
 
-    /// The files `out` becomes. Refuses to overwrite any of `inputs`, and a result whose
-    /// shape the layout cannot hold (a cube map as an equirect, an image as faces).
-    pub fn encode(&self, mut out: Output, inputs: &[PathBuf]) -> Result<Encoded> {
-        let wrong = |what: &str| {
-            Error::file(
-                &self.path,
-                format!("a {what} cannot be written as {}", self.kind.name()),
-            )
-        };
-        match (&out, self.kind.is_cube()) {
-            (Output::Cube(_), true) | (Output::Image(_), false) => {}
-            (Output::Cube(_), false) => return Err(wrong("cube map")),
-            (Output::Image(_), true) => return Err(wrong("single image")),
-        }
-        let images: Vec<&mut Image> = match &mut out {
-            Output::Cube(c) => c.levels[0].iter_mut().collect(),
-            Output::Image(img) => vec![img],
-        };
+    /// Applies the exposure and tone curve to `images` (level 0: the mips are made from it):
+    /// an 8-bit output's curve, or a linear one's exposure alone. Returns the warning for
+    /// what an 8-bit output clips.
+    fn tone_images(&self, images: Vec<&mut Image>) -> Option<String> {
         let (exposure, curve) = self.tone.unwrap_or((0.0, Tonemap::None));
         // RGBM and RGBD hold radiance: no tone curve, no clipping at 1.
         let eight_bit = self.is_8bit() && self.write.hdr_encoding.is_none();
@@ -121,6 +102,28 @@ impl Target {
                 .for_each(|img| crate::tonemap::scale(img, exposure)),
             _ => {}
         }
+        clipped
+    }
+
+    /// The files `out` becomes. Refuses to overwrite any of `inputs`, and a result whose
+    /// shape the layout cannot hold (a cube map as an equirect, an image as faces).
+    pub fn encode(&self, mut out: Output, inputs: &[PathBuf]) -> Result<Encoded> {
+        let wrong = |what: &str| {
+            Error::file(
+                &self.path,
+                format!("a {what} cannot be written as {}", self.kind.name()),
+            )
+        };
+        match (&out, self.kind.is_cube()) {
+            (Output::Cube(_), true) | (Output::Image(_), false) => {}
+            (Output::Cube(_), false) => return Err(wrong("cube map")),
+            (Output::Image(_), true) => return Err(wrong("single image")),
+        }
+        let images: Vec<&mut Image> = match &mut out {
+            Output::Cube(c) => c.levels[0].iter_mut().collect(),
+            Output::Image(img) => vec![img],
+        };
+        let clipped = self.tone_images(images);
         // Box mips are means of level 0: they fit where it fits.
         let clamped = self.format().and_then(|f| {
             let images: Vec<&Image> = match &out {

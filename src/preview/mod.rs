@@ -30,7 +30,6 @@ pub mod grid;
 pub mod material;
 pub mod pbr;
 pub mod sphere;
-pub use crate::tonemap;
 
 // The renderer in the order a frame flows: what to draw (options), the texts' programs
 // (shader), the per-vertex rasterizer (raster), the loop over pixels (render), and reading

@@ -49,27 +49,7 @@ pub fn render_lit<E: Environment + ?Sized>(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Image> {
     use rayon::prelude::*;
-    opts.validate()?;
-    material::validate(material)?;
-    if material.model == material::Model::Pbr && split_sum.is_none() {
-        return Err(Error::usage(format!(
-            "material \"{}\" is pbr: it needs split-sum lighting (preview::render_lit with a preview::pbr::SplitSum)",
-            material.name
-        )));
-    }
-    if opts.shading == Shading::PerVertex
-        && material.refraction == Some(Refraction::Exact)
-        && matches!(
-            material.model,
-            material::Model::Refract | material::Model::Dispersion
-        )
-    {
-        return Err(Error::usage(format!(
-            "material \"{}\" asks for refraction exact, which traces each fragment's path: it needs {} per-fragment",
-            material.name,
-            param("shading")
-        )));
-    }
+    refuse(split_sum, material, opts)?;
     let n = opts.size;
     let cam = Camera::new(opts.distance, opts.fov, opts.yaw, opts.pitch, n, n);
     let mut shader = Shader::new(
@@ -89,47 +69,12 @@ pub fn render_lit<E: Environment + ?Sized>(
     let inv_s = 1.0 / s as f32;
     let raster = (opts.shading == Shading::PerVertex)
         .then(|| setup_raster(&shader, &cam, opts.tessellation, &offsets));
-    let eye = cam.eye;
     let background = |d: Vec3| match opts.background {
         Background::Env => env.lookup(d, 0.0).truncate().extend(1.0),
         Background::Color(c) => c,
     };
-    // Per fragment: the vertex stage at the exact hit, and at the points where the rays one
-    // pixel right and below meet the hit's tangent plane (a GPU's neighbouring fragments on
-    // the surface's local plane).
-    let per_fragment = |sx: f32, sy: f32| -> Vec4 {
-        let d = cam.ray(sx, sy);
-        let Some(p) = sphere::hit(eye, d) else {
-            return background(d);
-        };
-        let nrm = p.normalize();
-        let uv = if shader.uses_uv {
-            sphere::uv(nrm)
-        } else {
-            Vec2::ZERO
-        };
-        if shader.exact {
-            return shader.exact(p, nrm, uv);
-        }
-        let var = shader.vertex(p, nrm, uv);
-        if !shader.lod_on {
-            return shader.fragment(&var, None);
-        }
-        let plane = (p - eye).dot(nrm);
-        let at = |sx2: f32, sy2: f32| {
-            let d2 = cam.ray(sx2, sy2);
-            let den = d2.dot(nrm);
-            if den >= -1e-9 {
-                return None;
-            }
-            let p2 = eye + d2 * (plane / den);
-            Some(shader.vertex(p2, p2.normalize(), var.uv))
-        };
-        match (at(sx + 1.0, sy), at(sx, sy + 1.0)) {
-            (Some(vx), Some(vy)) => shader.fragment(&var, Some((&vx, &vy))),
-            _ => shader.fragment(&var, None),
-        }
-    };
+    let per_fragment =
+        |sx: f32, sy: f32| fragment(&shader, &cam, sx, sy).unwrap_or_else(&background);
     let mut img = Image::new(n, n);
     img.pixels.par_chunks_mut(n).enumerate().for_each_init(
         || {
@@ -175,4 +120,75 @@ pub fn render_lit<E: Environment + ?Sized>(
         },
     );
     Ok(img)
+}
+
+/// What the renderer refuses before any pixel: bad options or material, a pbr material
+/// without split-sum lighting, and exact refraction per vertex.
+fn refuse(split_sum: Option<&SplitSum>, material: &Material, opts: &Options) -> Result<()> {
+    opts.validate()?;
+    material::validate(material)?;
+    if material.model == material::Model::Pbr && split_sum.is_none() {
+        return Err(Error::usage(format!(
+        "material \"{}\" is pbr: it needs split-sum lighting (preview::render_lit with a preview::pbr::SplitSum)",
+        material.name
+    )));
+    }
+    if opts.shading == Shading::PerVertex
+        && material.refraction == Some(Refraction::Exact)
+        && matches!(
+            material.model,
+            material::Model::Refract | material::Model::Dispersion
+        )
+    {
+        return Err(Error::usage(format!(
+        "material \"{}\" asks for refraction exact, which traces each fragment's path: it needs {} per-fragment",
+        material.name,
+        param("shading")
+    )));
+    }
+    Ok(())
+}
+
+/// One sample of the per-fragment path: the vertex stage at the exact hit, and at the points
+/// where the rays one pixel right and below meet the hit's tangent plane (a GPU's
+/// neighbouring fragments on the surface's local plane). `Err`: the ray's direction, which
+/// missed the sphere (the background shows).
+fn fragment<E: Environment + ?Sized>(
+    shader: &Shader<'_, E>,
+    cam: &Camera,
+    sx: f32,
+    sy: f32,
+) -> std::result::Result<Vec4, Vec3> {
+    let eye = cam.eye;
+    let d = cam.ray(sx, sy);
+    let Some(p) = sphere::hit(eye, d) else {
+        return Err(d);
+    };
+    let nrm = p.normalize();
+    let uv = if shader.uses_uv {
+        sphere::uv(nrm)
+    } else {
+        Vec2::ZERO
+    };
+    if shader.exact {
+        return Ok(shader.exact(p, nrm, uv));
+    }
+    let var = shader.vertex(p, nrm, uv);
+    if !shader.lod_on {
+        return Ok(shader.fragment(&var, None));
+    }
+    let plane = (p - eye).dot(nrm);
+    let at = |sx2: f32, sy2: f32| {
+        let d2 = cam.ray(sx2, sy2);
+        let den = d2.dot(nrm);
+        if den >= -1e-9 {
+            return None;
+        }
+        let p2 = eye + d2 * (plane / den);
+        Some(shader.vertex(p2, p2.normalize(), var.uv))
+    };
+    Ok(match (at(sx + 1.0, sy), at(sx, sy + 1.0)) {
+        (Some(vx), Some(vy)) => shader.fragment(&var, Some((&vx, &vy))),
+        _ => shader.fragment(&var, None),
+    })
 }

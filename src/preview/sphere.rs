@@ -13,14 +13,6 @@
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
-/// Nearest intersection t > 0 of the ray `origin + t dir` (dir of any length) with the unit
-/// sphere, for an origin outside the sphere.
-#[inline]
-pub fn intersect(origin: Vec3, dir: Vec3) -> Option<f32> {
-    let len = dir.length();
-    hit(origin, dir).map(|p| (p - origin).length() / len)
-}
-
 /// The nearest point where the ray from `origin` (outside the sphere) along `dir` (any
 /// length) meets the unit sphere. Computed from the ray's closest approach to the centre
 /// (Haines et al., Ray Tracing Gems ch. 7), so a distant camera keeps full precision.

@@ -2,9 +2,9 @@
 //! fixtures. Not every test file uses every helper.
 #![allow(dead_code)]
 
-use cubeforge::cube::{face_dir, CubeMap, CubeSampler, Environment, Interp};
-use cubeforge::image::Image;
-use cubeforge::io::{self, ReadOptions, WriteOptions};
+use cubeforge::internals::cube::{face_dir, CubeMap, CubeSampler, Environment, Interp};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, ReadOptions, WriteOptions};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -157,7 +157,7 @@ pub fn seam_steps(cube: &CubeMap, level: usize) -> (f32, f32) {
 /// The mean of one channel over the sphere: each texel weighted by its solid angle.
 pub fn sphere_mean(faces: &[Image; 6], channel: usize) -> f64 {
     let n = faces[0].width;
-    let table = cubeforge::cube::solid_angle_table(n);
+    let table = cubeforge::internals::cube::solid_angle_table(n);
     let mut acc = 0.0f64;
     for f in faces {
         for (p, sa) in f.pixels.iter().zip(&table) {

@@ -2,8 +2,8 @@
 //! their data ends.
 
 use crate::harness::{be16, encoded, test_image};
-use cubeforge::image::Image;
-use cubeforge::io::{self, Decoded, Limits, ReadOptions, WriteOptions};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, Decoded, Limits, ReadOptions, WriteOptions};
 use glam::Vec4;
 use std::path::Path;
 

@@ -5,10 +5,10 @@
 use crate::harness::{formats, formats_with, test_cube};
 use crate::images::{png_fields, png_fix_crcs};
 use crate::mutator::Field;
-use cubeforge::cube::CubeMap;
-use cubeforge::filter::sh;
-use cubeforge::io::babylon_env::{self, SphericalPolynomial};
-use cubeforge::io::ktx1::{self, Ktx1Format};
+use cubeforge::internals::cube::CubeMap;
+use cubeforge::internals::filter::sh;
+use cubeforge::internals::io::babylon_env::{self, SphericalPolynomial};
+use cubeforge::internals::io::ktx1::{self, Ktx1Format};
 use glam::{Vec3, Vec4};
 
 /// A UInt32 of a KTX 1 file in its byte order (0 past the end).

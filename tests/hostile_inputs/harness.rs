@@ -3,9 +3,9 @@
 use crate::images::png_fix_crcs;
 use crate::mutator::{Field, Mutator};
 use crate::LARGEST;
-use cubeforge::cube::CubeMap;
-use cubeforge::image::Image;
-use cubeforge::io::{self, Decoded, FileFormat, Limits, ReadOptions, WriteOptions};
+use cubeforge::internals::cube::CubeMap;
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, Decoded, FileFormat, Limits, ReadOptions, WriteOptions};
 use glam::{Vec3, Vec4};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
@@ -168,7 +168,7 @@ pub fn image_door(dir: &Path, name: &str) -> impl Fn(&[u8]) -> cubeforge::Result
             FileFormat::from_extension(&path),
             Some(FileFormat::Ktx2 | FileFormat::Dds | FileFormat::Ktx1 | FileFormat::Env)
         ) {
-            cubeforge::info::describe(&path, None, &opts)?;
+            cubeforge::internals::info::describe(&path, None, &opts)?;
         }
         Ok(())
     }

@@ -2,8 +2,8 @@
 
 use crate::harness::{be16, encoded, formats, real_files, test_cube, test_image};
 use crate::mutator::Field;
-use cubeforge::image::Image;
-use cubeforge::io::{self, GpuFormat, WriteOptions};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, GpuFormat, WriteOptions};
 
 /// PNG: IHDR's fields and every chunk's length.
 pub fn png_fields(b: &[u8]) -> Vec<Field> {

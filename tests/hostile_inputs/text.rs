@@ -3,8 +3,8 @@
 
 use crate::harness::{campaign, encoded, limits, test_cube, test_image};
 use crate::mutator::Mutator;
-use cubeforge::control::{self, Size, Syntax};
-use cubeforge::io::{self, GpuFormat, ReadOptions, WriteOptions};
+use cubeforge::internals::control::{self, Size, Syntax};
+use cubeforge::internals::io::{self, GpuFormat, ReadOptions, WriteOptions};
 use std::path::Path;
 
 /// Control recipes (TOML and JSON) through `control::parse`, and baked at 16x16 when they
@@ -58,7 +58,7 @@ fn recipe_mutations() {
 /// Material files through `material::parse_toml`: every preset as written by `to_toml`.
 #[test]
 fn material_mutations() {
-    use cubeforge::preview::material;
+    use cubeforge::internals::preview::material;
     let path = Path::new("material-under-test.toml");
     for (i, (preset, _)) in material::presets().into_iter().enumerate() {
         let text = material::to_toml(&preset);
@@ -96,7 +96,7 @@ fn sidecar_mutations() {
         "map.png.json",
         &|b| {
             std::fs::write(&side, b).unwrap();
-            match cubeforge::preview::read_control(&map, 4.0, &Default::default()) {
+            match cubeforge::internals::preview::read_control(&map, 4.0, &Default::default()) {
                 // A bad sidecar must be named, not the map.
                 Err(e) if !e.to_string().contains("map.png.json") => Err(cubeforge::Error::file(
                     &side,
@@ -124,6 +124,6 @@ fn sidecar_mutations() {
     };
     campaign("levels.json", text, mutator, 100, "chain.dds", &|b| {
         std::fs::write(&levels, b).unwrap();
-        cubeforge::info::describe(&dds, None, &opts).map(drop)
+        cubeforge::internals::info::describe(&dds, None, &opts).map(drop)
     });
 }

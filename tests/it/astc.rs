@@ -32,7 +32,7 @@ fn astc_refused(input: &std::path::Path, out: &std::path::Path) -> String {
 pub(crate) fn refused_without_the_feature(format: &str) -> String {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("in.hdr");
-    let img = cubeforge::image::Image {
+    let img = cubeforge::internals::image::Image {
         width: 16,
         height: 8,
         pixels: vec![glam::Vec4::ONE; 128],
@@ -55,11 +55,11 @@ fn astc_without_the_feature_is_refused_before_any_work() {
 #[cfg(feature = "astc")]
 pub(crate) mod with_astc {
     use super::*;
-    use cubeforge::convert;
-    use cubeforge::cube::CubeMap;
-    use cubeforge::flux;
-    use cubeforge::io::{self, gpu, ktx2, Decoded, GpuFormat, Limits, ReadOptions};
-    use cubeforge::resample::Resampler;
+    use cubeforge::internals::convert;
+    use cubeforge::internals::cube::CubeMap;
+    use cubeforge::internals::flux;
+    use cubeforge::internals::io::{self, gpu, ktx2, Decoded, GpuFormat, Limits, ReadOptions};
+    use cubeforge::internals::resample::Resampler;
     use std::path::{Path, PathBuf};
 
     use crate::gpu_formats::panoramas;
@@ -135,7 +135,7 @@ pub(crate) mod with_astc {
                 .expect("loads");
             let cube = convert::to_cube(&loaded, 256, &Resampler::default()).with_box_mips(None);
             let light = |c: &CubeMap| {
-                let faces: Vec<&cubeforge::image::Image> = c.levels[0].iter().collect();
+                let faces: Vec<&cubeforge::internals::image::Image> = c.levels[0].iter().collect();
                 flux::mean_radiance(flux::Grid::Cube(c.size()), &faces)
             };
             let source = light(&cube);

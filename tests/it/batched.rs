@@ -1,9 +1,9 @@
 //! The batched lookups (vectorised coordinate maths, prefetched texel reads) give exactly the
 //! values of the one-at-a-time lookups they speed up, so no output depends on the path taken.
 
-use cubeforge::cube::{Dirs, Environment, Interp, BATCH};
-use cubeforge::image::Image;
-use cubeforge::layout::{ImageEnv, Projection};
+use cubeforge::internals::cube::{Dirs, Environment, Interp, BATCH};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::layout::{ImageEnv, Projection};
 use glam::{Vec3, Vec4};
 
 /// A deterministic, busy image: every texel differs from its neighbours.
@@ -103,7 +103,7 @@ fn assert_batches_match(env: &dyn Environment, dirs: &[Vec3], what: &str) {
 
 #[test]
 fn batch_transform_and_normalize_match_glam() {
-    let m = cubeforge::resample::Orientation {
+    let m = cubeforge::internals::resample::Orientation {
         yaw: 33.0,
         pitch: -12.0,
         roll: 7.5,
@@ -127,14 +127,14 @@ fn batch_transform_and_normalize_match_glam() {
 #[test]
 fn cube_sample_many_matches_sample() {
     let n = 24;
-    let cube = cubeforge::cube::CubeMap {
+    let cube = cubeforge::internals::cube::CubeMap {
         levels: vec![std::array::from_fn(|f| {
             let img = busy(n, n);
             Image::from_fn(n, n, |x, y| img.get(x, y) + Vec4::splat(f as f32))
         })],
     }
     .with_box_mips(None);
-    let sampler = cubeforge::cube::CubeSampler::new(&cube);
+    let sampler = cubeforge::internals::cube::CubeSampler::new(&cube);
     let mut dirs = directions();
     // Face edges and corners, where the face choice ties.
     for d in [
@@ -151,16 +151,17 @@ fn cube_sample_many_matches_sample() {
 #[test]
 fn sampler_with_box_mips_matches_the_copying_route() {
     let n = 20;
-    let faces: cubeforge::cube::Faces = std::array::from_fn(|f| {
+    let faces: cubeforge::internals::cube::Faces = std::array::from_fn(|f| {
         let img = busy(n, n);
         Image::from_fn(n, n, |x, y| img.get(x, y) * (f + 1) as f32)
     });
-    let cube = cubeforge::cube::CubeMap {
+    let cube = cubeforge::internals::cube::CubeMap {
         levels: vec![faces.clone()],
     };
     for count in [Some(1), Some(3), None] {
-        let direct = cubeforge::cube::CubeSampler::with_box_mips(&faces, count);
-        let copied = cubeforge::cube::CubeSampler::new(&cube.clone().with_box_mips(count));
+        let direct = cubeforge::internals::cube::CubeSampler::with_box_mips(&faces, count);
+        let copied =
+            cubeforge::internals::cube::CubeSampler::new(&cube.clone().with_box_mips(count));
         assert_eq!(direct.levels(), copied.levels());
         for level in 0..direct.levels() {
             for d in directions() {
@@ -176,13 +177,13 @@ fn sampler_with_box_mips_matches_the_copying_route() {
 #[test]
 fn trilinear_many_matches_sample_split() {
     let n = 16;
-    let cube = cubeforge::cube::CubeMap {
+    let cube = cubeforge::internals::cube::CubeMap {
         levels: vec![std::array::from_fn(|f| {
             let img = busy(n, n);
             Image::from_fn(n, n, |x, y| img.get(x, y) - Vec4::splat(f as f32))
         })],
     };
-    let sampler = cubeforge::cube::CubeSampler::with_box_mips(&cube.levels[0], None);
+    let sampler = cubeforge::internals::cube::CubeSampler::with_box_mips(&cube.levels[0], None);
     let dirs = directions();
     let top = sampler.levels();
     for chunk in dirs.chunks(BATCH) {

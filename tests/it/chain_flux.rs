@@ -4,16 +4,16 @@
 //! for a wide patch of the filtered environment rather than its value at their centres.
 
 use crate::common;
-use cubeforge::convert::{self, Output};
-use cubeforge::cube::CubeMap;
-use cubeforge::filter::{self, ChainOptions, FilterKind};
-use cubeforge::flux::{mean_radiance, Grid};
-use cubeforge::io::ReadOptions;
-use cubeforge::layout::Kind;
-use cubeforge::resample::Resampler;
+use cubeforge::internals::convert::{self, Output};
+use cubeforge::internals::cube::CubeMap;
+use cubeforge::internals::filter::{self, ChainOptions, FilterKind};
+use cubeforge::internals::flux::{mean_radiance, Grid};
+use cubeforge::internals::io::ReadOptions;
+use cubeforge::internals::layout::Kind;
+use cubeforge::internals::resample::Resampler;
 
 /// The largest relative change of any channel's flux between `level` and `want`.
-fn change(level: &[cubeforge::image::Image; 6], want: [f64; 3]) -> f64 {
+fn change(level: &[cubeforge::internals::image::Image; 6], want: [f64; 3]) -> f64 {
     let got = mean_radiance(
         Grid::Cube(level[0].width),
         &level.iter().collect::<Vec<_>>(),

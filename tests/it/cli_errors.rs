@@ -6,11 +6,11 @@
 use crate::common;
 
 use common::{read_image, run, stderr, write_image};
-use cubeforge::cube::FACE_NAMES;
-use cubeforge::image::Image;
-use cubeforge::layout::{cross, Projection};
-use cubeforge::resample::{FnEnv, Resampler};
-use cubeforge::synthetic::smooth;
+use cubeforge::internals::cube::FACE_NAMES;
+use cubeforge::internals::image::Image;
+use cubeforge::internals::layout::{cross, Projection};
+use cubeforge::internals::resample::{FnEnv, Resampler};
+use cubeforge::internals::synthetic::smooth;
 use glam::Vec4;
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -68,7 +68,7 @@ fn faces(n: usize) -> [Image; 6] {
 }
 
 fn encode(name: &str, img: &Image) -> Vec<u8> {
-    cubeforge::io::encode_image(Path::new(name), img, &Default::default()).unwrap()
+    cubeforge::internals::io::encode_image(Path::new(name), img, &Default::default()).unwrap()
 }
 
 /// Failed cleanly: non-zero exit (not a panic's 101), and stderr is exactly one line, starting

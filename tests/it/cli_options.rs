@@ -32,8 +32,8 @@ pub(crate) fn err(o: &Output) -> String {
 }
 
 fn mean(path: &Path) -> f32 {
-    let (d, _) = cubeforge::io::read(path, &Default::default()).unwrap();
-    let cubeforge::io::Decoded::Image(img) = d else {
+    let (d, _) = cubeforge::internals::io::read(path, &Default::default()).unwrap();
+    let cubeforge::internals::io::Decoded::Image(img) = d else {
         panic!("an image")
     };
     img.pixels.iter().map(|p| p.x + p.y + p.z).sum::<f32>() / img.pixels.len() as f32
@@ -142,8 +142,9 @@ fn convert_reads_one_level_of_a_chain() {
         ],
         t.path(),
     );
-    let (d, _) = cubeforge::io::read(&t.path().join("l2.ktx2"), &Default::default()).unwrap();
-    let cubeforge::io::Decoded::Cube(c) = d else {
+    let (d, _) =
+        cubeforge::internals::io::read(&t.path().join("l2.ktx2"), &Default::default()).unwrap();
+    let cubeforge::internals::io::Decoded::Cube(c) = d else {
         panic!("a cube")
     };
     assert_eq!(c.size(), 4);
@@ -289,9 +290,10 @@ fn standard_input_and_output() {
 
 #[test]
 fn progress_is_reported_row_by_row() {
-    use cubeforge::filter::{irradiance_with_progress, IrradianceMethod};
-    let cube =
-        cubeforge::cube::CubeMap::from_fn(8, |d| glam::Vec4::new(d.x.max(0.0), 0.5, 0.2, 1.0));
+    use cubeforge::internals::filter::{irradiance_with_progress, IrradianceMethod};
+    let cube = cubeforge::internals::cube::CubeMap::from_fn(8, |d| {
+        glam::Vec4::new(d.x.max(0.0), 0.5, 0.2, 1.0)
+    });
     let rows = AtomicU64::new(0);
     irradiance_with_progress(&cube, 5, IrradianceMethod::Brute, &|n| {
         rows.fetch_add(n, Ordering::Relaxed);
@@ -336,7 +338,7 @@ fn an_oversized_control_map_names_where_its_size_came_from() {
 
 #[test]
 fn library_errors_have_kinds() {
-    use cubeforge::io::{read, Limits, ReadOptions};
+    use cubeforge::internals::io::{read, Limits, ReadOptions};
     use cubeforge::Error;
     let t = tempfile::tempdir().unwrap();
     let missing = t.path().join("missing.exr");
@@ -379,7 +381,7 @@ fn library_errors_have_kinds() {
         "size = \"8x8\"\n[reflectivity]\nconstant = [1, 2]\n",
     )
     .unwrap();
-    match cubeforge::control::load(&recipe, &Limits::default()) {
+    match cubeforge::internals::control::load(&recipe, &Limits::default()) {
         Err(e @ Error::Recipe { line: Some(3), .. }) => {
             assert!(e.to_string().contains("bad.toml: line 3: "), "{e}")
         }

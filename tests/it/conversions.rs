@@ -3,20 +3,22 @@
 
 use crate::common;
 
-use cubeforge::convert::{self, Loaded, Output, Source};
-use cubeforge::cube::{dir_face, face_dir, CubeMap, Environment, Interp};
-use cubeforge::image::Image;
-use cubeforge::io::{FileFormat, Meta};
-use cubeforge::layout::{self, angular, cross, equirect, octahedral, sphere, Kind, Projection};
-use cubeforge::resample::{FnEnv, Orientation, Resampler};
-use cubeforge::synthetic;
+use cubeforge::internals::convert::{self, Loaded, Output, Source};
+use cubeforge::internals::cube::{dir_face, face_dir, CubeMap, Environment, Interp};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{FileFormat, Meta};
+use cubeforge::internals::layout::{
+    self, angular, cross, equirect, octahedral, sphere, Kind, Projection,
+};
+use cubeforge::internals::resample::{FnEnv, Orientation, Resampler};
+use cubeforge::internals::synthetic;
 use glam::{Vec3, Vec4};
 
 fn meta() -> Meta {
     Meta {
         file_format: FileFormat::Exr,
         pixel_format: "RGBA32F".into(),
-        color_space: cubeforge::image::ColorSpace::Linear,
+        color_space: cubeforge::internals::image::ColorSpace::Linear,
         hdr: true,
         replaced_values: 0,
         stored_levels: 1,
@@ -553,7 +555,8 @@ fn detection_by_aspect_ratio() {
     assert_eq!(layout::detect(768, 128), Ok(Kind::Hstrip));
     assert_eq!(layout::detect(128, 768), Ok(Kind::Vstrip));
     // The library names the parameter; the CLI says --from (tests/it/cli_errors.rs).
-    let square = cubeforge::error::name_params(&layout::detect(256, 256).unwrap_err(), false);
+    let square =
+        cubeforge::internals::error::name_params(&layout::detect(256, 256).unwrap_err(), false);
     assert!(
         square.contains("`from` sphere") && square.contains("octahedral"),
         "{square}"

@@ -3,10 +3,10 @@
 //! seams, and cmft's warp formula places the texels.
 
 use crate::common::{run, stderr};
-use cubeforge::convert;
-use cubeforge::cube::fixup::{self, warp_factor, EdgeFixup};
-use cubeforge::cube::{dir_face, face_dir, CubeMap, Faces};
-use cubeforge::io::ReadOptions;
+use cubeforge::internals::convert;
+use cubeforge::internals::cube::fixup::{self, warp_factor, EdgeFixup};
+use cubeforge::internals::cube::{dir_face, face_dir, CubeMap, Faces};
+use cubeforge::internals::io::ReadOptions;
 use cubeforge::Resampler;
 use glam::{Vec3, Vec4};
 use std::path::Path;
@@ -221,12 +221,16 @@ fn every_cube_output_and_chain_level_is_fixed() {
             let faces = dir.path().join("smooth");
             std::fs::create_dir_all(&faces).unwrap();
             for (f, img) in smooth.iter().enumerate() {
-                let p = faces.join(format!("{}.exr", cubeforge::cube::FACE_NAMES[f]));
-                let opts = cubeforge::io::WriteOptions {
-                    exr_float: cubeforge::io::ExrFloat::F32,
+                let p = faces.join(format!("{}.exr", cubeforge::internals::cube::FACE_NAMES[f]));
+                let opts = cubeforge::internals::io::WriteOptions {
+                    exr_float: cubeforge::internals::io::ExrFloat::F32,
                     ..Default::default()
                 };
-                std::fs::write(&p, cubeforge::io::encode_image(&p, img, &opts).unwrap()).unwrap();
+                std::fs::write(
+                    &p,
+                    cubeforge::internals::io::encode_image(&p, img, &opts).unwrap(),
+                )
+                .unwrap();
             }
             let fixed = dir.path().join("smooth.ktx2");
             let r = run([
@@ -257,7 +261,7 @@ fn every_cube_output_and_chain_level_is_fixed() {
             assert!(after < 1e-3 * before, "{name}: {after}");
         }
         if name.ends_with(".ktx2") {
-            let kv = cubeforge::io::ktx2::metadata(&std::fs::read(&out).unwrap());
+            let kv = cubeforge::internals::io::ktx2::metadata(&std::fs::read(&out).unwrap());
             assert!(kv
                 .iter()
                 .any(|(k, v)| k == "cubeforge.edgeFixup" && v == b"warp"));

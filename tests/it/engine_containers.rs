@@ -5,11 +5,11 @@
 //! environments, and hostile headers.
 
 use crate::common::{self, run, stderr};
-use cubeforge::cube::{face_dir, CubeMap};
-use cubeforge::filter::sh;
-use cubeforge::io::babylon_env::{self, SphericalPolynomial};
-use cubeforge::io::ktx1::{self, KeyValue, Ktx1Format};
-use cubeforge::io::{self, Decoded, GpuFormat, Limits, ReadOptions};
+use cubeforge::internals::cube::{face_dir, CubeMap};
+use cubeforge::internals::filter::sh;
+use cubeforge::internals::io::babylon_env::{self, SphericalPolynomial};
+use cubeforge::internals::io::ktx1::{self, KeyValue, Ktx1Format};
+use cubeforge::internals::io::{self, Decoded, GpuFormat, Limits, ReadOptions};
 use glam::{Vec3, Vec4};
 use std::path::Path;
 use std::process::Command;
@@ -220,7 +220,9 @@ fn playcanvas_reads_our_ktx1() {
                         let t = &b[y * row + x * bpt..y * row + (x + 1) * bpt];
                         let got: Vec<f32> = match format {
                             Ktx1Format::Rgba8Srgb => (0..3)
-                                .map(|c| cubeforge::image::srgb_to_linear(t[c] as f32 / 255.0))
+                                .map(|c| {
+                                    cubeforge::internals::image::srgb_to_linear(t[c] as f32 / 255.0)
+                                })
                                 .collect(),
                             _ => (0..3)
                                 .map(|c| {
@@ -355,7 +357,7 @@ fn babylon_reads_our_env() {
                         .chunks_exact(4)
                         .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
                         .collect();
-                    cubeforge::image::Image::from_fn(n, n, |x, y| {
+                    cubeforge::internals::image::Image::from_fn(n, n, |x, y| {
                         let i = 3 * (y * n + x);
                         Vec4::new(v[i], v[i + 1], v[i + 2], 1.0)
                     })

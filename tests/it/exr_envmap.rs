@@ -6,10 +6,10 @@
 //! says what the file declared; and how `info` names an EXR's samples and compression.
 
 use crate::common;
-use cubeforge::cube::{texel_dir, CubeMap};
-use cubeforge::image::Image;
-use cubeforge::io::{self, Decoded, ReadOptions};
-use cubeforge::layout::equirect;
+use cubeforge::internals::cube::{texel_dir, CubeMap};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, Decoded, ReadOptions};
+use cubeforge::internals::layout::equirect;
 use exr::meta::attribute::EnvironmentMap;
 use exr::prelude::{Encoding, Layer, LayerAttributes, SpecificChannels, WritableImage};
 use glam::Vec3;

@@ -33,7 +33,7 @@ fn info(file: &Path, args: &[&str]) -> String {
 }
 
 /// `convert FILE --to equirect -o OUT ARGS`, read back.
-fn convert(file: &Path, out: &Path, args: &[&str]) -> (cubeforge::image::Image, String) {
+fn convert(file: &Path, out: &Path, args: &[&str]) -> (cubeforge::internals::image::Image, String) {
     let mut all: Vec<&OsStr> = vec![
         "convert".as_ref(),
         file.as_os_str(),
@@ -239,7 +239,7 @@ fn exrmaketiled_mip_levels_are_counted_and_each_is_read() {
     let dir = tempfile::tempdir().unwrap();
     // A float equirect, 128 x 64, made into tiles with a mip chain by OpenEXR's own tool.
     let flat = dir.path().join("flat.exr");
-    let mut img = cubeforge::image::Image::new(128, 64);
+    let mut img = cubeforge::internals::image::Image::new(128, 64);
     for (i, p) in img.pixels.iter_mut().enumerate() {
         let (x, y) = ((i % 128) as f32, (i / 128) as f32);
         *p = glam::Vec4::new(x / 128.0, y / 64.0, ((x + 3.0 * y) % 7.0) / 7.0, 1.0);

@@ -6,7 +6,7 @@
 
 pub(crate) use crate::atomic_writes::tree;
 use crate::common::{run, stderr};
-use cubeforge::image::Image;
+use cubeforge::internals::image::Image;
 use glam::Vec4;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -322,13 +322,13 @@ fn writes_that_fail_say_so() {
     }
 }
 
-/// Item 2: what a header claims ([`cubeforge::io::claim`], read before any decode) is what
+/// Item 2: what a header claims ([`cubeforge::internals::io::claim`], read before any decode) is what
 /// the decoder then gives, for every format cubeforge reads; a file past the first MiB (a
 /// noisy PNG) and a JPEG whose size comes after 1.1 MB of metadata are claimed right too.
 #[test]
 fn claims_match_what_decoding_gives() {
-    use cubeforge::cube::CubeMap;
-    use cubeforge::io::{self, Decoded, GpuFormat, ReadOptions, WriteOptions};
+    use cubeforge::internals::cube::CubeMap;
+    use cubeforge::internals::io::{self, Decoded, GpuFormat, ReadOptions, WriteOptions};
     let dir = tempfile::tempdir().unwrap();
     let opts = ReadOptions::default();
     let img = Image::from_fn(24, 12, |x, y| {

@@ -5,9 +5,9 @@
 use crate::common;
 
 use common::{run, stderr};
-use cubeforge::cube::CubeMap;
-use cubeforge::image::Image;
-use cubeforge::io::{self, Decoded, GpuFormat, ReadOptions};
+use cubeforge::internals::cube::CubeMap;
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, Decoded, GpuFormat, ReadOptions};
 use glam::Vec4;
 use std::path::Path;
 

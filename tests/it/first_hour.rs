@@ -1,7 +1,7 @@
 //! A new user's first hour: the surprises a first try ran into, each one now said or avoided.
 
 use crate::cli_options::{err, run, run_ok};
-use cubeforge::image::Image;
+use cubeforge::internals::image::Image;
 use glam::{Vec3, Vec4};
 use std::path::Path;
 
@@ -65,8 +65,8 @@ fn zstd_takes_its_level_after_a_space() {
 /// The largest Laplacian of the luminance over the inner disc of a sphere preview, relative:
 /// a chain's 1 x 1 faces draw the cube's box outline there as creases.
 fn crease(path: &Path) -> f32 {
-    let (d, _) = cubeforge::io::read(path, &Default::default()).unwrap();
-    let cubeforge::io::Decoded::Image(img) = d else {
+    let (d, _) = cubeforge::internals::io::read(path, &Default::default()).unwrap();
+    let cubeforge::internals::io::Decoded::Image(img) = d else {
         panic!("an image")
     };
     let n = img.width;
@@ -103,7 +103,8 @@ fn blurry_chains_stop_at_16_px_and_show_no_box_outline() {
         Vec4::new(1.0 + 0.8 * d.y, 1.0 + 0.5 * d.x, 1.0 + 0.6 * d.z, 1.0)
     });
     let input = t.path().join("smooth.exr");
-    let bytes = cubeforge::io::encode_image(&input, &smooth, &Default::default()).unwrap();
+    let bytes =
+        cubeforge::internals::io::encode_image(&input, &smooth, &Default::default()).unwrap();
     std::fs::write(&input, bytes).unwrap();
     let input = input.to_str().unwrap().to_owned();
     let mut creases = Vec::new();
@@ -182,10 +183,10 @@ fn blurry_chains_stop_at_16_px_and_show_no_box_outline() {
 }
 
 fn mean_rgb(path: &Path) -> f64 {
-    let (d, _) = cubeforge::io::read(path, &Default::default()).unwrap();
+    let (d, _) = cubeforge::internals::io::read(path, &Default::default()).unwrap();
     let images: Vec<Image> = match d {
-        cubeforge::io::Decoded::Image(img) => vec![img],
-        cubeforge::io::Decoded::Cube(c) => c.levels[0].to_vec(),
+        cubeforge::internals::io::Decoded::Image(img) => vec![img],
+        cubeforge::internals::io::Decoded::Cube(c) => c.levels[0].to_vec(),
     };
     let (sum, n) = images
         .iter()
@@ -335,13 +336,13 @@ fn a_sun_beyond_half_float_is_kept_with_exr_float_f32() {
         Vec4::new(v, v, v, 1.0)
     });
     let input = t.path().join("sun.exr");
-    let write = cubeforge::io::WriteOptions {
-        exr_float: cubeforge::io::ExrFloat::F32,
+    let write = cubeforge::internals::io::WriteOptions {
+        exr_float: cubeforge::internals::io::ExrFloat::F32,
         ..Default::default()
     };
     std::fs::write(
         &input,
-        cubeforge::io::encode_image(&input, &sun, &write).unwrap(),
+        cubeforge::internals::io::encode_image(&input, &sun, &write).unwrap(),
     )
     .unwrap();
     let input = input.to_str().unwrap();
@@ -369,8 +370,9 @@ fn a_sun_beyond_half_float_is_kept_with_exr_float_f32() {
         t.path(),
     );
     assert!(err(&o).is_empty(), "{}", err(&o));
-    let (d, _) = cubeforge::io::read(&t.path().join("full.exr"), &Default::default()).unwrap();
-    let cubeforge::io::Decoded::Image(img) = d else {
+    let (d, _) =
+        cubeforge::internals::io::read(&t.path().join("full.exr"), &Default::default()).unwrap();
+    let cubeforge::internals::io::Decoded::Image(img) = d else {
         panic!("an image")
     };
     let top = img.pixels.iter().map(|p| p.x).fold(0.0, f32::max);
@@ -439,8 +441,9 @@ fn ibl_never_enlarges_without_saying_so() {
         "{text}"
     );
     let (d, _) =
-        cubeforge::io::read(&t.path().join("b/env_specular.ktx2"), &Default::default()).unwrap();
-    let cubeforge::io::Decoded::Cube(c) = d else {
+        cubeforge::internals::io::read(&t.path().join("b/env_specular.ktx2"), &Default::default())
+            .unwrap();
+    let cubeforge::internals::io::Decoded::Cube(c) = d else {
         panic!("a cube")
     };
     assert_eq!(c.size(), 128);

@@ -4,14 +4,14 @@
 
 use crate::common;
 
-use cubeforge::convert::{self, Loaded, Output, Source};
-use cubeforge::cube::CubeMap;
-use cubeforge::filter::{self, sh, ChainOptions, FilterKind, IrradianceMethod};
-use cubeforge::flux::{mean_radiance, Grid};
-use cubeforge::image::{ColorSpace, Image};
-use cubeforge::io::{FileFormat, Meta, ReadOptions};
-use cubeforge::layout::{equirect, Kind, Projection};
-use cubeforge::resample::Resampler;
+use cubeforge::internals::convert::{self, Loaded, Output, Source};
+use cubeforge::internals::cube::CubeMap;
+use cubeforge::internals::filter::{self, sh, ChainOptions, FilterKind, IrradianceMethod};
+use cubeforge::internals::flux::{mean_radiance, Grid};
+use cubeforge::internals::image::{ColorSpace, Image};
+use cubeforge::internals::io::{FileFormat, Meta, ReadOptions};
+use cubeforge::internals::layout::{equirect, Kind, Projection};
+use cubeforge::internals::resample::Resampler;
 use glam::{Vec3, Vec4};
 use std::path::PathBuf;
 

@@ -3,8 +3,8 @@
 
 use crate::common;
 
-use cubeforge::image::{linear_to_srgb, srgb_to_linear, Image};
-use cubeforge::io::{self, Decoded, ReadOptions, WriteOptions};
+use cubeforge::internals::image::{linear_to_srgb, srgb_to_linear, Image};
+use cubeforge::internals::io::{self, Decoded, ReadOptions, WriteOptions};
 use glam::Vec4;
 use std::process::Command;
 

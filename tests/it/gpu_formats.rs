@@ -4,11 +4,11 @@
 //! padding of small mips, thread-count independence, clamping of negatives.
 
 use crate::common;
-use cubeforge::convert;
-use cubeforge::cube::CubeMap;
-use cubeforge::image::Image;
-use cubeforge::io::{self, dds, gpu, ktx2, Decoded, GpuFormat, Limits, ReadOptions};
-use cubeforge::resample::Resampler;
+use cubeforge::internals::convert;
+use cubeforge::internals::cube::CubeMap;
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, dds, gpu, ktx2, Decoded, GpuFormat, Limits, ReadOptions};
+use cubeforge::internals::resample::Resampler;
 use glam::Vec4;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -99,8 +99,12 @@ fn bc6h_keeps_real_panoramas_within_the_stated_psnr() {
             println!("{} BC6H {kind}: {p:.2} dB", pano.display());
             if kind == "ktx2" {
                 let light = |c: &CubeMap| {
-                    let faces: Vec<&cubeforge::image::Image> = c.levels[0].iter().collect();
-                    cubeforge::flux::mean_radiance(cubeforge::flux::Grid::Cube(c.size()), &faces)
+                    let faces: Vec<&cubeforge::internals::image::Image> =
+                        c.levels[0].iter().collect();
+                    cubeforge::internals::flux::mean_radiance(
+                        cubeforge::internals::flux::Grid::Cube(c.size()),
+                        &faces,
+                    )
                 };
                 let (a, b) = (light(&cube), light(&back));
                 let off = (0..3)
@@ -370,7 +374,7 @@ fn texture2ddecoder_agrees_with_our_block_decoding() {
         for (i, (p, t)) in ours.pixels.iter().zip(theirs.chunks_exact(4)).enumerate() {
             let stored = |v: f32| {
                 let v = if format.is_srgb() {
-                    cubeforge::image::linear_to_srgb(v)
+                    cubeforge::internals::image::linear_to_srgb(v)
                 } else {
                     v
                 };

@@ -3,8 +3,8 @@
 //! `--decode` (a KTX2 by its metadata, a PNG by its text chunk, alone).
 
 use crate::common::{self, read_image, run, stderr};
-use cubeforge::image::Image;
-use cubeforge::io::{self, Decoded, ReadOptions};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, Decoded, ReadOptions};
 use glam::Vec4;
 use std::path::Path;
 
@@ -272,9 +272,9 @@ fn files_that_cannot_hold_an_encoding_are_refused() {
 /// that cannot hold an encoding even when the input does not exist.
 #[test]
 fn the_jobs_refuse_an_encoding_in_validate() {
-    use cubeforge::io::HdrEncoding;
-    use cubeforge::jobs::{ConvertJob, IrradianceJob, Job, PrefilterJob};
-    use cubeforge::output::Destination;
+    use cubeforge::internals::io::HdrEncoding;
+    use cubeforge::internals::jobs::{ConvertJob, IrradianceJob, Job, PrefilterJob};
+    use cubeforge::internals::output::Destination;
     let dir = tempfile::tempdir().unwrap();
     let missing = vec![dir.path().join("nowhere.exr")];
     let out = |name: &str| Destination::Path(dir.path().join(name));

@@ -3,8 +3,8 @@
 //! must give a one-line error naming the file, never a panic or an abort.
 
 use crate::common::XorShift;
-use cubeforge::image::Image;
-use cubeforge::io::{self, Decoded, ReadOptions};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, Decoded, ReadOptions};
 use exr::prelude::*;
 use glam::Vec4;
 use std::io::Cursor;
@@ -28,7 +28,7 @@ fn real(sub: &str) -> Option<Vec<PathBuf>> {
     Some(files)
 }
 
-/// Reads `bytes` as the file `name` through `cubeforge::io::read`. A panic fails the test
+/// Reads `bytes` as the file `name` through `cubeforge::internals::io::read`. A panic fails the test
 /// (with `what` to say which file it was); the error, if any, comes back as its message.
 fn read(dir: &Path, name: &str, bytes: &[u8], what: &str) -> std::result::Result<Image, String> {
     let path = dir.join(name);
@@ -248,7 +248,7 @@ fn corrupt_dwa_sizes_of_written_files_are_refused() {
 
 /// `count` copies of `bytes`, each with a few bytes changed (most near the start, where
 /// the headers, the chunk table and the first chunk's header and DWA counters are), read
-/// through `cubeforge::io::read`: Ok or Err, but no panic.
+/// through `cubeforge::internals::io::read`: Ok or Err, but no panic.
 /// HOSTILE_EXR_ROUNDS=n runs n times as many (for a longer search by hand).
 fn mutate(bytes: &[u8], seed: u64, count: usize, dir: &Path, what: &str) -> (usize, usize) {
     let scale: usize = std::env::var("HOSTILE_EXR_ROUNDS")
@@ -399,7 +399,7 @@ fn duplicate_and_missing_blocks_are_refused() {
 
 /// The exr crate's own reader, for comparison.
 fn crate_reader(bytes: &[u8]) -> Image {
-    cubeforge::io::exr::crate_reader(bytes).unwrap()
+    cubeforge::internals::io::exr::crate_reader(bytes).unwrap()
 }
 
 /// (d) The real fixtures, and files of every layout the crate writes, decode exactly as the

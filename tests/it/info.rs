@@ -5,12 +5,12 @@
 use crate::common;
 
 use common::{run, stderr, write_image};
-use cubeforge::cube::FACE_NAMES;
-use cubeforge::image::Image;
-use cubeforge::info::{self, Report};
-use cubeforge::io::ReadOptions;
-use cubeforge::layout::cross::{self, Cells};
-use cubeforge::layout::Kind;
+use cubeforge::internals::cube::FACE_NAMES;
+use cubeforge::internals::image::Image;
+use cubeforge::internals::info::{self, Report};
+use cubeforge::internals::io::ReadOptions;
+use cubeforge::internals::layout::cross::{self, Cells};
+use cubeforge::internals::layout::Kind;
 use glam::Vec4;
 use std::path::{Path, PathBuf};
 
@@ -87,7 +87,7 @@ fn square_images_need_from_for_their_face_size() {
     let r = describe(&p, None).unwrap();
     assert_eq!((r.kind, r.face_size), (None, None));
     // The library names the parameter by its field (the CLI by its flag).
-    let note = cubeforge::error::name_params(&r.kind_note.clone().unwrap(), false);
+    let note = cubeforge::internals::error::name_params(&r.kind_note.clone().unwrap(), false);
     assert!(
         note.contains("`from` sphere")
             && note.contains("`from` octahedral")
@@ -278,7 +278,10 @@ fn a_prefiltered_chain_folder_lists_its_levels() {
         (Some(Kind::Faces.into()), Some(8), 4)
     );
     let levels = r.levels.as_ref().expect("levels.json");
-    assert_eq!(levels.filter, cubeforge::filter::FilterKind::Gaussian);
+    assert_eq!(
+        levels.filter,
+        cubeforge::internals::filter::FilterKind::Gaussian
+    );
     assert_eq!(levels.levels.len(), 4);
 
     let v = json(&[chain.as_os_str()]);
@@ -363,8 +366,8 @@ fn real_folders_and_balls() {
 }
 
 /// A 16 px cube with its 5 box levels, every value in [0.1, 3.1]: nothing bad anywhere.
-fn clean_chain() -> cubeforge::cube::CubeMap {
-    cubeforge::cube::CubeMap::from_fn(16, |d| {
+fn clean_chain() -> cubeforge::internals::cube::CubeMap {
+    cubeforge::internals::cube::CubeMap::from_fn(16, |d| {
         Vec4::new(d.x.abs() * 3.0 + 0.1, d.y * 0.5 + 0.6, d.z.abs() + 0.1, 1.0)
     })
     .with_box_mips(None)
@@ -464,7 +467,8 @@ fn patch(bytes: &mut [u8], half: bool, at: impl Fn(usize, usize, usize) -> usize
 fn a_bad_mip_in_a_ktx2_chain_is_counted_and_named() {
     let dir = tempfile::tempdir().unwrap();
     let cube = clean_chain();
-    let mut b = cubeforge::io::ktx2::encode(&cube, cubeforge::io::GpuFormat::Rgba16f);
+    let mut b =
+        cubeforge::internals::io::ktx2::encode(&cube, cubeforge::internals::io::GpuFormat::Rgba16f);
     let clean = dir.path().join("clean.ktx2");
     std::fs::write(&clean, &b).unwrap();
     assert_clean(&clean);
@@ -485,7 +489,9 @@ fn a_bad_mip_in_a_ktx2_chain_is_counted_and_named() {
 fn a_bad_mip_in_a_dds_chain_is_counted_and_named() {
     let dir = tempfile::tempdir().unwrap();
     let cube = clean_chain();
-    let mut b = cubeforge::io::dds::encode(&cube, cubeforge::io::GpuFormat::Rgba32f).unwrap();
+    let mut b =
+        cubeforge::internals::io::dds::encode(&cube, cubeforge::internals::io::GpuFormat::Rgba32f)
+            .unwrap();
     let clean = dir.path().join("clean.dds");
     std::fs::write(&clean, &b).unwrap();
     assert_clean(&clean);
@@ -544,9 +550,9 @@ fn a_bad_mip_in_a_chain_folder_is_counted_and_named() {
 /// and a layout given for a container file is refused by the file.
 #[test]
 fn a_container_is_its_own_kind_and_from_takes_layouts() {
-    use cubeforge::io::{dds, Container, GpuFormat, MapKind};
+    use cubeforge::internals::io::{dds, Container, GpuFormat, MapKind};
     let dir = tempfile::tempdir().unwrap();
-    let cube = cubeforge::cube::CubeMap::from_fn(8, |_| Vec4::ONE);
+    let cube = cubeforge::internals::cube::CubeMap::from_fn(8, |_| Vec4::ONE);
     let p = dir.path().join("c.dds");
     std::fs::write(&p, dds::encode(&cube, GpuFormat::Rgba16f).unwrap()).unwrap();
     let r = describe(&p, None).unwrap();

@@ -193,8 +193,6 @@ fn only_the_output_module_writes_files() {
         ".create_new(true)",
         ".truncate(true)",
         "stage_with(",
-        "write_all_atomic(",
-        "write_all_atomic_with(",
     ];
     for f in files {
         let rel = f

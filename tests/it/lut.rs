@@ -4,7 +4,7 @@
 
 use crate::common;
 
-use cubeforge::lut::{self, LutOptions};
+use cubeforge::internals::lut::{self, LutOptions};
 use std::f64::consts::PI;
 
 /// Which integral.
@@ -161,7 +161,7 @@ fn quadrature_knows_the_limits() {
 /// by oiiotool (16-bit PNG, half EXR) and by ktx-parse (RGBA16F, one 2D level).
 #[test]
 fn the_command_writes_each_format() {
-    use cubeforge::io::{self, Decoded, ReadOptions};
+    use cubeforge::internals::io::{self, Decoded, ReadOptions};
     let dir = tempfile::tempdir().unwrap();
     let size = 32;
     let opts = LutOptions {

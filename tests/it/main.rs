@@ -49,6 +49,7 @@ mod sh_bands;
 mod simd;
 mod streamed;
 mod sun;
+mod surface;
 mod texel_truth;
 mod uastc;
 mod ultrahdr;

@@ -4,13 +4,13 @@
 
 use crate::common;
 
-use cubeforge::convert::{self, Loaded, Output, Source};
-use cubeforge::cube::{CubeMap, Environment, Interp};
-use cubeforge::image::Image;
-use cubeforge::io::{FileFormat, Meta};
-use cubeforge::layout::{octahedral, ImageEnv, Kind, Projection};
-use cubeforge::resample::Resampler;
-use cubeforge::synthetic;
+use cubeforge::internals::convert::{self, Loaded, Output, Source};
+use cubeforge::internals::cube::{CubeMap, Environment, Interp};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{FileFormat, Meta};
+use cubeforge::internals::layout::{octahedral, ImageEnv, Kind, Projection};
+use cubeforge::internals::resample::Resampler;
+use cubeforge::internals::synthetic;
 use glam::{Vec3, Vec4};
 
 fn loaded(source: Source, kind: Kind) -> Loaded {
@@ -21,7 +21,7 @@ fn loaded(source: Source, kind: Kind) -> Loaded {
         meta: Meta {
             file_format: FileFormat::Exr,
             pixel_format: "RGBA32F".into(),
-            color_space: cubeforge::image::ColorSpace::Linear,
+            color_space: cubeforge::internals::image::ColorSpace::Linear,
             hdr: true,
             replaced_values: 0,
             stored_levels: 1,
@@ -233,7 +233,7 @@ fn round_trips_through_an_octahedral_map() {
 #[test]
 fn the_marker_lands_where_the_convention_says() {
     let n = 128;
-    let from_fn = cubeforge::resample::FnEnv(synthetic::marker);
+    let from_fn = cubeforge::internals::resample::FnEnv(synthetic::marker);
     let rs = Resampler {
         antialias: false,
         ..Resampler::default()
@@ -305,7 +305,7 @@ fn command_line_writes_and_reads_octahedral_maps() {
     // What the library makes: the panorama to an octahedral map of 64, that map to a panorama
     // keeping its face size (32: 128 x 64).
     let rs = Resampler::default();
-    let read = cubeforge::io::ReadOptions::default();
+    let read = cubeforge::internals::io::ReadOptions::default();
     let sky = convert::load(&[SKY.into()], None, &read).unwrap();
     let want_octa = image(convert::convert(&sky, Kind::Octahedral, 32, &rs));
     let got_octa = common::read_image(&octa);

@@ -3,10 +3,10 @@
 
 use crate::common;
 
-use cubeforge::cube::{face_dir, CubeMap, CubeSampler, Environment};
-use cubeforge::filter::{self, brute, lobe::Lobe, sh, ChainOptions, FilterKind};
-use cubeforge::image::Image;
-use cubeforge::synthetic;
+use cubeforge::internals::cube::{face_dir, CubeMap, CubeSampler, Environment};
+use cubeforge::internals::filter::{self, brute, lobe::Lobe, sh, ChainOptions, FilterKind};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::synthetic;
 use glam::{Vec3, Vec4};
 
 /// A sky with detail at every scale and a small HDR sun.
@@ -312,7 +312,7 @@ fn irradiance_matches_closed_forms_both_ways() {
 
 #[test]
 fn chains_round_trip_through_ktx2_and_dds() {
-    use cubeforge::io::{dds, ktx2, Decoded, GpuFormat, Limits};
+    use cubeforge::internals::io::{dds, ktx2, Decoded, GpuFormat, Limits};
     let base = CubeMap::from_fn(16, sky);
     let (out, _) = chain(FilterKind::Ggx, &base, 16);
     let path = std::path::Path::new("chain");
@@ -344,7 +344,7 @@ fn chains_round_trip_through_ktx2_and_dds() {
 /// 2e-5.
 #[test]
 fn ggx_and_charlie_levels_keep_the_flux() {
-    use cubeforge::flux::{mean_radiance, Grid};
+    use cubeforge::internals::flux::{mean_radiance, Grid};
     let flux = |faces: &[Image; 6]| {
         mean_radiance(
             Grid::Cube(faces[0].width),
@@ -428,7 +428,7 @@ fn min_size_shortens_the_chain_and_respans_roughness() {
 /// one-line usage errors.
 #[test]
 fn min_size_on_the_command_line() {
-    use cubeforge::io::ktx2;
+    use cubeforge::internals::io::ktx2;
     let dir = tempfile::tempdir().unwrap();
     let sky = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.exr");
     let ktx = dir.path().join("sheen.ktx2");
@@ -514,7 +514,7 @@ fn charlie_and_ggx_stay_finite_next_to_the_largest_radiance() {
     let hot = Vec3::new(0.3, 0.2, 0.93).normalize();
     let base = CubeMap::from_fn(16, |d| {
         let v = if d.dot(hot) > 0.99 {
-            cubeforge::image::MAX_RADIANCE
+            cubeforge::internals::image::MAX_RADIANCE
         } else {
             0.5
         };
@@ -523,7 +523,7 @@ fn charlie_and_ggx_stay_finite_next_to_the_largest_radiance() {
     let hot_texels = base.levels[0]
         .iter()
         .flat_map(|f| f.pixels.iter())
-        .filter(|p| p.x >= cubeforge::image::MAX_RADIANCE)
+        .filter(|p| p.x >= cubeforge::internals::image::MAX_RADIANCE)
         .count();
     assert!(hot_texels > 0);
     for filter in [FilterKind::Ggx, FilterKind::Charlie] {

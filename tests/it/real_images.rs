@@ -11,12 +11,12 @@
 use crate::common;
 
 use common::{clamped, max_abs_error, max_abs_error_where, psnr, psnr_where, read_image, run};
-use cubeforge::convert::{self, Output};
-use cubeforge::cube::{FACE_LONG_NAMES, FACE_NAMES};
-use cubeforge::image::{linear_to_srgb, Image};
-use cubeforge::io::{self, Decoded, ReadOptions};
-use cubeforge::layout::{equirect, ImageEnv, Kind, Projection};
-use cubeforge::resample::{Orientation, Resampler};
+use cubeforge::internals::convert::{self, Output};
+use cubeforge::internals::cube::{FACE_LONG_NAMES, FACE_NAMES};
+use cubeforge::internals::image::{linear_to_srgb, Image};
+use cubeforge::internals::io::{self, Decoded, ReadOptions};
+use cubeforge::internals::layout::{equirect, ImageEnv, Kind, Projection};
+use cubeforge::internals::resample::{Orientation, Resampler};
 use glam::{Vec3, Vec4};
 use std::path::{Path, PathBuf};
 

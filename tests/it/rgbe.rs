@@ -4,8 +4,10 @@
 
 use crate::common;
 
-use cubeforge::image::Image;
-use cubeforge::io::{self, raster, rgbe, Decoded, FileFormat, ReadOptions, WriteOptions};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{
+    self, raster, rgbe, Decoded, FileFormat, ReadOptions, WriteOptions,
+};
 use glam::Vec4;
 use std::path::Path;
 
@@ -22,7 +24,7 @@ fn crate_decode(bytes: &[u8]) -> Image {
         panic!("not an image")
     };
     for p in &mut img.pixels {
-        *p = p.min(glam::Vec4::splat(cubeforge::image::MAX_RADIANCE));
+        *p = p.min(glam::Vec4::splat(cubeforge::internals::image::MAX_RADIANCE));
     }
     img
 }

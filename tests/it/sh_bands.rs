@@ -3,9 +3,9 @@
 //! texel solid angles from the arctangent formula, every sum in f64.
 
 use crate::common::{real_dir, run, stderr};
-use cubeforge::cube::{texel_dir, CubeMap};
-use cubeforge::filter::sh_bands::{self, ShSet, ShWindow};
-use cubeforge::filter::{irradiance, IrradianceMethod};
+use cubeforge::internals::cube::{texel_dir, CubeMap};
+use cubeforge::internals::filter::sh_bands::{self, ShSet, ShWindow};
+use cubeforge::internals::filter::{irradiance, IrradianceMethod};
 use glam::{Vec3, Vec4};
 use std::f64::consts::PI;
 
@@ -109,7 +109,7 @@ fn every_band_count_matches_a_direct_projection() {
     }
     eprintln!("largest difference from the direct projection: {worst:.2e} of the DC term");
     // Nine coefficients of a 3-band set are the order-2 projection every engine uses.
-    let nine = cubeforge::filter::sh::project(&cube);
+    let nine = cubeforge::internals::filter::sh::project(&cube);
     let three = ShSet::project(&cube.levels[0], 3).unwrap();
     for (a, b) in nine.iter().zip(&three.radiance) {
         assert_eq!(a, b);

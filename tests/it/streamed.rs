@@ -4,10 +4,10 @@
 //! ../shared/fixtures/real is absent).
 
 use crate::common;
-use cubeforge::convert::{self, stream, Source};
-use cubeforge::cube::CubeMap;
-use cubeforge::io::ReadOptions;
-use cubeforge::resample::Resampler;
+use cubeforge::internals::convert::{self, stream, Source};
+use cubeforge::internals::cube::CubeMap;
+use cubeforge::internals::io::ReadOptions;
+use cubeforge::internals::resample::Resampler;
 use std::path::PathBuf;
 
 /// The finest texel of a cube of `size`: a face's corner.

@@ -3,14 +3,14 @@
 //! overcast canal) has none. Each panorama as the CLI reads it, at its own size.
 
 use crate::common;
-use cubeforge::convert::{self, Source};
-use cubeforge::flux::{sun, Grid};
-use cubeforge::io::ReadOptions;
-use cubeforge::layout::Projection;
+use cubeforge::internals::convert::{self, Source};
+use cubeforge::internals::flux::{sun, Grid};
+use cubeforge::internals::io::ReadOptions;
+use cubeforge::internals::layout::Projection;
 use glam::DVec3;
 
 /// The panorama's image and its grid.
-fn panorama(name: &str) -> Option<(cubeforge::image::Image, Grid)> {
+fn panorama(name: &str) -> Option<(cubeforge::internals::image::Image, Grid)> {
     let path = common::real_dir()?.join("hdr").join(name);
     let loaded = convert::load(&[path], None, &ReadOptions::default()).expect("loads");
     let Source::Projection(Projection::Equirect, img) = loaded.source else {
@@ -25,7 +25,7 @@ fn lum(p: glam::Vec4) -> f64 {
 }
 
 /// The direction of the brightest texel.
-fn brightest(img: &cubeforge::image::Image, grid: Grid) -> DVec3 {
+fn brightest(img: &cubeforge::internals::image::Image, grid: Grid) -> DVec3 {
     let i = (0..img.pixels.len())
         .max_by(|&a, &b| lum(img.pixels[a]).total_cmp(&lum(img.pixels[b])))
         .unwrap();
@@ -38,7 +38,12 @@ fn brightest(img: &cubeforge::image::Image, grid: Grid) -> DVec3 {
 /// The luminance-weighted centroid of the texels above `above` within 5 degrees of `near`
 /// (the sun's texels: esplanade has a second bright patch 15 degrees away) and their integral
 /// (luminance times solid angle), written apart from the finder.
-fn bright(img: &cubeforge::image::Image, grid: Grid, above: f64, near: DVec3) -> (DVec3, f64) {
+fn bright(
+    img: &cubeforge::internals::image::Image,
+    grid: Grid,
+    above: f64,
+    near: DVec3,
+) -> (DVec3, f64) {
     let (mut sum, mut total) = (DVec3::ZERO, 0.0);
     let reach = 5f64.to_radians().cos();
     for y in 0..img.height {
@@ -84,9 +89,9 @@ fn esplanade_has_a_sun_where_its_bright_texels_are() {
     assert!(off < 1.0, "{off} degrees");
     // Taken out, the sun leaves the map's flux less its irradiance over 4 pi.
     let mut img = img;
-    let before = cubeforge::flux::mean_radiance(grid, &[&img]);
+    let before = cubeforge::internals::flux::mean_radiance(grid, &[&img]);
     sun::remove(grid, std::slice::from_mut(&mut img), &s, lights.threshold);
-    let after = cubeforge::flux::mean_radiance(grid, &[&img]);
+    let after = cubeforge::internals::flux::mean_radiance(grid, &[&img]);
     for c in 0..3 {
         let want = before[c] - s.irradiance[c] / (4.0 * std::f64::consts::PI);
         let moved = after[c] / want - 1.0;

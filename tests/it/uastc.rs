@@ -23,12 +23,12 @@ fn uastc_without_the_feature_is_refused_before_any_work() {
 mod with_uastc {
     use super::*;
     use crate::gpu_formats::panoramas;
-    use cubeforge::convert;
-    use cubeforge::cube::CubeMap;
-    use cubeforge::flux;
-    use cubeforge::image::Image;
-    use cubeforge::io::{gpu, ktx2, Decoded, GpuFormat, Limits, ReadOptions};
-    use cubeforge::resample::Resampler;
+    use cubeforge::internals::convert;
+    use cubeforge::internals::cube::CubeMap;
+    use cubeforge::internals::flux;
+    use cubeforge::internals::image::Image;
+    use cubeforge::internals::io::{gpu, ktx2, Decoded, GpuFormat, Limits, ReadOptions};
+    use cubeforge::internals::resample::Resampler;
     use std::path::Path;
     use std::process::Command;
 
@@ -296,7 +296,8 @@ mod with_uastc {
         assert!(o.status.success(), "{}", common::stderr(&o));
         for file in ["env_specular.ktx2", "env_diffuse.ktx2"] {
             let (_, meta) =
-                cubeforge::io::read_raw(&bevy.join(file), &ReadOptions::default()).unwrap();
+                cubeforge::internals::io::read_raw(&bevy.join(file), &ReadOptions::default())
+                    .unwrap();
             assert_eq!(meta.pixel_format, "UASTC HDR 4x4");
             if let Some(bin) = common::bevy_ktx2() {
                 common::bevy_check(&bin, &bevy.join(file));
@@ -344,7 +345,8 @@ mod with_uastc {
         assert!(o.status.success(), "{}", common::stderr(&o));
         let file = out.join("env.ktx2");
         // cubeforge reads it back top row first (KTXorientation "ru" undone).
-        let (decoded, _) = cubeforge::io::read_raw(&file, &ReadOptions::default()).unwrap();
+        let (decoded, _) =
+            cubeforge::internals::io::read_raw(&file, &ReadOptions::default()).unwrap();
         let Decoded::Image(ours) = decoded else {
             panic!("a 2D texture")
         };

@@ -4,7 +4,7 @@
 //! where three.js's equirect mapping puts them.
 
 use crate::common::{self, read_image, run, stderr};
-use cubeforge::image::Image;
+use cubeforge::internals::image::Image;
 use glam::{Vec3, Vec4};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -130,7 +130,7 @@ fn sunny_panorama(dir: &Path) -> PathBuf {
     let path = dir.join("sunny.exr");
     std::fs::write(
         &path,
-        cubeforge::io::encode_image(&path, &img, &Default::default()).unwrap(),
+        cubeforge::internals::io::encode_image(&path, &img, &Default::default()).unwrap(),
     )
     .unwrap();
     path
@@ -271,7 +271,7 @@ fn real_panoramas_keep_their_light_in_ultrahdr_and_in_three() {
     let mut standard = Vec::new();
     for (name, src, out) in &threes {
         let mut bytes = std::fs::read(out.join("env.jpg")).unwrap();
-        let mark = cubeforge::io::ultrahdr::THREE_MARK;
+        let mark = cubeforge::internals::io::ultrahdr::THREE_MARK;
         let at = bytes
             .windows(mark.len())
             .position(|w| w == mark)

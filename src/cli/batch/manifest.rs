@@ -4,7 +4,7 @@
 use super::expand::{expand, is_glob};
 use super::ninja;
 use super::template::{Template, Unfilled};
-use cubeforge::batch::depfile;
+use cubeforge::internals::output::depfile;
 use cubeforge::{Error, Result};
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};

@@ -1,5 +1,5 @@
 //! `cubeforge batch`: a manifest of jobs over many inputs, each built from its command's own
-//! flags exactly as that command line would be, run by the library's [`cubeforge::batch`]
+//! flags exactly as that command line would be, run by the library's [`cubeforge::internals::batch`]
 //! (inputs side by side, each decoded once, incremental through a state file, sharded), or
 //! written out as a `build.ninja` for Ninja to run.
 
@@ -9,7 +9,7 @@ mod ninja;
 mod template;
 
 use super::{Cli, Command};
-use cubeforge::batch::{Batch, BatchJob, Done, Outcome, Shard};
+use cubeforge::internals::batch::{Batch, BatchJob, Done, Outcome, Shard};
 use cubeforge::{Error, Job, Result};
 use manifest::Planned;
 use std::path::{Path, PathBuf};
@@ -145,7 +145,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
                     &d.display().to_string()
                 ))
         );
-        return super::report(cubeforge::error::escape_text(&line));
+        return super::report(cubeforge::internals::error::escape_text(&line));
     }
     let mut jobs = Vec::new();
     let mut parser = <Cli as clap::CommandFactory>::command();
@@ -183,7 +183,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
 /// The summary line, then each failure in one line with its manifest line; an error when any
 /// job failed.
 fn summarize(
-    report: &cubeforge::batch::BatchReport,
+    report: &cubeforge::internals::batch::BatchReport,
     dry_run: bool,
     seconds: f64,
     lines: &std::collections::HashMap<String, usize>,
@@ -219,7 +219,7 @@ fn summarize(
                 d.id,
                 e.with_flags()
             );
-            super::tell(cubeforge::error::escape_text(&line));
+            super::tell(cubeforge::internals::error::escape_text(&line));
         }
     }
     match report.failed() {
@@ -234,7 +234,7 @@ fn summarize(
 fn show(d: &Done, verbose: bool) {
     let id = &d.id;
     let say = |line: String| {
-        let _ = super::report(cubeforge::error::escape_text(&line));
+        let _ = super::report(cubeforge::internals::error::escape_text(&line));
     };
     match &d.outcome {
         Outcome::Ran(_, report) => {

@@ -5,7 +5,7 @@
 //! Every name goes through [`path`] or [`value`]: what Ninja's syntax cannot hold is refused.
 
 use super::manifest::{shell_quote, Planned};
-use cubeforge::output::{self, Destination, Files};
+use cubeforge::internals::output::{self, Destination, Files};
 use cubeforge::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 /// line.
 fn unholdable(s: &str) -> Option<String> {
     let c = s.chars().find(|&c| c.is_control() && c != '\t')?;
-    let shown = cubeforge::error::escape_text(&c.to_string()).into_owned();
+    let shown = cubeforge::internals::error::escape_text(&c.to_string()).into_owned();
     Some(if c == '\n' || c == '\r' {
         format!("build.ninja cannot hold a line break ({shown})")
     } else {

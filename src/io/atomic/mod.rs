@@ -156,16 +156,13 @@ fn missing_top(path: &Path) -> Option<PathBuf> {
     top
 }
 
-/// Writes every file under a temporary name; nothing is visible under the real names yet.
-pub fn stage(files: &[(PathBuf, Vec<u8>)]) -> Result<Staged> {
-    stage_with(files, &[])
-}
-
-/// [`stage`], where each of `folders` is an output in its own right (a faces folder, a
-/// chain folder): every file under it is staged in a new folder that replaces it whole on
+/// Writes every file under a temporary name (nothing is visible under the real names yet),
+/// where each of `folders` is an output in its own right (a faces folder, a chain folder):
+/// every file under it is staged in a new folder that replaces it whole on
 /// [`Staged::commit`]. Refuses a folder that holds what cubeforge did not write
-/// ([`check_folder`]).
-pub fn stage_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> Result<Staged> {
+/// ([`check_folder`]). Crate-only: `output::deliver` calls it after the output check, which
+/// a caller here would skip.
+pub(crate) fn stage_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> Result<Staged> {
     // `-` names standard output: a command that cannot write there must not make a file or
     // a folder of that name.
     let dash = |p: &Path| p.components().any(|c| c.as_os_str() == "-");
@@ -520,12 +517,5 @@ impl Drop for Staged {
     }
 }
 
-/// Writes several files so that either all of them land or none does (see the module).
-pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
-    stage(files)?.commit()
-}
-
-/// [`write_all_atomic`] with folder outputs replaced whole ([`stage_with`]).
-pub fn write_all_atomic_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> Result<()> {
-    stage_with(files, folders)?.commit()
-}
+#[cfg(test)]
+mod tests;

@@ -175,40 +175,122 @@ impl Ktx1 {
     }
 }
 
-/// Reads a KTX 1 cube map (every level) or 2D texture (level 0) with its key/value pairs.
-pub fn read(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Ktx1> {
+/// The 32-bit word at `at`, in the file's byte order.
+fn word_at(bytes: &[u8], at: usize, big: bool) -> u32 {
+    let b: [u8; 4] = bytes[at..at + 4].try_into().unwrap_or_default();
+    if big {
+        u32::from_be_bytes(b)
+    } else {
+        u32::from_le_bytes(b)
+    }
+}
+
+/// The `kvd_len` bytes of key/value pairs after the header, each checked against the block
+/// they sit in, and where they end.
+fn key_values(
+    bytes: &[u8],
+    kvd_len: u32,
+    big: bool,
+    path: &Path,
+) -> Result<(Vec<KeyValue>, usize)> {
     let err = |msg: String| Error::file(path, msg);
     let file_len = bytes.len();
-    if !bytes.starts_with(&IDENTIFIER) && !IDENTIFIER.starts_with(bytes) {
-        return Err(err("not a KTX 1 file (its identifier is missing)".into()));
-    }
-    if file_len < HEADER_LEN {
-        return Err(err(format!(
-            "truncated KTX file: {file_len} bytes, shorter than the {HEADER_LEN}-byte header"
-        )));
-    }
-    let big = match u32::from_le_bytes(bytes[12..16].try_into().unwrap_or_default()) {
-        ENDIANNESS => false,
-        0x0102_0304 => true,
-        e => {
+    let kvd_end = HEADER_LEN
+        .checked_add(kvd_len as usize)
+        .filter(|&e| e <= file_len)
+        .ok_or_else(|| {
+            err(format!(
+                "truncated KTX file: its key/value data ({kvd_len} bytes) does not fit in the file ({file_len} bytes)"
+            ))
+        })?;
+    let word = |at: usize| word_at(bytes, at, big);
+    let mut key_values = Vec::new();
+    let mut at = HEADER_LEN;
+    while at < kvd_end {
+        if kvd_end - at < 4 {
+            return Err(err(
+                "invalid key/value data: an entry's size is cut off".into()
+            ));
+        }
+        let len = word(at) as usize;
+        let body = at + 4;
+        if len > kvd_end - body {
             return Err(err(format!(
-                "invalid header: endianness is {e:#010x}, neither 0x04030201 nor 0x01020304"
-            )))
+                "invalid key/value data: an entry of {len} bytes at byte {at} runs past the key/value data"
+            )));
         }
-    };
-    let word = |at: usize| -> u32 {
-        let b: [u8; 4] = bytes[at..at + 4].try_into().unwrap_or_default();
-        if big {
-            u32::from_be_bytes(b)
-        } else {
-            u32::from_le_bytes(b)
-        }
-    };
-    let field = |i: usize| word(16 + 4 * i);
-    let (gl_type, type_size, gl_format, internal) = (field(0), field(1), field(2), field(3));
-    let (width, height, depth) = (field(5), field(6), field(7));
-    let (array, faces, level_field, kvd_len) = (field(8), field(9), field(10), field(11));
+        let kv = &bytes[body..body + len];
+        let nul = kv.iter().position(|&b| b == 0).ok_or_else(|| {
+            err(format!(
+                "invalid key/value data: the key at byte {body} has no terminating NUL"
+            ))
+        })?;
+        key_values.push(KeyValue {
+            key: String::from_utf8_lossy(&kv[..nul]).into_owned(),
+            value: kv[nul + 1..].to_vec(),
+        });
+        at = (body + len).div_ceil(4) * 4;
+    }
+    Ok((key_values, kvd_end))
+}
 
+/// Every level's place from `at` on (its start, width, height and face stride), checked
+/// before anything is allocated (a cube's six faces, a 2D texture's one, per level).
+fn level_spans(
+    bytes: &[u8],
+    mut at: usize,
+    big: bool,
+    format: Ktx1Format,
+    faces: usize,
+    (width, height, level_count): (usize, usize, usize),
+    path: &Path,
+) -> Result<Vec<(usize, usize, usize, usize)>> {
+    let err = |msg: String| Error::file(path, msg);
+    let word = |at: usize| word_at(bytes, at, big);
+    let (file_len, cube) = (bytes.len(), faces == 6);
+    let mut spans = Vec::with_capacity(level_count);
+    for l in 0..level_count {
+        let (w, h) = ((width >> l).max(1), (height >> l).max(1));
+        let face_len = format.row_bytes(w) * h;
+        if file_len.saturating_sub(at) < 4 {
+            return Err(err(format!(
+                "truncated KTX file: level {l}'s imageSize is missing (the file has {file_len} bytes)"
+            )));
+        }
+        let image_size = word(at) as usize;
+        // A cube's imageSize is one face; a 2D texture's its one image: the same bytes.
+        let expected = face_len;
+        if image_size != expected {
+            let holds = if cube { "one face of" } else { "an image of" };
+            return Err(err(format!(
+                "invalid level {l}: imageSize is {image_size}, but {holds} {w}x{h} {} texels takes {expected}",
+                format.name()
+            )));
+        }
+        let start = at + 4;
+        let stride = face_len.div_ceil(4) * 4; // cubePadding
+        let level_end = start + faces * stride;
+        if level_end > file_len {
+            return Err(err(format!(
+                "truncated KTX file: level {l} needs bytes {start} to {level_end}, but the file has {file_len}"
+            )));
+        }
+        spans.push((start, w, h, stride));
+        at = level_end.div_ceil(4) * 4; // mipPadding
+    }
+    Ok(spans)
+}
+
+/// The texel format the header's GL fields name, refused when cubeforge cannot read it or
+/// the fields disagree (cmgen's R11F_G11F_B10F files taken as they are).
+fn gl_format_of(
+    path: &Path,
+    gl_type: u32,
+    type_size: u32,
+    gl_format: u32,
+    internal: u32,
+) -> Result<Ktx1Format> {
+    let err = |msg: String| Error::file(path, msg);
     if gl_type == 0 {
         return Err(Error::unsupported(
             path,
@@ -234,6 +316,73 @@ pub fn read(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Ktx1> {
             gl.format
         )));
     }
+    Ok(format)
+}
+
+/// The texels of `spans` decoded (byte-swapped first from a big-endian file): a cube map's
+/// every level, or a 2D texture's level 0.
+fn texture(
+    bytes: &[u8],
+    spans: &[(usize, usize, usize, usize)],
+    format: Ktx1Format,
+    big: bool,
+    cube: bool,
+    path: &Path,
+) -> Result<Decoded> {
+    let err = |msg: String| Error::file(path, msg);
+    let swap = big && format.gl().type_size > 1;
+    let face = |&(start, w, h, stride): &(usize, usize, usize, usize), f: usize| {
+        let b = &bytes[start + f * stride..start + f * stride + format.row_bytes(w) * h];
+        if swap {
+            let ts = format.gl().type_size as usize;
+            let mut le = b.to_vec();
+            le.chunks_exact_mut(ts).for_each(|c| c.reverse());
+            format.decode_face(&le, w, h)
+        } else {
+            format.decode_face(b, w, h)
+        }
+        .map_err(err)
+    };
+    Ok(if cube {
+        Decoded::Cube(CubeMap {
+            levels: spans
+                .iter()
+                .map(|s| crate::cube::try_faces(|f| face(s, f)))
+                .collect::<Result<_>>()?,
+        })
+    } else {
+        Decoded::Image(face(&spans[0], 0)?)
+    })
+}
+
+/// Reads a KTX 1 cube map (every level) or 2D texture (level 0) with its key/value pairs.
+pub fn read(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Ktx1> {
+    let err = |msg: String| Error::file(path, msg);
+    let file_len = bytes.len();
+    if !bytes.starts_with(&IDENTIFIER) && !IDENTIFIER.starts_with(bytes) {
+        return Err(err("not a KTX 1 file (its identifier is missing)".into()));
+    }
+    if file_len < HEADER_LEN {
+        return Err(err(format!(
+            "truncated KTX file: {file_len} bytes, shorter than the {HEADER_LEN}-byte header"
+        )));
+    }
+    let big = match u32::from_le_bytes(bytes[12..16].try_into().unwrap_or_default()) {
+        ENDIANNESS => false,
+        0x0102_0304 => true,
+        e => {
+            return Err(err(format!(
+                "invalid header: endianness is {e:#010x}, neither 0x04030201 nor 0x01020304"
+            )))
+        }
+    };
+    let word = |at: usize| word_at(bytes, at, big);
+    let field = |i: usize| word(16 + 4 * i);
+    let (gl_type, type_size, gl_format, internal) = (field(0), field(1), field(2), field(3));
+    let (width, height, depth) = (field(5), field(6), field(7));
+    let (array, faces, level_field, kvd_len) = (field(8), field(9), field(10), field(11));
+
+    let format = gl_format_of(path, gl_type, type_size, gl_format, internal)?;
     if array != 0 {
         return Err(err(format!(
             "texture arrays are not supported (numberOfArrayElements {array})"
@@ -278,99 +427,19 @@ pub fn read(bytes: &[u8], path: &Path, limits: &Limits) -> Result<Ktx1> {
         )));
     }
 
-    // Key/value pairs, each checked against the block they sit in.
-    let kvd_end = HEADER_LEN
-        .checked_add(kvd_len as usize)
-        .filter(|&e| e <= file_len)
-        .ok_or_else(|| {
-            err(format!(
-                "truncated KTX file: its key/value data ({kvd_len} bytes) does not fit in the file ({file_len} bytes)"
-            ))
-        })?;
-    let mut key_values = Vec::new();
-    let mut at = HEADER_LEN;
-    while at < kvd_end {
-        if kvd_end - at < 4 {
-            return Err(err(
-                "invalid key/value data: an entry's size is cut off".into()
-            ));
-        }
-        let len = word(at) as usize;
-        let body = at + 4;
-        if len > kvd_end - body {
-            return Err(err(format!(
-                "invalid key/value data: an entry of {len} bytes at byte {at} runs past the key/value data"
-            )));
-        }
-        let kv = &bytes[body..body + len];
-        let nul = kv.iter().position(|&b| b == 0).ok_or_else(|| {
-            err(format!(
-                "invalid key/value data: the key at byte {body} has no terminating NUL"
-            ))
-        })?;
-        key_values.push(KeyValue {
-            key: String::from_utf8_lossy(&kv[..nul]).into_owned(),
-            value: kv[nul + 1..].to_vec(),
-        });
-        at = (body + len).div_ceil(4) * 4;
-    }
+    let (key_values, kvd_end) = key_values(bytes, kvd_len, big, path)?;
 
-    // Every level's place, checked before anything is allocated.
-    let mut spans = Vec::with_capacity(level_count);
-    let mut at = kvd_end;
-    for l in 0..level_count {
-        let (w, h) = ((width >> l).max(1), (height >> l).max(1));
-        let face_len = format.row_bytes(w) * h;
-        if file_len.saturating_sub(at) < 4 {
-            return Err(err(format!(
-                "truncated KTX file: level {l}'s imageSize is missing (the file has {file_len} bytes)"
-            )));
-        }
-        let image_size = word(at) as usize;
-        // A cube's imageSize is one face; a 2D texture's its one image: the same bytes.
-        let expected = face_len;
-        if image_size != expected {
-            let holds = if cube { "one face of" } else { "an image of" };
-            return Err(err(format!(
-                "invalid level {l}: imageSize is {image_size}, but {holds} {w}x{h} {} texels takes {expected}",
-                format.name()
-            )));
-        }
-        let start = at + 4;
-        let stride = face_len.div_ceil(4) * 4; // cubePadding
-        let level_end = start + faces as usize * stride;
-        if level_end > file_len {
-            return Err(err(format!(
-                "truncated KTX file: level {l} needs bytes {start} to {level_end}, but the file has {file_len}"
-            )));
-        }
-        spans.push((start, w, h, stride));
-        at = level_end.div_ceil(4) * 4; // mipPadding
-    }
+    let spans = level_spans(
+        bytes,
+        kvd_end,
+        big,
+        format,
+        faces as usize,
+        (width, height, level_count),
+        path,
+    )?;
 
-    let swap = big && format.gl().type_size > 1;
-    let face = |&(start, w, h, stride): &(usize, usize, usize, usize), f: usize| {
-        let b = &bytes[start + f * stride..start + f * stride + format.row_bytes(w) * h];
-        if swap {
-            let ts = format.gl().type_size as usize;
-            let mut le = b.to_vec();
-            le.chunks_exact_mut(ts).for_each(|c| c.reverse());
-            format.decode_face(&le, w, h)
-        } else {
-            format.decode_face(b, w, h)
-        }
-        .map_err(err)
-    };
-    let texture = if cube {
-        Decoded::Cube(CubeMap {
-            levels: spans
-                .iter()
-                .map(|s| crate::cube::try_faces(|f| face(s, f)))
-                .collect::<Result<_>>()?,
-        })
-    } else {
-        Decoded::Image(face(&spans[0], 0)?)
-    };
+    let texture = texture(bytes, &spans, format, big, cube, path)?;
     Ok(Ktx1 {
         texture,
         format,
@@ -400,161 +469,4 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Deco
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use glam::Vec4;
-
-    fn cube(n: usize, levels: usize) -> CubeMap {
-        CubeMap::from_fn(n, |d| Vec4::new(d.x.abs() * 3.0, d.y * 0.5 + 0.5, d.z, 1.0))
-            .with_box_mips(Some(levels))
-    }
-
-    #[test]
-    fn header_and_image_sizes_follow_the_spec() {
-        let c = cube(8, 4);
-        let kv = [KeyValue::text("hello", "world")];
-        let b = encode(&c, Ktx1Format::Rgba16f, &kv).unwrap();
-        let w = |i: usize| u32::from_le_bytes(b[12 + 4 * i..16 + 4 * i].try_into().unwrap());
-        assert_eq!(&b[..12], &IDENTIFIER);
-        assert_eq!(w(0), 0x0403_0201);
-        assert_eq!(
-            (w(1), w(2), w(3), w(4), w(5)),
-            (0x140B, 2, 0x1908, 0x881A, 0x1908)
-        );
-        assert_eq!((w(6), w(7), w(8), w(9), w(10), w(11)), (8, 8, 0, 0, 6, 4));
-        let kvd = w(12) as usize;
-        assert_eq!(kvd % 4, 0);
-        // First level's imageSize: one 8x8 RGBA16F face.
-        let at = 64 + kvd;
-        assert_eq!(
-            u32::from_le_bytes(b[at..at + 4].try_into().unwrap()),
-            8 * 8 * 8
-        );
-        let expect_len = 64
-            + kvd
-            + (0..4)
-                .map(|l| 4 + 6 * (8usize >> l).pow(2) * 8)
-                .sum::<usize>();
-        assert_eq!(b.len(), expect_len);
-    }
-
-    #[test]
-    fn round_trip_keeps_texels_and_key_values() {
-        let c = cube(4, 3);
-        let kv = [
-            KeyValue::text("a", "1"),
-            KeyValue {
-                key: "bin".into(),
-                value: vec![1, 2, 3],
-            },
-        ];
-        for f in [
-            Ktx1Format::Rgba32f,
-            Ktx1Format::Rgba16f,
-            Ktx1Format::Rgb16f,
-            Ktx1Format::Rgba8,
-        ] {
-            let b = encode(&c, f, &kv).unwrap();
-            let k = read(&b, Path::new("t.ktx"), &Limits::default()).unwrap();
-            assert_eq!(k.format, f);
-            assert_eq!(k.key_values[0].key, WRITER_KEY);
-            assert_eq!(&k.key_values[1..], &kv);
-            let Decoded::Cube(d) = k.texture else {
-                panic!("a cube")
-            };
-            assert_eq!(d.levels.len(), 3);
-            for (la, lb) in c.levels.iter().zip(&d.levels) {
-                for (fa, fb) in la.iter().zip(lb) {
-                    for (p, q) in fa.pixels.iter().zip(&fb.pixels) {
-                        // 8-bit UNORM holds [0, 1] to half a step; halves hold 11 bits.
-                        let (p, tol) = if f == Ktx1Format::Rgba8 {
-                            (p.clamp(Vec4::ZERO, Vec4::ONE), 0.51 / 255.0)
-                        } else {
-                            (*p, 1e-3 * p.abs().max_element().max(1.0))
-                        };
-                        let d = (p.truncate() - q.truncate()).abs().max_element();
-                        assert!(d <= tol, "{f:?} {p} {q}");
-                    }
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn rgb16f_rows_are_padded_to_four_bytes() {
-        // A 1x1 face of 6 bytes takes 8; a 3x3 one 3 rows of 20.
-        let c = cube(3, 2);
-        let b = encode(&c, Ktx1Format::Rgb16f, &[]).unwrap();
-        let k = read(&b, Path::new("t.ktx"), &Limits::default()).unwrap();
-        assert_eq!(k.levels, 2);
-        let kvd = u32::from_le_bytes(b[60..64].try_into().unwrap()) as usize;
-        assert_eq!(
-            u32::from_le_bytes(b[64 + kvd..68 + kvd].try_into().unwrap()),
-            60
-        );
-        assert_eq!(b.len(), 64 + kvd + 4 + 6 * 60 + 4 + 6 * 8);
-    }
-
-    #[test]
-    fn big_endian_files_are_read() {
-        let c = cube(2, 2);
-        let le = encode(&c, Ktx1Format::Rgba16f, &[KeyValue::text("k", "v")]).unwrap();
-        // Swap every UInt32 of the header, key/value sizes and imageSizes, and every half.
-        let mut be = le.clone();
-        let swap4 = |b: &mut Vec<u8>, at: usize| b[at..at + 4].reverse();
-        for i in 0..13 {
-            swap4(&mut be, 12 + 4 * i);
-        }
-        let kvd = u32::from_le_bytes(le[60..64].try_into().unwrap()) as usize;
-        let mut at = 64;
-        while at < 64 + kvd {
-            let n = u32::from_le_bytes(le[at..at + 4].try_into().unwrap()) as usize;
-            swap4(&mut be, at);
-            at = (at + 4 + n).div_ceil(4) * 4;
-        }
-        for l in 0..2 {
-            let n = 2usize >> l;
-            swap4(&mut be, at);
-            for h in 0..6 * n * n * 4 {
-                be[at + 4 + 2 * h..at + 6 + 2 * h].reverse();
-            }
-            at += 4 + 6 * n * n * 8;
-        }
-        let a = read(&le, Path::new("le.ktx"), &Limits::default()).unwrap();
-        let b = read(&be, Path::new("be.ktx"), &Limits::default()).unwrap();
-        let (Decoded::Cube(a), Decoded::Cube(b)) = (a.texture, b.texture) else {
-            panic!("cubes")
-        };
-        assert_eq!(a, b);
-    }
-
-    /// Both refusals of a format name every format read (the compressed one left out R11F).
-    #[test]
-    fn refusals_name_every_format_read() {
-        let mut b = encode(&cube(2, 1), Ktx1Format::Rgba16f, &[]).unwrap();
-        for (at, v) in [(16, 0u32), (16, 0x1234)] {
-            b[at..at + 4].copy_from_slice(&v.to_le_bytes());
-            let e = read(&b, Path::new("t.ktx"), &Limits::default()).unwrap_err();
-            assert!(e.to_string().contains(READS), "{e}");
-        }
-    }
-
-    #[test]
-    fn sh_text_round_trips() {
-        let mut r = [[0.0f64; 3]; 9];
-        for (i, c) in r.iter_mut().enumerate() {
-            *c = [i as f64 * 0.1, -(i as f64) * 0.2, 1.0 / (i + 1) as f64];
-        }
-        let sh = filament_sh(&r);
-        let kv = sh_key_value(&sh);
-        assert_eq!(kv.key, "sh");
-        assert_eq!(kv.as_text().unwrap().lines().count(), 9);
-        let back = parse_sh(&kv.value).unwrap();
-        for i in 0..9 {
-            for c in 0..3 {
-                assert!((back[i][c] - sh[i][c]).abs() <= 1e-6 * sh[i][c].abs().max(1e-3));
-            }
-        }
-        assert!(parse_sh(b"1 2 3").is_none());
-    }
-}
+mod tests;

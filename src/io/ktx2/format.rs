@@ -106,8 +106,42 @@ pub(super) type Sample = (u32, u32, u32, u32, u32);
 /// texel block size and bytes, then its samples), as the Khronos Data Format Specification
 /// describes each Vulkan format.
 pub(super) fn data_format_descriptor(format: GpuFormat) -> Vec<u8> {
-    const ONE: u32 = 0x3F80_0000; // 1.0f
-    const MINUS_ONE: u32 = 0xBF80_0000; // -1.0f
+    let transfer = if format.is_srgb() {
+        KHR_DF_TRANSFER_SRGB
+    } else {
+        KHR_DF_TRANSFER_LINEAR
+    };
+    let (model, samples) = samples(format, transfer);
+    let block_size = DFD_BLOCK_HEADER_LEN + samples.len() as u32 * DFD_SAMPLE_LEN;
+    let dim = format.block_dim() as u32 - 1;
+    let mut words: Vec<u32> = vec![
+        4 + block_size,
+        KHR_DF_VENDORID_KHRONOS | (KHR_DF_KHR_DESCRIPTORTYPE_BASICFORMAT << 17),
+        KHR_DF_VERSIONNUMBER_1_3 | (block_size << 16),
+        model
+            | (KHR_DF_PRIMARIES_BT709 << 8)
+            | (transfer << 16)
+            | (KHR_DF_FLAG_ALPHA_STRAIGHT << 24),
+        dim | (dim << 8), // texelBlockDimension0..3, each stored as value - 1
+        format.block_bytes() as u32, // bytesPlane0; bytesPlane1..3 are 0
+        0,                // bytesPlane4..7
+    ];
+    for (offset, bits, channel, lower, upper) in samples {
+        words.push(offset | ((bits - 1) << 16) | (channel << 24));
+        words.push(0); // samplePosition0..3
+        words.push(lower);
+        words.push(upper);
+    }
+    words.iter().flat_map(|w| w.to_le_bytes()).collect()
+}
+
+/// 1.0f and -1.0f, as a sample's upper and lower values.
+const ONE: u32 = 0x3F80_0000;
+const MINUS_ONE: u32 = 0xBF80_0000;
+
+/// A format's colour model and its samples (for `transfer`: alpha is marked linear under
+/// sRGB).
+fn samples(format: GpuFormat, transfer: u32) -> (u32, Vec<Sample>) {
     let float = KHR_DF_SAMPLE_DATATYPE_FLOAT;
     let signed_float = KHR_DF_SAMPLE_DATATYPE_FLOAT | KHR_DF_SAMPLE_DATATYPE_SIGNED;
     let rgb = [
@@ -121,12 +155,7 @@ pub(super) fn data_format_descriptor(format: GpuFormat) -> Vec<u8> {
         KHR_DF_CHANNEL_RGBSDA_BLUE,
         KHR_DF_CHANNEL_RGBSDA_ALPHA,
     ];
-    let transfer = if format.is_srgb() {
-        KHR_DF_TRANSFER_SRGB
-    } else {
-        KHR_DF_TRANSFER_LINEAR
-    };
-    let (model, samples): (u32, Vec<Sample>) = match format {
+    match format {
         GpuFormat::Rgba16f | GpuFormat::Rgba32f | GpuFormat::Rgba8 | GpuFormat::Rgba8Srgb => {
             let bits = format.block_bytes() as u32 * 2;
             let samples = rgba
@@ -187,26 +216,5 @@ pub(super) fn data_format_descriptor(format: GpuFormat) -> Vec<u8> {
         ),
         // As basis_universal writes it: unsigned float, from 0 to 1.
         GpuFormat::UastcHdr4x4 => (KHR_DF_MODEL_UASTC_HDR_4X4, vec![(0, 128, float, 0, ONE)]),
-    };
-    let block_size = DFD_BLOCK_HEADER_LEN + samples.len() as u32 * DFD_SAMPLE_LEN;
-    let dim = format.block_dim() as u32 - 1;
-    let mut words: Vec<u32> = vec![
-        4 + block_size,
-        KHR_DF_VENDORID_KHRONOS | (KHR_DF_KHR_DESCRIPTORTYPE_BASICFORMAT << 17),
-        KHR_DF_VERSIONNUMBER_1_3 | (block_size << 16),
-        model
-            | (KHR_DF_PRIMARIES_BT709 << 8)
-            | (transfer << 16)
-            | (KHR_DF_FLAG_ALPHA_STRAIGHT << 24),
-        dim | (dim << 8), // texelBlockDimension0..3, each stored as value - 1
-        format.block_bytes() as u32, // bytesPlane0; bytesPlane1..3 are 0
-        0,                // bytesPlane4..7
-    ];
-    for (offset, bits, channel, lower, upper) in samples {
-        words.push(offset | ((bits - 1) << 16) | (channel << 24));
-        words.push(0); // samplePosition0..3
-        words.push(lower);
-        words.push(upper);
     }
-    words.iter().flat_map(|w| w.to_le_bytes()).collect()
 }

@@ -20,6 +20,7 @@
 #![warn(missing_docs)]
 
 mod format;
+mod levels;
 
 use super::container::Shape;
 use super::{Decoded, FileFormat, GpuFormat, Limits, Meta};
@@ -27,6 +28,7 @@ use crate::cube::CubeMap;
 use crate::error::{Error, Result};
 use crate::image::Image;
 use format::*;
+use levels::{check_blocks, inflate, level_spans};
 use std::path::Path;
 
 /// The 12 bytes every KTX2 file starts with ("«KTX 20»\r\n\x1A\n").
@@ -323,36 +325,18 @@ fn in_file(offset: u64, len: u64, file_len: usize) -> bool {
         .is_some_and(|end| end <= file_len as u64)
 }
 
-/// Reads a KTX2 cube map with all its levels, or level 0 of a 2D texture (what `cubeforge
-/// control` writes) as an image; every level's index entry is checked either way.
-pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
+/// Whether the header describes a cube map (or a 2D texture, a control map, whose level 0 is
+/// read as an image); what cubeforge does not read is refused: arrays, 3D and 1D textures,
+/// supercompression other than Zstandard.
+fn texture_kind(
+    path: &Path,
+    face_count: u32,
+    layer_count: u32,
+    depth: u32,
+    height: u32,
+    scheme: u32,
+) -> Result<bool> {
     let err = |msg: String| Error::file(path, msg);
-    let file_len = bytes.len();
-    if !bytes.starts_with(&IDENTIFIER) && !IDENTIFIER.starts_with(bytes) {
-        return Err(err("not a KTX2 file (its identifier is missing)".into()));
-    }
-    if file_len < HEADER_LEN {
-        return Err(err(format!(
-            "truncated KTX2 file: {file_len} bytes, shorter than the {HEADER_LEN}-byte header"
-        )));
-    }
-    let field = |i: usize| le_u32(bytes, 12 + 4 * i).unwrap_or(0);
-    let vk = field(0);
-    let type_size_field = field(1);
-    let width = field(2);
-    let height = field(3);
-    let depth = field(4);
-    let layer_count = field(5);
-    let face_count = field(6);
-    let level_count_field = field(7);
-    let scheme = field(8);
-    let dfd_offset = field(9);
-    let dfd_len = field(10);
-    let kvd_offset = field(11);
-    let kvd_len = field(12);
-    let sgd_offset = le_u64(bytes, 64).unwrap_or(0);
-    let sgd_len = le_u64(bytes, 72).unwrap_or(0);
-
     // A cube map, or a 2D texture (a control map): level 0 of the latter is read as an image.
     let cube = match face_count {
         6 => true,
@@ -388,6 +372,18 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             "supercompressed KTX2 (scheme {scheme}, {name}) is not supported: cubeforge reads plain and Zstandard (scheme 2) levels"
         )));
     }
+    Ok(cube)
+}
+
+/// The texel format of the header's vkFormat, with its typeSize checked.
+fn format_of(
+    bytes: &[u8],
+    vk: u32,
+    type_size_field: u32,
+    (dfd_offset, dfd_len): (u32, u32),
+    path: &Path,
+) -> Result<GpuFormat> {
+    let err = |msg: String| Error::file(path, msg);
     // The colour model of the DFD's basic block (its fourth word), where the DFD is that long:
     // it tells UASTC HDR 4x4 from plain ASTC 4x4 (their bounds are checked below).
     let color_model = (dfd_len >= 16)
@@ -403,6 +399,41 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
             type_size(format)
         )));
     }
+    Ok(format)
+}
+
+/// Reads a KTX2 cube map with all its levels, or level 0 of a 2D texture (what `cubeforge
+/// control` writes) as an image; every level's index entry is checked either way.
+pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Meta)> {
+    let err = |msg: String| Error::file(path, msg);
+    let file_len = bytes.len();
+    if !bytes.starts_with(&IDENTIFIER) && !IDENTIFIER.starts_with(bytes) {
+        return Err(err("not a KTX2 file (its identifier is missing)".into()));
+    }
+    if file_len < HEADER_LEN {
+        return Err(err(format!(
+            "truncated KTX2 file: {file_len} bytes, shorter than the {HEADER_LEN}-byte header"
+        )));
+    }
+    let field = |i: usize| le_u32(bytes, 12 + 4 * i).unwrap_or(0);
+    let vk = field(0);
+    let type_size_field = field(1);
+    let width = field(2);
+    let height = field(3);
+    let depth = field(4);
+    let layer_count = field(5);
+    let face_count = field(6);
+    let level_count_field = field(7);
+    let scheme = field(8);
+    let dfd_offset = field(9);
+    let dfd_len = field(10);
+    let kvd_offset = field(11);
+    let kvd_len = field(12);
+    let sgd_offset = le_u64(bytes, 64).unwrap_or(0);
+    let sgd_len = le_u64(bytes, 72).unwrap_or(0);
+
+    let cube = texture_kind(path, face_count, layer_count, depth, height, scheme)?;
+    let format = format_of(bytes, vk, type_size_field, (dfd_offset, dfd_len), path)?;
     // levelCount 0 asks the loader to make the mips; the file then holds level 0 only.
     let shape = Shape::check(
         path,
@@ -422,95 +453,18 @@ pub fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Decoded, Me
         )));
     }
 
-    // Data Format Descriptor and key/value data: only their bounds matter to this reader,
-    // the vkFormat says everything about the texels.
-    if dfd_len < 4 {
-        return Err(err(
-            "invalid KTX2 file: it has no data format descriptor".into()
-        ));
-    }
-    if !in_file(dfd_offset as u64, dfd_len as u64, file_len) {
-        return Err(err(format!(
-            "invalid KTX2 file: its data format descriptor ({dfd_len} bytes at {dfd_offset}) does not fit in the file ({file_len} bytes)"
-        )));
-    }
-    let dfd_total = le_u32(bytes, dfd_offset as usize).unwrap_or(0);
-    if dfd_total != dfd_len {
-        return Err(err(format!(
-            "invalid KTX2 file: dfdTotalSize is {dfd_total} but dfdByteLength is {dfd_len}"
-        )));
-    }
-    if !in_file(kvd_offset as u64, kvd_len as u64, file_len) {
-        return Err(err(format!(
-            "invalid KTX2 file: its key/value data ({kvd_len} bytes at {kvd_offset}) does not fit in the file ({file_len} bytes)"
-        )));
-    }
-    if !in_file(sgd_offset, sgd_len, file_len) {
-        return Err(err(format!(
-            "invalid KTX2 file: its supercompression data ({sgd_len} bytes at {sgd_offset}) does not fit in the file ({file_len} bytes)"
-        )));
-    }
-
-    // Every level's place and size, checked before anything is allocated.
+    check_blocks(
+        bytes,
+        path,
+        (dfd_offset as u64, dfd_len as u64),
+        (kvd_offset as u64, kvd_len as u64),
+        (sgd_offset, sgd_len),
+    )?;
     let zstd = scheme == SCHEME_ZSTD;
-    let mut spans = Vec::with_capacity(level_count);
-    for l in 0..level_count {
-        let entry = HEADER_LEN + l * LEVEL_ENTRY_LEN;
-        let offset = le_u64(bytes, entry).unwrap_or(0);
-        let len = le_u64(bytes, entry + 8).unwrap_or(0);
-        let uncompressed = le_u64(bytes, entry + 16).unwrap_or(0);
-        let expected = shape.level_bytes(l);
-        if uncompressed != expected || (!zstd && len != expected) {
-            let take = if cube { "take" } else { "takes" };
-            return Err(err(format!(
-                "invalid level index: level {l} claims {len} bytes ({uncompressed} uncompressed), but {} {take} {expected}",
-                shape.holds(l)
-            )));
-        }
-        if !in_file(offset, len, file_len) {
-            return Err(err(format!(
-                "truncated KTX2 file: level {l} needs bytes {offset} to {}, but the file has {file_len}",
-                offset.saturating_add(len)
-            )));
-        }
-        // Both fit in the file, so in usize.
-        spans.push((offset as usize, len as usize));
-    }
-
+    let spans = level_spans(bytes, &shape, zstd, path)?;
     // A cube map's every level, a 2D texture's level 0 (its mips are that image made smaller).
     let wanted = if cube { level_count } else { 1 };
-    use rayon::prelude::*;
-    let inflated: Vec<std::borrow::Cow<[u8]>> = spans[..wanted]
-        .par_iter()
-        .enumerate()
-        .map(|(l, &(offset, len))| {
-            let stored = &bytes[offset..offset + len];
-            if !zstd {
-                return Ok(std::borrow::Cow::Borrowed(stored));
-            }
-            // Streamed, so memory grows with what really inflates (a tiny file cannot make
-            // us reserve its whole claimed size), and never past one byte over the claim.
-            use std::io::Read;
-            let expected = shape.level_bytes(l) as usize;
-            let mut plain = Vec::new();
-            zstd::stream::read::Decoder::with_buffer(stored)
-                .and_then(|d| d.take(expected as u64 + 1).read_to_end(&mut plain))
-                .map_err(|e| {
-                    err(format!(
-                        "level {l}: its Zstandard data does not decompress: {}",
-                        super::io_msg(&e)
-                    ))
-                })?;
-            if plain.len() != expected {
-                return Err(err(format!(
-                    "level {l}: its Zstandard data holds {} bytes, but {} take {expected}",
-                    plain.len(),
-                    shape.holds(l)
-                )));
-            }
-            Ok(std::borrow::Cow::Owned(plain))
-        })
-        .collect::<Result<_>>()?;
+    let inflated = inflate(bytes, &spans[..wanted], &shape, zstd, path)?;
     let image = |l: usize, face: usize| {
         let (w, h) = shape.level_size(l);
         let len = shape.face_bytes(l);

@@ -163,7 +163,7 @@ fn eta(n: f32) -> f32 {
 /// The built-in materials, with a line saying what each is.
 pub fn presets() -> Vec<(Material, &'static str)> {
     let base = Material::default();
-    vec![
+    let mut all = vec![
         (
             Material {
                 name: "chrome".into(),
@@ -236,6 +236,14 @@ pub fn presets() -> Vec<(Material, &'static str)> {
             },
             "Fresnel and chromatic dispersion (C7E5v/C7E6f): glass with indices 1.44, 1.5, 1.56 for red, green, blue",
         ),
+    ];
+    all.extend(pbr_presets(base));
+    all
+}
+
+/// The split-sum (glTF metallic-roughness) presets, after the texts' materials.
+fn pbr_presets(base: Material) -> Vec<(Material, &'static str)> {
+    vec![
         (
             Material {
                 name: "pbr".into(),

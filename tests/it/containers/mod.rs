@@ -11,9 +11,11 @@ mod layout;
 mod readers;
 mod round_trips;
 
-use cubeforge::cube::CubeMap;
-use cubeforge::image::{linear_to_srgb, Image};
-use cubeforge::io::{self, dds, ktx2, Decoded, FileFormat, GpuFormat, Limits, ReadOptions};
+use cubeforge::internals::cube::CubeMap;
+use cubeforge::internals::image::{linear_to_srgb, Image};
+use cubeforge::internals::io::{
+    self, dds, ktx2, Decoded, FileFormat, GpuFormat, Limits, ReadOptions,
+};
 use glam::Vec4;
 use std::path::Path;
 

@@ -2,8 +2,8 @@
 //! resized with, and where the map's size comes from.
 
 use super::*;
-use cubeforge::image::{luminance, srgb_to_linear};
-use cubeforge::io;
+use cubeforge::internals::image::{luminance, srgb_to_linear};
+use cubeforge::internals::io;
 use glam::Vec4;
 
 #[test]
@@ -73,7 +73,7 @@ fn image_channels_luminance_and_srgb_decode() {
     assert_close(&v, &[0.0, 0.2, 1.0, 32768.0 / 65535.0]);
 
     // Float data above 1 clamps to 1; srgb does not apply to it.
-    let img = cubeforge::image::Image {
+    let img = cubeforge::internals::image::Image {
         width: 2,
         height: 1,
         pixels: vec![

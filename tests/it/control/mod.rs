@@ -12,8 +12,8 @@ mod outputs;
 mod read_back;
 mod sources;
 
-use cubeforge::control::{self, Recipe, Size, Syntax};
-use cubeforge::io::Limits;
+use cubeforge::internals::control::{self, Recipe, Size, Syntax};
+use cubeforge::internals::io::Limits;
 use std::path::Path;
 use std::process::{Command, Output};
 

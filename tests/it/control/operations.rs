@@ -2,7 +2,7 @@
 //! parameters between channels: exact values for each.
 
 use super::*;
-use cubeforge::control::Slot;
+use cubeforge::internals::control::Slot;
 use glam::Vec4;
 
 #[test]

@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::common;
-use cubeforge::io::{self, unorm8, Decoded, ReadOptions};
+use cubeforge::internals::io::{self, unorm8, Decoded, ReadOptions};
 use std::path::PathBuf;
 
 /// Little-endian u32 / u64 at a byte offset.

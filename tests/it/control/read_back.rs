@@ -2,7 +2,7 @@
 //! and 2D KTX2 and DDS textures of every format read as their level 0.
 
 use super::*;
-use cubeforge::io::{self, Decoded, ReadOptions};
+use cubeforge::internals::io::{self, Decoded, ReadOptions};
 use glam::Vec4;
 
 /// Item 10: a control map written as KTX2 reads back everywhere. The library returns its
@@ -90,8 +90,8 @@ fn a_ktx2_control_map_reads_back_in_info_and_preview() {
 /// headers, with mips), read as their level 0 image; `info` describes a DDS one.
 #[test]
 fn two_d_ktx2_and_dds_read_as_their_level_0() {
-    use cubeforge::image::Image;
-    use cubeforge::io::GpuFormat;
+    use cubeforge::internals::image::Image;
+    use cubeforge::internals::io::GpuFormat;
     let dir = tempfile::tempdir().unwrap();
     let level0 = Image::from_fn(5, 3, |x, y| {
         Vec4::new(x as f32 / 4.0, y as f32 / 2.0, 0.25, 1.0 - x as f32 / 8.0)

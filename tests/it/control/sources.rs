@@ -2,7 +2,7 @@
 //! against the values its definition gives.
 
 use super::*;
-use cubeforge::control::{lattice, Noise};
+use cubeforge::internals::control::{lattice, Noise};
 
 #[test]
 fn constants_give_round_v_times_255_in_8_bit_png_and_exact_16_bit() {

@@ -9,7 +9,7 @@ mod ninja;
 mod planning;
 
 use super::within;
-use cubeforge::batch::depfile;
+use cubeforge::internals::output::depfile;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, SystemTime};
@@ -167,7 +167,7 @@ fn assert_left_out_told(o: &Output) {
     let told: Vec<&str> = e.lines().filter(|l| l.contains("left out")).collect();
     assert_eq!(told.len(), LEFT_OUT.len(), "{e}");
     for n in LEFT_OUT {
-        let shown = cubeforge::error::escape_text(n).into_owned();
+        let shown = cubeforge::internals::error::escape_text(n).into_owned();
         assert!(
             told.iter().any(
                 |l| l.starts_with("cubeforge: warning: m.toml: line 2: left out ")

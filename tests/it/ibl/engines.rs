@@ -2,7 +2,7 @@
 //! roughness per level and mapping, light kept, and the files of each target.
 
 use super::*;
-use cubeforge::ibl::RoughnessMapping;
+use cubeforge::internals::ibl::RoughnessMapping;
 
 #[test]
 fn each_engine_sees_the_panorama_unmirrored() {
@@ -246,7 +246,7 @@ fn gltf_ships_the_sheen_chain_and_the_tables() {
     let charlie = levels_of(&out.join("env_charlie.ktx2"));
     assert_eq!(charlie.level_count, 4);
     for l in &charlie.levels {
-        assert_eq!(l.filter, cubeforge::filter::FilterKind::Charlie);
+        assert_eq!(l.filter, cubeforge::internals::filter::FilterKind::Charlie);
         assert!(
             (l.roughness.unwrap() - l.level as f32 / 3.0).abs() < 1e-6,
             "{l:?}"

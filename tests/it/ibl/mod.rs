@@ -10,10 +10,10 @@ mod readers;
 mod snippets;
 
 use crate::common::{self, run, stderr};
-use cubeforge::chain::LevelsFile;
-use cubeforge::cube::{face_dir, CubeMap};
-use cubeforge::image::Image;
-use cubeforge::io::{self, Decoded, ReadOptions};
+use cubeforge::internals::chain::LevelsFile;
+use cubeforge::internals::cube::{face_dir, CubeMap};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, Decoded, ReadOptions};
 use glam::{Vec3, Vec4};
 use std::path::{Path, PathBuf};
 

@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::common;
-use cubeforge::io::ReadOptions;
+use cubeforge::internals::io::ReadOptions;
 use std::path::Path;
 
 #[test]
@@ -106,7 +106,7 @@ fn prefilter_folder_chains_load_level_by_level() {
     for (k, n) in sizes.iter().enumerate() {
         let sub = dir.path().join(format!("m{k}"));
         std::fs::create_dir_all(&sub).unwrap();
-        for f in cubeforge::cube::FACE_NAMES {
+        for f in cubeforge::internals::cube::FACE_NAMES {
             let p = sub.join(format!("{f}.exr"));
             let img = Image::filled(*n, *n, Vec4::new(k as f32, 0.0, 0.0, 1.0));
             std::fs::write(
@@ -123,7 +123,7 @@ fn prefilter_folder_chains_load_level_by_level() {
     .unwrap();
     let env = preview::load_environment(dir.path(), None, &ReadOptions::default()).unwrap();
     assert_eq!(env.levels(), 4);
-    use cubeforge::cube::Environment;
+    use cubeforge::internals::cube::Environment;
     assert_eq!(env.sampler.lookup(Vec3::X, 2.0).x, 2.0);
     assert_eq!(env.sampler.lookup(Vec3::X, 1.5).x, 1.5);
     // A level of the wrong size is named.
@@ -131,7 +131,7 @@ fn prefilter_folder_chains_load_level_by_level() {
     std::fs::remove_dir_all(dir.path().join("m2")).unwrap();
     let sub = dir.path().join("m2");
     std::fs::create_dir_all(&sub).unwrap();
-    for f in cubeforge::cube::FACE_NAMES {
+    for f in cubeforge::internals::cube::FACE_NAMES {
         let p = sub.join(format!("{f}.exr"));
         let img = Image::filled(3, 3, Vec4::ONE);
         std::fs::write(

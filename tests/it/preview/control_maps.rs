@@ -2,7 +2,7 @@
 //! says, panorama decals, and the sidecar's LOD bias.
 
 use super::*;
-use cubeforge::preview::Control;
+use cubeforge::internals::preview::Control;
 
 #[test]
 fn control_map_changes_reflectivity_where_it_says() {
@@ -75,7 +75,7 @@ fn a_panorama_decal_wraps_like_the_environment() {
     let pano = Image::from_fn(w, h, |x, y| {
         let u = (x as f32 + 0.5) / w as f32;
         let v = (y as f32 + 0.5) / h as f32;
-        synthetic::smooth(cubeforge::layout::equirect::uv_to_dir(u, v))
+        synthetic::smooth(cubeforge::internals::layout::equirect::uv_to_dir(u, v))
     });
     let m = Material {
         reflectivity: 0.0,

@@ -5,7 +5,7 @@
 
 use super::*;
 use crate::common;
-use cubeforge::preview::Refraction;
+use cubeforge::internals::preview::Refraction;
 use cubeforge::{Destination, Job, PreviewJob};
 use std::path::Path;
 
@@ -149,8 +149,14 @@ fn exact_glass_matches_a_double_precision_trace() {
                     assert!((got - env(dir)).abs().max_element() < 1e-4, "background");
                     continue;
                 };
-                let rule =
-                    expected_exact(m, x, y, n, Some(cubeforge::preview::glass::MAX_EXITS)).unwrap();
+                let rule = expected_exact(
+                    m,
+                    x,
+                    y,
+                    n,
+                    Some(cubeforge::internals::preview::glass::MAX_EXITS),
+                )
+                .unwrap();
                 assert!(got.is_finite(), "{}: NaN at ({x}, {y})", m.name);
                 full = full.max((got - want).abs().max_element());
                 same_rule = same_rule.max((got - rule).abs().max_element());
@@ -160,7 +166,7 @@ fn exact_glass_matches_a_double_precision_trace() {
         println!(
             "{}: max error {full:.2e} vs the full series, {same_rule:.2e} vs {} exits, over {count} pixels",
             m.name,
-            cubeforge::preview::glass::MAX_EXITS
+            cubeforge::internals::preview::glass::MAX_EXITS
         );
         assert!(count > 4000);
         // f32 against f64 on the same stopping rule; the series cut after MAX_EXITS internal

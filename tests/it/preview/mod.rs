@@ -16,13 +16,13 @@ mod orientation;
 mod parallax;
 mod vertex;
 
-use cubeforge::cube::{CubeMap, CubeSampler};
-use cubeforge::image::Image;
-use cubeforge::io::{self, WriteOptions};
-use cubeforge::preview::material::{self, Material, Model};
-use cubeforge::preview::{self, Background, Options, Shading, Surface};
-use cubeforge::resample::FnEnv;
-use cubeforge::synthetic;
+use cubeforge::internals::cube::{CubeMap, CubeSampler};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::{self, WriteOptions};
+use cubeforge::internals::preview::material::{self, Material, Model};
+use cubeforge::internals::preview::{self, Background, Options, Shading, Surface};
+use cubeforge::internals::resample::FnEnv;
+use cubeforge::internals::synthetic;
 use glam::{DVec3, Vec3, Vec4};
 
 // ---------------------------------------------------------------------------------------

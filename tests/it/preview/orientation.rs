@@ -2,8 +2,8 @@
 //! texts' orientation, stratified samples, and renders independent of the thread count.
 
 use super::*;
-use cubeforge::layout::sphere as sphere_map;
-use cubeforge::preview::camera::sample_offsets;
+use cubeforge::internals::layout::sphere as sphere_map;
+use cubeforge::internals::preview::camera::sample_offsets;
 
 #[test]
 fn chrome_ball_matches_the_sphere_map_layout() {

@@ -1,7 +1,7 @@
 //! Brennan's correction: both parallax modes against his formulas, and how they differ.
 
 use super::*;
-use cubeforge::preview::{Parallax, ParallaxMode};
+use cubeforge::internals::preview::{Parallax, ParallaxMode};
 
 #[test]
 fn parallax_modes_match_brennan_and_differ_as_expected() {

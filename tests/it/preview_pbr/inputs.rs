@@ -3,12 +3,12 @@
 
 use super::{pbr, render};
 use crate::common;
-use cubeforge::cube::{CubeMap, CubeSampler, Environment};
-use cubeforge::ibl::Engine;
-use cubeforge::io::ReadOptions;
-use cubeforge::preview::material::{self, Model};
-use cubeforge::preview::pbr::LevelMapping;
-use cubeforge::preview::{self, Options, Surface};
+use cubeforge::internals::cube::{CubeMap, CubeSampler, Environment};
+use cubeforge::internals::ibl::Engine;
+use cubeforge::internals::io::ReadOptions;
+use cubeforge::internals::preview::material::{self, Model};
+use cubeforge::internals::preview::pbr::LevelMapping;
+use cubeforge::internals::preview::{self, Options, Surface};
 use glam::{Vec3, Vec4};
 use std::path::Path;
 
@@ -337,10 +337,10 @@ fn pbr_stays_finite_next_to_the_largest_radiance() {
             Vec4::splat(0.5)
         }
     });
-    let opts = cubeforge::filter::ChainOptions::default();
-    let (chain, levels) = cubeforge::filter::prefilter(&base, &opts, &|_| {});
+    let opts = cubeforge::internals::filter::ChainOptions::default();
+    let (chain, levels) = cubeforge::internals::filter::prefilter(&base, &opts, &|_| {});
     let mapping = LevelMapping::levels(levels.iter().map(|l| l.roughness.unwrap()).collect());
-    let split = cubeforge::preview::pbr::SplitSum::for_cube(&chain, mapping.unwrap());
+    let split = cubeforge::internals::preview::pbr::SplitSum::for_cube(&chain, mapping.unwrap());
     for r in [0.0, 0.3, 1.0] {
         for metallic in [0.0, 1.0] {
             let img = render(

@@ -11,13 +11,13 @@ use brute::{
     sky, sky_sun, sun, Env,
 };
 
-use cubeforge::cube::{CubeMap, CubeSampler, Environment};
-use cubeforge::filter::{self, ChainOptions, FilterKind};
-use cubeforge::ibl::RoughnessMapping;
-use cubeforge::image::Image;
-use cubeforge::preview::material::{Material, Model};
-use cubeforge::preview::pbr::{self, LevelMapping, SplitSum};
-use cubeforge::preview::{self, Options, Surface};
+use cubeforge::internals::cube::{CubeMap, CubeSampler, Environment};
+use cubeforge::internals::filter::{self, ChainOptions, FilterKind};
+use cubeforge::internals::ibl::RoughnessMapping;
+use cubeforge::internals::image::Image;
+use cubeforge::internals::preview::material::{Material, Model};
+use cubeforge::internals::preview::pbr::{self, LevelMapping, SplitSum};
+use cubeforge::internals::preview::{self, Options, Surface};
 use glam::{DVec3, Vec3, Vec4};
 use rayon::prelude::*;
 

@@ -9,8 +9,8 @@
 
 use super::reference::{self, Lobe};
 use super::{chain, real_base, real_chain, stated, to_cube};
-use cubeforge::cube::CubeMap;
-use cubeforge::filter::FilterKind;
+use cubeforge::internals::cube::CubeMap;
+use cubeforge::internals::filter::FilterKind;
 use glam::Vec4;
 use rayon::prelude::*;
 

@@ -12,13 +12,13 @@ mod far_field;
 mod reference;
 
 use crate::common;
-use cubeforge::convert::{self, Output};
-use cubeforge::cube::CubeMap;
-use cubeforge::filter::{self, ChainOptions, FilterKind, LevelInfo};
-use cubeforge::image::Image;
-use cubeforge::io::ReadOptions;
-use cubeforge::layout::Kind;
-use cubeforge::resample::Resampler;
+use cubeforge::internals::convert::{self, Output};
+use cubeforge::internals::cube::CubeMap;
+use cubeforge::internals::filter::{self, ChainOptions, FilterKind, LevelInfo};
+use cubeforge::internals::image::Image;
+use cubeforge::internals::io::ReadOptions;
+use cubeforge::internals::layout::Kind;
+use cubeforge::internals::resample::Resampler;
 use reference::{Cube, Lobe};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -303,7 +303,7 @@ fn irradiance_matches_brute_force() {
 fn reference_is_the_crates_geometry_and_converged() {
     for face in 0..6 {
         for (s, t) in [(0.1f32, 0.2f32), (0.7, 0.4), (0.5, 0.9)] {
-            let d = cubeforge::cube::face_dir(face, s, t);
+            let d = cubeforge::internals::cube::face_dir(face, s, t);
             let p = reference::face_point(face, 2.0 * s as f64 - 1.0, 2.0 * t as f64 - 1.0);
             for c in 0..3 {
                 assert!((d[c] as f64 - p[c]).abs() < 1e-6, "face {face}");

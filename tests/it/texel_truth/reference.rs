@@ -1,6 +1,6 @@
 //! The brute-force truth, written apart from the tool: its own face table (checked once against
 //! the crate's), exact texel solid angles from the corners' arctangents, the lobes' formulas in
-//! f64 and their integrals by their own quadrature. Nothing from `cubeforge::filter`.
+//! f64 and their integrals by their own quadrature. Nothing from `cubeforge::internals::filter`.
 //!
 //! The model: each base texel is light of power value x solid angle at its centre direction;
 //! a lobe spreads it over the sphere; an output texel holds the lobe-weighted light over its

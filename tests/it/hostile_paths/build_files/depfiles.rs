@@ -3,7 +3,7 @@
 //! written and the command fails with one line naming the file.
 
 use super::{cubeforge, found, ok, skies, stderr, stdout, within, SKY_EXR};
-use cubeforge::batch::depfile;
+use cubeforge::internals::output::depfile;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, SystemTime};

@@ -1,5 +1,6 @@
 //! Make-style depfiles (`target: dep dep ...`), as Make, Ninja (`deps = gcc`) and asset
-//! cookers read them: the output a command was asked for, and every file it read.
+//! cookers read them: the output a command was asked for, and every file it read. Every
+//! command's `--depfile` and each job of a batch write them, so they sit beside `deliver`.
 
 use crate::error::{Error, Result};
 use crate::io::atomic::{Place, Places};
