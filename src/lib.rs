@@ -122,7 +122,7 @@ mod tonemap;
 #[allow(missing_docs)]
 mod view;
 
-pub use batch::{Batch, BatchJob, BatchReport, Done, Outcome, Shard, Why};
+pub use batch::{Batch, BatchJob, BatchReport, Done, Outcome, Shard, ShardBy, Why};
 pub use control::Size;
 pub use cube::{CubeMap, EdgeFixup, Interp};
 pub use error::{Error, LimitKind, Result};

@@ -41,6 +41,7 @@
 //! ```
 
 mod conflicts;
+mod shard;
 mod state;
 
 pub use state::Why;
@@ -84,20 +85,45 @@ impl BatchJob {
     }
 }
 
-/// The `I`-th of `N` parts of a batch (from 0): the inputs, in order, dealt out in turn.
+/// The `I`-th of `N` parts of a batch (from 0). Each input's jobs stay together; the inputs
+/// are given out by [`ShardBy`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Shard {
     /// This part, from 0.
     pub index: usize,
     /// How many parts.
     pub count: usize,
+    /// How inputs are given out.
+    pub by: ShardBy,
+}
+
+/// How a sharded batch gives out its inputs: the same on every machine from the same manifest
+/// and inputs, so independent tasks agree without a coordinator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ShardBy {
+    /// By cost (`I/N`): each input's jobs' planned bytes (from the headers) as its cost,
+    /// greatest first onto the least-loaded shard (the lowest on a tie): one 16K panorama
+    /// among 2K ones gets a shard to itself instead of a quarter of the others beside it.
+    #[default]
+    Cost,
+    /// In turn (`I/N:order`): input k to shard k mod N, as before costs were weighed.
+    Order,
 }
 
 impl std::str::FromStr for Shard {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Shard, String> {
-        let bad = || format!("{s:?}: give I/N, the I-th of N shards counted from 0 (0/4 .. 3/4)");
-        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let bad = || {
+            format!(
+                "{s:?}: give I/N, the I-th of N shards counted from 0 (0/4 .. 3/4), or I/N:order \
+                 to deal the inputs out in turn"
+            )
+        };
+        let (s_part, by) = match s.strip_suffix(":order") {
+            Some(rest) => (rest, ShardBy::Order),
+            None => (s, ShardBy::Cost),
+        };
+        let (i, n) = s_part.split_once('/').ok_or_else(bad)?;
         let (index, count) = (
             i.trim().parse::<usize>().map_err(|_| bad())?,
             n.trim().parse::<usize>().map_err(|_| bad())?,
@@ -105,7 +131,7 @@ impl std::str::FromStr for Shard {
         if count == 0 || index >= count {
             return Err(bad());
         }
-        Ok(Shard { index, count })
+        Ok(Shard { index, count, by })
     }
 }
 
@@ -173,6 +199,9 @@ pub struct BatchReport {
     pub jobs: Vec<Done>,
     /// Jobs left to the other shards.
     pub other_shards: usize,
+    /// With a shard: each shard's estimated cost (its inputs' planned bytes) and jobs, in
+    /// shard order.
+    pub shard_costs: Vec<(u64, usize)>,
     /// Things to know: a state file that could not be read, say.
     pub warnings: Vec<crate::jobs::Warning>,
 }

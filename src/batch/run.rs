@@ -49,7 +49,7 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
     report
         .warnings
         .extend(warning.map(crate::jobs::Warning::new));
-    let mine = shard_groups(&batch, &mut report.other_shards);
+    let mine = shard_groups(&batch, &mut report);
     let hashes = Hashes::default();
     let whys = reasons(&batch, &mine, &state, &hashes);
     // The state the batch keeps: jobs gone from the batch dropped, each finished job's record
@@ -118,19 +118,39 @@ fn refuse_special_state(batch: &Batch) -> Result<()> {
 }
 
 /// This shard's groups (all of them without a shard); the jobs of the others are counted in
-/// `others`.
-fn shard_groups(batch: &Batch, others: &mut usize) -> Vec<Group> {
-    groups(&batch.jobs)
-        .into_iter()
-        .enumerate()
-        .filter(|(g, jobs)| {
-            let keep = batch.shard.is_none_or(|s| g % s.count == s.index);
-            if !keep {
-                *others += jobs.len();
-            }
-            keep
+/// the report, and each shard's estimated cost.
+fn shard_groups(batch: &Batch, report: &mut BatchReport) -> Vec<Group> {
+    let all = groups(&batch.jobs);
+    let Some(shard) = batch.shard else {
+        return all;
+    };
+    // A group's cost: its jobs' planned bytes, from the headers (a job that cannot plan costs
+    // nothing here; it fails when it runs).
+    let costs: Vec<u64> = all
+        .iter()
+        .map(|g| {
+            g.iter()
+                .map(|&i| batch.jobs[i].job.memory_estimate().unwrap_or(0))
+                .fold(0u64, u64::saturating_add)
         })
-        .map(|(_, jobs)| jobs)
+        .collect();
+    let owner = super::shard::assign(&costs, shard.count, shard.by);
+    report.shard_costs = vec![(0, 0); shard.count];
+    for ((g, &cost), &s) in all.iter().zip(&costs).zip(&owner) {
+        let entry = &mut report.shard_costs[s];
+        entry.0 = entry.0.saturating_add(cost);
+        entry.1 += g.len();
+    }
+    all.into_iter()
+        .zip(owner)
+        .filter_map(|(g, s)| {
+            if s == shard.index {
+                Some(g)
+            } else {
+                report.other_shards += g.len();
+                None
+            }
+        })
         .collect()
 }
 

@@ -26,8 +26,10 @@ pub struct Args {
     /// Run every job, up to date or not.
     #[arg(long)]
     pub force: bool,
-    /// Run the I-th of N parts (from 0), the inputs dealt out in turn: each machine of a CI
-    /// matrix or array job passes its index.
+    /// Run the I-th of N parts (from 0): each machine of a CI matrix or array job passes its
+    /// index. Each input's jobs stay together; inputs go by cost (their jobs' planned bytes,
+    /// from the headers), the greatest first onto the least-loaded part, the same on every
+    /// machine; I/N:order deals them out in turn instead. --dry-run prints each part's cost.
     #[arg(long, value_name = "I/N")]
     pub shard: Option<Shard>,
     /// Write a Make-style depfile beside each job's output (OUTPUT.d): the files it read.
@@ -190,6 +192,15 @@ fn summarize(
 ) -> Result<()> {
     for w in &report.warnings {
         super::warn(w.with_flags());
+    }
+    if dry_run {
+        let n = report.shard_costs.len();
+        for (i, (cost, jobs)) in report.shard_costs.iter().enumerate() {
+            super::report(format!(
+                "shard {i}/{n}: {jobs} jobs, estimated {:.1} MiB",
+                *cost as f64 / (1u64 << 20) as f64
+            ))?;
+        }
     }
     let shards = if report.other_shards > 0 {
         format!(", {} left to other shards", report.other_shards)

@@ -226,8 +226,83 @@ fn shards_run_every_job_once() {
         "{}",
         String::from_utf8_lossy(&o.stdout)
     );
-    for bad in ["3/3", "1", "a/b", "0/0"] {
+    for bad in ["3/3", "1", "a/b", "0/0", "0/2:cost"] {
         let o = crate::cli_options::run(&["batch", "proj/m.toml", "--shard", bad], d);
         assert_eq!(o.status.code(), Some(2), "{bad}");
+    }
+}
+
+/// Shards balanced by cost (issue 52): one 2048 x 1024 panorama among seven 256 x 128 ones on
+/// two shards, no shard's texels past max(the largest input, 1.2 x the even share); every
+/// input on one shard; `--dry-run` prints each shard's estimate; `I/N:order` deals them out in
+/// turn as before (the large one beside three small ones).
+#[test]
+fn shards_are_balanced_by_cost() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let p = d.join("proj/hdri");
+    std::fs::create_dir_all(&p).unwrap();
+    let sky = crate::common::read_image(std::path::Path::new(super::SKY_EXR));
+    let sizes = [
+        (256, 128),
+        (256, 128),
+        (2048, 1024),
+        (256, 128),
+        (256, 128),
+        (256, 128),
+        (256, 128),
+        (256, 128),
+    ];
+    for (k, (w, h)) in sizes.iter().enumerate() {
+        let img = cubeforge::Image::from_fn(*w, *h, |x, y| {
+            sky.bilinear(
+                (x as f32 + 0.5) * sky.width as f32 / *w as f32,
+                (y as f32 + 0.5) * sky.height as f32 / *h as f32,
+                true,
+            )
+        });
+        crate::common::write_image(&p.join(format!("p{k}.exr")), &img);
+    }
+    std::fs::write(
+        d.join("proj/m.toml"),
+        "[[job]]\ninputs = [\"hdri/*.exr\"]\ncommand = \"convert\"\nargs = [\"--to\", \"faces\", \"--size\", \"16\"]\noutput = \"build/{stem}/\"\n",
+    )
+    .unwrap();
+    let texels = |k: usize| (sizes[k].0 * sizes[k].1) as f64;
+    let total: f64 = (0..8).map(texels).sum();
+    for (split, balanced) in [("", true), (":order", false)] {
+        let mut seen = Vec::new();
+        let mut loads = Vec::new();
+        for i in 0..2 {
+            let shard = format!("{i}/2{split}");
+            let o = run_ok(&["batch", "proj/m.toml", "--shard", &shard, "--dry-run"], d);
+            let out = String::from_utf8_lossy(&o.stdout).into_owned();
+            assert!(
+                out.contains("shard 0/2:") && out.contains("shard 1/2:"),
+                "{out}"
+            );
+            let mine: Vec<usize> = (0..8)
+                .filter(|k| {
+                    out.lines()
+                        .any(|l| l.contains("would run") && l.contains(&format!("p{k}.exr")))
+                })
+                .collect();
+            loads.push(mine.iter().map(|&k| texels(k)).sum::<f64>());
+            seen.extend(mine);
+        }
+        seen.sort();
+        assert_eq!(
+            seen,
+            (0..8).collect::<Vec<_>>(),
+            "every input once ({split})"
+        );
+        let bound = texels(2).max(1.2 * total / 2.0);
+        let worst = loads.iter().cloned().fold(0.0, f64::max);
+        println!("shards{split}: texels {loads:?}, bound {bound}");
+        assert_eq!(
+            worst <= bound,
+            balanced,
+            "{split}: {loads:?} against {bound}"
+        );
     }
 }
