@@ -101,7 +101,10 @@ pub fn find(grid: Grid, images: &[&Image]) -> Lights {
         let p = images[face].pixels[y * w + x];
         (omega > 0.0).then(|| (d.as_dvec3(), omega, [p.x as f64, p.y as f64, p.z as f64]))
     };
-    let sky = median_luminance(rows, w, &texel);
+    let (median, mean) = median_luminance(rows, w, &texel);
+    // A map mostly black (a night, a studio's dark floor) has a median near 0: the sky's level
+    // is then taken as a thousandth of the mean, so the whole map does not pass for lights.
+    let sky = median.max(mean * 1e-3);
     let threshold = SUN_RATIO * sky.max(1e-12);
     let mut candidates: Vec<Candidate> = (0..rows)
         .into_par_iter()
@@ -240,43 +243,53 @@ pub fn remove(grid: Grid, images: &mut [Image], light: &Light, threshold: f64) -
     taken
 }
 
-/// The solid-angle-weighted median luminance, from a histogram of log2 luminance.
+/// The solid-angle-weighted median luminance, from a histogram of log2 luminance, and the
+/// mean.
 fn median_luminance(
     rows: usize,
     w: usize,
     texel: &(impl Fn(usize, usize) -> Option<(DVec3, f64, [f64; 3])> + Sync),
-) -> f64 {
+) -> (f64, f64) {
     let bin =
         |l: f64| ((l.max(1e-300).log2() + 64.0) * 64.0).clamp(0.0, (BINS - 1) as f64) as usize;
-    let hist = (0..rows)
+    // Each band of ROWS rows' histogram and light (bands in parallel), added in band order:
+    // the same bits on every thread count, a histogram a band, not a row.
+    const ROWS: usize = 64;
+    let per_row: Vec<(Vec<f64>, f64)> = (0..rows.div_ceil(ROWS))
         .into_par_iter()
-        .map(|fy| {
+        .map(|band| {
             let mut hist = vec![0.0f64; BINS];
-            for x in 0..w {
-                if let Some((_, omega, rgb)) = texel(fy, x) {
-                    hist[bin(luminance(rgb))] += omega;
+            let mut light = 0.0;
+            for fy in band * ROWS..rows.min((band + 1) * ROWS) {
+                for x in 0..w {
+                    if let Some((_, omega, rgb)) = texel(fy, x) {
+                        let l = luminance(rgb);
+                        hist[bin(l)] += omega;
+                        light += l * omega;
+                    }
                 }
             }
-            hist
+            (hist, light)
         })
-        .reduce(
-            || vec![0.0; BINS],
-            |mut a, b| {
-                for (x, y) in a.iter_mut().zip(b) {
-                    *x += y;
-                }
-                a
-            },
-        );
+        .collect();
+    let mut hist = vec![0.0f64; BINS];
+    let mut light = 0.0;
+    for (h, l) in &per_row {
+        for (a, b) in hist.iter_mut().zip(h) {
+            *a += b;
+        }
+        light += l;
+    }
     let total: f64 = hist.iter().sum();
+    let mean = if total > 0.0 { light / total } else { 0.0 };
     let mut run = 0.0;
     for (i, v) in hist.iter().enumerate() {
         run += v;
         if run >= total / 2.0 {
-            return ((i as f64 + 0.5) / 64.0 - 64.0).exp2();
+            return (((i as f64 + 0.5) / 64.0 - 64.0).exp2(), mean);
         }
     }
-    0.0
+    (0.0, mean)
 }
 
 /// The cosine-weighted integral of luminance over the hemisphere around `axis`.
