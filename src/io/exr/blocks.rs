@@ -66,7 +66,7 @@ pub(super) fn decode_blocks(
     if next != h {
         return Err(format!("scan lines {next} to {h} are missing"));
     }
-    let line_bytes: usize = slots.iter().map(|(_, t)| t.bytes_per_sample() * w).sum();
+    let (line_bytes, words) = sizes(slots, w);
     let mut img = Image::new(w, h);
     let mut rest = img.pixels.as_mut_slice();
     let mut jobs = Vec::with_capacity(blocks.len());
@@ -75,11 +75,6 @@ pub(super) fn decode_blocks(
         rest = tail;
         jobs.push((y, chunk, rows));
     }
-    // 16-bit words per sample of each channel, for PIZ.
-    let words: Vec<usize> = slots
-        .iter()
-        .map(|(_, t)| t.bytes_per_sample() / 2)
-        .collect();
     let replaced = jobs
         .into_par_iter()
         .map_init(scratch(w), |s, (y, chunk, rows)| {
@@ -95,6 +90,17 @@ pub(super) fn decode_blocks(
         })
         .try_reduce(|| 0, |a, b| Ok(a + b))?;
     Ok((img, replaced))
+}
+
+/// The bytes of one scan line of `w` texels in the stored channels, and each channel's 16-bit
+/// words per sample (for PIZ): what every block of the layer is cut by.
+fn sizes(slots: &[(Option<usize>, SampleType)], w: usize) -> (usize, Vec<usize>) {
+    let line_bytes = slots.iter().map(|(_, t)| t.bytes_per_sample() * w).sum();
+    let words = slots
+        .iter()
+        .map(|(_, t)| t.bytes_per_sample() / 2)
+        .collect();
+    (line_bytes, words)
 }
 
 /// The layer in bands of `lines` rows (a power of two no smaller than any block's lines),
@@ -139,11 +145,7 @@ pub(super) fn map_bands<T: Send>(
             ));
         }
     }
-    let line_bytes: usize = slots.iter().map(|(_, t)| t.bytes_per_sample() * w).sum();
-    let words: Vec<usize> = slots
-        .iter()
-        .map(|(_, t)| t.bytes_per_sample() / 2)
-        .collect();
+    let (line_bytes, words) = sizes(slots, w);
     let block = Block {
         meta,
         slots,
