@@ -48,6 +48,7 @@ mod rgbe;
 mod sh_bands;
 mod simd;
 mod streamed;
+mod streamed_info;
 mod texel_truth;
 mod uastc;
 mod ultrahdr;
