@@ -4,8 +4,12 @@
 //! the streamed path on small files.
 
 use crate::common;
+use common::write_image;
+use cubeforge::ibl::{Engine, IblOptions};
+use cubeforge::image::Image;
 use cubeforge::info;
 use cubeforge::io::{Limits, ReadOptions};
+use cubeforge::{IblJob, Job};
 use glam::Vec4;
 use std::path::Path;
 use std::process::Command;
@@ -35,6 +39,11 @@ fn sky(x: usize, y: usize, (w, h): (usize, usize)) -> Vec4 {
     let v = 0.2 + (x as f32 * 0.37).sin().abs() + y as f32 / h as f32;
     let sun = if (x, y) == (w / 3, h / 4) { 5e4 } else { 0.0 };
     Vec4::new(v + sun, 0.5 * v + sun, 0.25 * v, 1.0)
+}
+
+/// The sky as a half-float OpenEXR file.
+fn panorama(path: &Path, w: usize, h: usize) {
+    write_image(path, &Image::from_fn(w, h, |x, y| sky(x, y, (w, h))));
 }
 
 /// The bytes the whole read of a `w` x `h` image plans (its texels twice over), less one: a
@@ -123,4 +132,39 @@ fn real_panoramas_streamed_give_the_same_info() {
             assert!(common::stderr(&refused).contains("in bands of"), "{file}");
         }
     }
+}
+
+/// A budget the whole panorama does not fit but its bands and reduced copy do: `ibl` plans
+/// the streamed path's bytes and runs; the whole read's plan is refused at it.
+#[test]
+fn ibl_within_a_budget_only_the_bands_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("pano.exr");
+    let (w, h) = (1024, 512);
+    panorama(&path, w, h);
+    let read = budget(below_whole(w, h) / 2);
+    let whole = cubeforge::convert::plan_input(std::slice::from_ref(&path), None, &read);
+    assert!(whole.is_err(), "the whole image fits the budget");
+    let job = IblJob {
+        options: IblOptions {
+            specular_size: Some(16),
+            samples: Some(4),
+            ..IblOptions::default()
+        },
+        read,
+        ..IblJob::new(vec![path.clone()], dir.path().join("out"), Engine::Bevy)
+    };
+    let (estimate, report) = on(2, || (job.memory_estimate(), job.run(&())));
+    let estimate = estimate.unwrap();
+    assert!(estimate <= read.limits.max_memory, "{estimate}");
+    report.unwrap();
+    // Larger outputs are not reduced: the whole image is planned, and refused.
+    let big = IblJob {
+        options: IblOptions {
+            specular_size: Some(256),
+            ..job.options.clone()
+        },
+        ..job.clone()
+    };
+    assert!(on(2, || big.memory_estimate()).is_err());
 }
