@@ -104,9 +104,12 @@ impl Bands<'_> {
     }
 }
 
-/// Whether `opts` read `path` as a streamed job may: an OpenEXR file's usual image.
+/// Whether `opts` read `path` as a streamed job may: an OpenEXR file's usual image. Anything
+/// but a regular file (a pipe would block its magic number's read) is left to the whole
+/// read, which says why it is refused.
 fn offered(path: &Path, opts: &ReadOptions) -> bool {
-    path != Path::new("-") && opts.usual() && super::super::is_exr(path)
+    let regular = std::fs::metadata(path).is_ok_and(|m| m.is_file());
+    path != Path::new("-") && opts.usual() && regular && super::super::is_exr(path)
 }
 
 /// The common layout's slots where `meta` is a file of it with no more than its image: RGB
