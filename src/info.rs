@@ -8,12 +8,16 @@ use crate::convert::{self, Source};
 use crate::cube::Faces;
 use crate::error::{param, Error, Result};
 use crate::flux;
-use crate::image::{luminance, Image};
+use crate::image::Image;
 use crate::io::{self, Decoded, MapKind, ReadOptions};
 use crate::layout::{self, Kind};
 use glam::Vec4;
 use serde::Serialize;
 use std::path::Path;
+
+mod stream;
+mod tally;
+use tally::Tally;
 
 /// Value statistics of a file's texels, as `cubeforge info` prints them.
 #[derive(Clone, Debug, Serialize)]
@@ -102,9 +106,11 @@ pub struct Report {
     pub levels: Option<LevelsFile>,
 }
 
-/// Statistics over images; luminance ignores non-finite values, sums run in a fixed order.
+/// Statistics over images; luminance ignores non-finite values. Each row is summed on its own
+/// (in parallel), the rows in order: the same figures on any thread count, and from a file
+/// read a band at a time ([`stream`]).
 pub fn stats<'a>(images: impl IntoIterator<Item = &'a Image>) -> Stats {
-    stats_of(images.into_iter().flat_map(|img| img.pixels.iter()))
+    layout_tally(None, images).stats()
 }
 
 /// Statistics over the texels of `img` that hold part of a `kind` layout: a cross's or
@@ -115,49 +121,27 @@ pub(crate) fn layout_stats(kind: Option<Kind>, img: &Image) -> Stats {
     if let Some(cells) = kind.and_then(Kind::cells) {
         return stats(&layout::cross::extract(cells, img));
     }
-    match kind.and_then(Kind::projection) {
-        Some(p @ (layout::Projection::Sphere | layout::Projection::Angular)) => {
-            let (w, h) = (img.width, img.height);
-            stats_of(img.pixels.iter().enumerate().filter_map(|(i, px)| {
-                let u = ((i % w) as f32 + 0.5) / w as f32;
-                let v = ((i / w) as f32 + 0.5) / h as f32;
-                p.to_dir(u, v).map(|_| px)
-            }))
-        }
-        _ => stats([img]),
-    }
+    layout_tally(kind.and_then(Kind::projection), [img]).stats()
 }
 
-fn stats_of<'a>(pixels: impl Iterator<Item = &'a Vec4>) -> Stats {
-    let mut s = Stats {
-        min_luminance: f64::INFINITY,
-        max_luminance: f64::NEG_INFINITY,
-        mean_luminance: 0.0,
-        nan: 0,
-        inf: 0,
-        negative: 0,
-    };
-    let mut sum = 0.0f64;
-    let mut n = 0u64;
-    let mut bad = LevelBad::default();
-    for p in pixels {
-        bad.count(*p);
-        let l = luminance(*p) as f64;
-        if l.is_finite() {
-            s.min_luminance = s.min_luminance.min(l);
-            s.max_luminance = s.max_luminance.max(l);
-            sum += l;
-            n += 1;
-        }
+/// The rows of `images` tallied in parallel (those of `projection`'s layout), added in order.
+fn layout_tally<'a>(
+    projection: Option<layout::Projection>,
+    images: impl IntoIterator<Item = &'a Image>,
+) -> Tally {
+    use rayon::prelude::*;
+    let mut t = Tally::default();
+    for img in images {
+        let (w, h) = (img.width.max(1), img.height);
+        let rows: Vec<Tally> = img
+            .pixels
+            .par_chunks(w)
+            .enumerate()
+            .map(|(y, row)| Tally::of_row(projection, (w, h), y, row))
+            .collect();
+        rows.iter().for_each(|r| t.add(r));
     }
-    (s.nan, s.inf, s.negative) = (bad.nan, bad.inf, bad.negative);
-    if n == 0 {
-        s.min_luminance = 0.0;
-        s.max_luminance = 0.0;
-    } else {
-        s.mean_luminance = sum / n as f64;
-    }
-    s
+    t
 }
 
 impl LevelBad {
@@ -272,6 +256,9 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
     };
     if path.is_dir() {
         return describe_folder(path, from, opts);
+    }
+    if let Some(report) = stream::describe(path, from, opts)? {
+        return Ok(report);
     }
     let (decoded, mut meta) = io::read_raw(path, opts)?;
     let declared = meta.declared.take();

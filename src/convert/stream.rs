@@ -18,7 +18,8 @@ use super::{Loaded, Source};
 use crate::error::Result;
 use crate::flux::{Grid, PeakRow, Peaks, RowStats};
 use crate::image::Image;
-use crate::io::{exr::stream::Bands, ReadOptions};
+use crate::io::exr::stream::{Bands, Shape};
+use crate::io::ReadOptions;
 use crate::layout::{equirect, Kind, Projection};
 use glam::Vec4;
 use std::path::Path;
@@ -53,16 +54,76 @@ pub fn factor(w: usize, h: usize, min_footprint: f32) -> usize {
     f
 }
 
+/// What loading a panorama reduced takes, from its header alone: jobs plan their memory
+/// with it before the file is read.
+#[derive(Clone, Copy, Debug)]
+pub struct Plan {
+    /// The file's shape.
+    pub shape: Shape,
+    /// Times the panorama is reduced per axis ([`factor`]).
+    pub factor: usize,
+}
+
+impl Plan {
+    /// The face edge that keeps the full panorama's resolution.
+    pub fn face_size(&self) -> usize {
+        Kind::Equirect.face_size(self.shape.width, self.shape.height)
+    }
+
+    /// The rows each band holds.
+    fn lines(&self) -> usize {
+        self.shape.band_lines(self.factor.max(MIN_BAND))
+    }
+
+    /// Bytes in use while a job works from it: the file and each thread's band while it is
+    /// decoded, the reduced copy, and its lookup pyramid (half as many again, as
+    /// [`super::InputPlan::working_bytes`] counts a whole image's). Peaks are left out: at
+    /// most a few texels in a thousand on real panoramas.
+    pub fn working_bytes(&self) -> u64 {
+        let (w, h) = (self.shape.width, self.shape.height);
+        let reduced = ((w / self.factor) * (h / self.factor)) as u64 * 16;
+        self.shape
+            .decode_bytes(self.lines())
+            .saturating_add(reduced + reduced / 2)
+    }
+}
+
+/// How `path` would be loaded reduced, when it is an OpenEXR equirect of the common layout
+/// that reduces for outputs whose finest texel spans `min_footprint(face size)` radians; None
+/// where it is not (the caller loads it whole). The size limits are checked, not the memory.
+pub fn plan(
+    path: &Path,
+    opts: &ReadOptions,
+    min_footprint: impl FnOnce(usize) -> f32,
+) -> Result<Option<Plan>> {
+    let Some(shape) = crate::io::exr::stream::shape(path, opts)? else {
+        return Ok(None);
+    };
+    let (w, h) = (shape.width, shape.height);
+    if w != 2 * h {
+        return Ok(None);
+    }
+    let factor = factor(w, h, min_footprint(Kind::Equirect.face_size(w, h)));
+    Ok((factor >= 2).then_some(Plan { shape, factor }))
+}
+
 /// Loads `path` as a reduced panorama when it is an OpenEXR equirect of the common layout
 /// that reduces by `factor` for outputs whose finest texel spans `min_footprint` radians;
 /// None where it is not (the caller loads it whole).
 pub fn load(path: &Path, opts: &ReadOptions, min_footprint: f32) -> Result<Option<Loaded>> {
+    match plan(path, opts, |_| min_footprint)? {
+        Some(p) => load_planned(path, opts, &p),
+        None => Ok(None),
+    }
+}
+
+/// [`load`] as `plan` planned it; None where the file no longer fits the plan.
+pub fn load_planned(path: &Path, opts: &ReadOptions, plan: &Plan) -> Result<Option<Loaded>> {
     let loaded = crate::io::exr::stream::with_bands(path, opts, |b| {
-        let (w, h) = b.size();
-        if w != 2 * h || factor(w, h, min_footprint) < 2 {
+        if b.size() != (plan.shape.width, plan.shape.height) {
             return Ok(None);
         }
-        reduce(b, path, factor(w, h, min_footprint)).map(Some)
+        reduce(b, path, plan.factor).map(Some)
     })?;
     Ok(loaded.flatten())
 }

@@ -16,7 +16,7 @@
 use crate::cube::{dir_face, face_dir, solid_angle_table, texel_density, texel_solid_angle};
 use crate::image::Image;
 use crate::layout::{equirect, Projection};
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -238,24 +238,51 @@ pub fn mean_radiance(grid: Grid, images: &[&Image]) -> [f64; 3] {
         .into_par_iter()
         .map(|fy| {
             let (face, y) = (fy / h, fy % h);
-            let img = images[face];
-            let mut acc = [0.0f64; 3];
-            let mut total = 0.0;
-            let row = equirect.then(|| equirect::texel_solid_angle(w, h, y));
-            for x in 0..w {
-                let a = row.unwrap_or_else(|| match face_table.get(y * w + x) {
-                    Some(&t) => t as f64,
-                    None => omega[(face * h + y) * w + x],
-                });
-                let p = img.get(x, y);
-                for c in 0..3 {
-                    acc[c] += p[c] as f64 * a;
-                }
-                total += a;
+            let row = &images[face].pixels[y * w..(y + 1) * w];
+            if equirect {
+                let a = equirect::texel_solid_angle(w, h, y);
+                return row_sums(row, |_| a);
             }
-            (acc, total)
+            row_sums(row, |x| match face_table.get(y * w + x) {
+                Some(&t) => t as f64,
+                None => omega[(face * h + y) * w + x],
+            })
         })
         .collect();
+    mean_of_rows(rows)
+}
+
+/// One row's radiance times solid angle per channel and its solid angle, summed in f64 along
+/// the row (`a(x)`: texel x's solid angle).
+#[inline]
+fn row_sums(row: &[Vec4], a: impl Fn(usize) -> f64) -> ([f64; 3], f64) {
+    let mut acc = [0.0f64; 3];
+    let mut total = 0.0;
+    for (x, p) in row.iter().enumerate() {
+        let a = a(x);
+        for c in 0..3 {
+            acc[c] += p[c] as f64 * a;
+        }
+        total += a;
+    }
+    (acc, total)
+}
+
+/// Row `y` of a single-image `grid`'s share of [`mean_radiance`], for a map read a band of
+/// rows at a time: the same sums, so [`mean_of_rows`] over every row in order gives the same
+/// bits as the whole image.
+pub(crate) fn projection_row(grid: Grid, y: usize, row: &[Vec4]) -> ([f64; 3], f64) {
+    match grid {
+        Grid::Projection(Projection::Equirect, w, h) => {
+            let a = equirect::texel_solid_angle(w, h, y);
+            row_sums(row, |_| a)
+        }
+        _ => row_sums(row, |x| grid.solid_angle(x, y)),
+    }
+}
+
+/// The flux from every row's sums ([`projection_row`]), added in row order.
+pub(crate) fn mean_of_rows(rows: impl IntoIterator<Item = ([f64; 3], f64)>) -> [f64; 3] {
     let mut acc = [0.0f64; 3];
     let mut total = 0.0;
     for (r, t) in rows {

@@ -132,6 +132,15 @@ impl Limits {
     }
 
     fn check_image(&self, path: &Path, w: u64, h: u64) -> Result<()> {
+        self.check_pixels(path, w, h)?;
+        // The RGBA f32 image and, at worst, a decoder's buffer of the same size.
+        let needs = w.saturating_mul(h).saturating_mul(32);
+        self.check_decode_memory(path, format_args!("image claims {w}x{h} pixels"), needs)
+    }
+
+    /// The size limits alone: a file decoded in bands never holds its whole image, so its
+    /// reader checks the memory its bands take instead ([`Limits::check_memory`]).
+    pub(crate) fn check_pixels(&self, path: &Path, w: u64, h: u64) -> Result<()> {
         if w == 0 || h == 0 {
             return Err(Error::file(path, format!("image is empty ({w}x{h})")));
         }
@@ -148,9 +157,7 @@ impl Limits {
                 ),
             ));
         }
-        // The RGBA f32 image and, at worst, a decoder's buffer of the same size.
-        let needs = w.saturating_mul(h).saturating_mul(32);
-        self.check_decode_memory(path, format_args!("image claims {w}x{h} pixels"), needs)
+        Ok(())
     }
 
     /// Refuses a file whose claimed size (`claim`) needs more than the memory budget to decode.

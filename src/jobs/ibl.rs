@@ -125,8 +125,8 @@ impl IblJob {
 impl IblJob {
     /// A large panorama reduced as it is decoded (`convert::stream`) when every output is a
     /// cube much coarser than it (the engines whose files all come from the specular base);
-    /// None: loaded whole.
-    fn streamed(&self, input_face: Option<usize>) -> Result<Option<convert::Loaded>> {
+    /// None: loaded whole. From the file's header alone.
+    fn stream_plan(&self) -> Result<Option<convert::stream::Plan>> {
         let cubes_only = matches!(
             self.engine,
             Engine::Bevy | Engine::Gltf | Engine::Babylon | Engine::Generic
@@ -138,9 +138,21 @@ impl IblJob {
             return Ok(None);
         }
         // The finest texel of the specular base: a face's corner, 2 sqrt(2) / 3 of its centre.
-        let size = self.specular_size(input_face) as f32;
-        let corner = 2.0 * std::f32::consts::SQRT_2 / 3.0 / size;
-        convert::stream::load(input, &self.read, corner)
+        convert::stream::plan(input, &self.read, |face| {
+            let size = self.specular_size(Some(face)) as f32;
+            2.0 * std::f32::consts::SQRT_2 / 3.0 / size
+        })
+    }
+
+    /// The input's face size and the bytes it takes while the job works (a streamed
+    /// panorama's bands and reduced copy, or the whole decoded input), with the streamed plan
+    /// where it is taken: the budget is checked against what will run.
+    fn input_plan(&self) -> Result<(Option<usize>, u64, Option<convert::stream::Plan>)> {
+        if let Some(p) = self.stream_plan()? {
+            return Ok((Some(p.face_size()), p.working_bytes(), Some(p)));
+        }
+        let plan = chain::plan(&self.inputs, self.from, &self.read)?;
+        Ok((plan.face_size, plan.working_bytes(), None))
     }
 
     /// Refuses a `--gpu-format` the target has no file for, before any work.
@@ -192,8 +204,8 @@ impl Job for IblJob {
     }
 
     fn memory_estimate(&self) -> Result<u64> {
-        let plan = chain::plan(&self.inputs, self.from, &self.read)?;
-        Ok(self.plan_bytes(plan.face_size, plan.working_bytes()))
+        let (face, input, _) = self.input_plan()?;
+        Ok(self.plan_bytes(face, input))
     }
 
     fn run(&self, progress: &dyn Progress) -> Result<Report> {
@@ -201,18 +213,24 @@ impl Job for IblJob {
         warnings.extend(self.validate()?);
         // The whole plan against the budget before any file is decoded: the input, the
         // specular chain (and the sheen chain), the diffuse map.
-        let plan = chain::plan(&self.inputs, self.from, &self.read)?;
-        let (size, diffuse) = self.sizes(plan.face_size);
+        let (face, input, streamed) = self.input_plan()?;
+        let (size, diffuse) = self.sizes(face);
         self.read.limits.check_memory(
             format_args!(
                 "{} {size} and {} {diffuse}",
                 param("size"),
                 param("diffuse_size")
             ),
-            self.plan_bytes(plan.face_size, plan.working_bytes()),
+            self.plan_bytes(face, input),
         )?;
-        let mut loaded = match self.streamed(plan.face_size)? {
+        let reduced = match (&streamed, self.inputs.as_slice()) {
+            (Some(p), [one]) => convert::stream::load_planned(one, &self.read, p)?,
+            _ => None,
+        };
+        let mut loaded = match reduced {
             Some(loaded) => loaded,
+            // Changed since it was planned: planned again, whole.
+            None if streamed.is_some() => convert::load(&self.inputs, self.from, &self.read)?,
             None => convert::load_planned(&self.inputs, self.from, &self.read)?,
         };
         loaded.expose(self.options.encoding.exposure);

@@ -48,6 +48,7 @@ mod rgbe;
 mod sh_bands;
 mod simd;
 mod streamed;
+mod streamed_info;
 mod sun;
 mod surface;
 mod texel_truth;

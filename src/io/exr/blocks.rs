@@ -103,16 +103,27 @@ fn sizes(slots: &[(Option<usize>, SampleType)], w: usize) -> (usize, Vec<usize>)
     (line_bytes, words)
 }
 
-/// The layer in bands of `lines` rows (a power of two no smaller than any block's lines),
-/// the bands `pick` keeps decoded in parallel, each into a thread's buffer (sanitized) and
-/// handed to `fold(first row, rows)`: how a panorama is reduced as it is decoded, the whole
-/// never held. The folds in band order (None where not picked) and the values replaced.
+/// How `map_bands` reads: the chunks are ZSTD (see `read_meta`), the lines are sanitized,
+/// and the rows a band holds (a power of two no smaller than any block's lines).
+pub(super) struct BandRead {
+    pub zstd: bool,
+    pub sanitize: bool,
+    pub lines: usize,
+}
+
+/// The layer in bands of `lines` rows, the bands `pick` keeps decoded in parallel, each into
+/// a thread's buffer (sanitized if asked) and handed to `fold(first row, rows)`: how a
+/// panorama is reduced as it is decoded, the whole never held. The folds in band order (None
+/// where not picked) and the values replaced.
 pub(super) fn map_bands<T: Send>(
     meta: &MetaData,
     (slots, alpha): &Layout,
     chunks: &[RawChunk],
-    zstd: bool,
-    lines: usize,
+    BandRead {
+        zstd,
+        sanitize,
+        lines,
+    }: BandRead,
     pick: &(dyn Fn(usize) -> bool + Sync),
     fold: &(dyn Fn(usize, &[Vec4]) -> T + Sync),
 ) -> std::result::Result<(Vec<Option<T>>, usize), String> {
@@ -165,7 +176,7 @@ pub(super) fn map_bands<T: Send>(
         for c in band {
             let y = c.bounds.position.1 as usize;
             let rows = &mut buf[(y - y0) * w..(y - y0 + c.bounds.size.1) * w];
-            replaced += block.decode(s, y, c, rows, true)?;
+            replaced += block.decode(s, y, c, rows, sanitize)?;
         }
         Ok((Some(fold(y0, &buf[..n * w])), replaced))
     };

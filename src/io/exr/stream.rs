@@ -18,7 +18,39 @@ pub struct Bands<'a> {
     layout: Layout,
     chunks: Vec<RawChunk<'a>>,
     zstd: bool,
+    sanitize: bool,
     pixel_format: String,
+}
+
+/// What decoding a file in bands takes, from its header alone: jobs plan their memory with it
+/// before the file is read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shape {
+    /// Width and height in texels.
+    pub width: usize,
+    /// Height in texels.
+    pub height: usize,
+    /// The most lines one block holds: bands are a multiple of it.
+    pub block_lines: usize,
+    /// The file's size: it is read whole before its bands are decoded.
+    pub file_bytes: u64,
+}
+
+impl Shape {
+    /// The band of rows for folds that want at least `lines` rows: a power of two, a
+    /// multiple of the blocks.
+    pub fn band_lines(&self, lines: usize) -> usize {
+        self.block_lines.next_power_of_two().max(lines)
+    }
+
+    /// Bytes in use while its bands of `lines` rows are decoded on every thread: the file,
+    /// and for each thread a band's texels and its decompressed samples (at most as many
+    /// bytes again).
+    pub fn decode_bytes(&self, lines: usize) -> u64 {
+        let band = (lines * self.width) as u64 * 32;
+        let threads = rayon::current_num_threads() as u64;
+        self.file_bytes.saturating_add(threads.saturating_mul(band))
+    }
 }
 
 impl Bands<'_> {
@@ -38,8 +70,9 @@ impl Bands<'_> {
     }
 
     /// The bands of `lines` rows (a power of two, at least `block_lines`) that `pick` keeps,
-    /// decoded and sanitized in parallel, each handed to `fold(first row, rows)`: the folds in
-    /// band order (None where not picked) and the count of values replaced.
+    /// decoded (and sanitized, unless read as stored) in parallel, each handed to
+    /// `fold(first row, rows)`: the folds in band order (None where not picked) and the count
+    /// of values replaced.
     pub fn map<T: Send>(
         &self,
         path: &Path,
@@ -47,16 +80,13 @@ impl Bands<'_> {
         pick: &(dyn Fn(usize) -> bool + Sync),
         fold: &(dyn Fn(usize, &[Vec4]) -> T + Sync),
     ) -> Result<(Vec<Option<T>>, usize)> {
-        blocks::map_bands(
-            &self.meta,
-            &self.layout,
-            &self.chunks,
-            self.zstd,
+        let how = blocks::BandRead {
+            zstd: self.zstd,
+            sanitize: self.sanitize,
             lines,
-            pick,
-            fold,
-        )
-        .map_err(|e| Error::file(path, format!("cannot decode OpenEXR: {e}")))
+        };
+        blocks::map_bands(&self.meta, &self.layout, &self.chunks, how, pick, fold)
+            .map_err(|e| Error::file(path, format!("cannot decode OpenEXR: {e}")))
     }
 
     /// What `io::read` says of the file, with `replaced` values sanitized.
@@ -74,24 +104,18 @@ impl Bands<'_> {
     }
 }
 
-/// Reads `path` (noted in the session) and hands its bands to `work` when it is an OpenEXR
-/// file of the common layout, read as `io::read` would read it with `opts`; None otherwise
-/// (the caller decodes it whole).
-pub fn with_bands<R>(
-    path: &Path,
-    opts: &ReadOptions,
-    work: impl FnOnce(&Bands) -> Result<R>,
-) -> Result<Option<R>> {
-    if path == Path::new("-") || !opts.usual() || opts.as_stored || !super::super::is_exr(path) {
-        return Ok(None);
-    }
-    opts.limits.session.note(path);
-    let bytes = super::super::read_file(path)?;
-    let fail = |msg: String| Error::file(path, format!("cannot decode OpenEXR: {msg}"));
-    let (meta, table_start, zstd) = read_meta(&bytes).map_err(fail)?;
-    let Some(layout) = fast_layout(&meta) else {
-        return Ok(None);
-    };
+/// Whether `opts` read `path` as a streamed job may: an OpenEXR file's usual image. Anything
+/// but a regular file (a pipe would block its magic number's read) is left to the whole
+/// read, which says why it is refused.
+fn offered(path: &Path, opts: &ReadOptions) -> bool {
+    let regular = std::fs::metadata(path).is_ok_and(|m| m.is_file());
+    path != Path::new("-") && opts.usual() && regular && super::super::is_exr(path)
+}
+
+/// The common layout's slots where `meta` is a file of it with no more than its image: RGB
+/// at full resolution, no envmap, one level.
+fn common(meta: &MetaData) -> Option<Layout> {
+    let layout = fast_layout(meta)?;
     let header = &meta.headers[0];
     let has = |n: &str| header.channels.list.iter().any(|c| c.name.eq(n));
     let plain = header
@@ -99,15 +123,76 @@ pub fn with_bands<R>(
         .list
         .iter()
         .all(|c| c.sampling == exr::math::Vec2(1, 1));
-    if !(has("R") && has("G") && has("B") && plain)
-        || header.own_attributes.environment_map.is_some()
-        || select::level_count(header) != 1
-    {
+    let one_level = select::level_count(header) == 1;
+    (has("R") && has("G") && has("B") && plain)
+        .then_some(layout)
+        .filter(|_| header.own_attributes.environment_map.is_none() && one_level)
+}
+
+/// The shape of `path` when `with_bands` would take it (read as `opts` say), from its
+/// header (the first MiB, or the whole file where the header is longer); None otherwise.
+/// Checks the size limits; the memory is the caller's to check ([`Shape::decode_bytes`]).
+pub fn shape(path: &Path, opts: &ReadOptions) -> Result<Option<Shape>> {
+    if !offered(path, opts) {
         return Ok(None);
     }
+    use std::io::Read;
+    const HEAD: u64 = 1 << 20;
+    let file_bytes = super::super::regular_file(path)?.len();
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(HEAD).read_to_end(&mut head))
+        .map_err(|e| Error::io(path, e))?;
+    let meta = match read_meta(&head) {
+        Ok((meta, ..)) => meta,
+        Err(_) if file_bytes > HEAD => {
+            let whole = super::super::read_file(path)?;
+            let Ok((meta, ..)) = read_meta(&whole) else {
+                return Ok(None); // the whole read says why
+            };
+            meta
+        }
+        Err(_) => return Ok(None),
+    };
+    if common(&meta).is_none() {
+        return Ok(None);
+    }
+    let header = &meta.headers[0];
+    let (width, height) = (header.layer_size.0, header.layer_size.1);
+    opts.limits
+        .check_pixels(path, width as u64, height as u64)?;
+    Ok(Some(Shape {
+        width,
+        height,
+        block_lines: header.compression.scan_lines_per_block(),
+        file_bytes,
+    }))
+}
+
+/// Reads `path` (noted in the session) and hands its bands to `work` when it is an OpenEXR
+/// file of the common layout, read as `io::read` would read it with `opts` (sanitized, or as
+/// stored); None otherwise (the caller decodes it whole). The size limits are checked here,
+/// the memory is the caller's to check ([`shape`]).
+pub fn with_bands<R>(
+    path: &Path,
+    opts: &ReadOptions,
+    work: impl FnOnce(&Bands) -> Result<R>,
+) -> Result<Option<R>> {
+    if !offered(path, opts) {
+        return Ok(None);
+    }
+    opts.limits.session.note(path);
+    let bytes = super::super::read_file(path)?;
+    let fail = |msg: String| Error::file(path, format!("cannot decode OpenEXR: {msg}"));
+    let (meta, table_start, zstd) = read_meta(&bytes).map_err(fail)?;
+    let Some(layout) = common(&meta) else {
+        return Ok(None);
+    };
+    let header = &meta.headers[0];
     let (w, h) = (header.layer_size.0, header.layer_size.1);
-    opts.limits.check(path, w as u64, h as u64)?;
-    let pixel_format = super::pixel_format(header, has("A"), zstd.first() == Some(&true));
+    opts.limits.check_pixels(path, w as u64, h as u64)?;
+    let has_alpha = header.channels.list.iter().any(|c| c.name.eq("A"));
+    let pixel_format = super::pixel_format(header, has_alpha, zstd.first() == Some(&true));
     let chunks = read_chunks(&bytes, &meta, table_start).map_err(fail)?;
     let zstd = zstd.first() == Some(&true);
     let bands = Bands {
@@ -115,6 +200,7 @@ pub fn with_bands<R>(
         layout,
         chunks,
         zstd,
+        sanitize: !opts.as_stored,
         pixel_format,
     };
     work(&bands).map(Some)
