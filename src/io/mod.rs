@@ -28,8 +28,8 @@ use std::path::Path;
 
 pub(crate) use crate::alloc::human_bytes;
 pub use atomic::{
-    check_folder, remove_temporaries, stage, stage_with, write_all_atomic, write_all_atomic_with,
-    Staged,
+    check_folder, remove_temporaries, stage, stage_replacing, stage_with, write_all_atomic,
+    write_all_atomic_with, Staged,
 };
 pub use encode::{
     check_gpu_format, container_psnr, encode_cube, encode_cube_with, encode_image, zstd_needs_ktx2,

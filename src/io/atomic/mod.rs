@@ -111,6 +111,8 @@ pub struct Staged {
     folders: Vec<PathBuf>,
     /// Files in folders that exist: (temporary, target).
     files: Vec<(PathBuf, PathBuf)>,
+    /// Files an earlier run may have left in the folder outputs, replaced with them.
+    known: Vec<PathBuf>,
 }
 
 /// The longest file name the common file systems take (ext4, XFS, Btrfs, APFS, NTFS).
@@ -166,6 +168,17 @@ pub fn stage(files: &[(PathBuf, Vec<u8>)]) -> Result<Staged> {
 /// [`Staged::commit`]. Refuses a folder that holds what cubeforge did not write
 /// ([`check_folder`]).
 pub fn stage_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> Result<Staged> {
+    stage_replacing(files, folders, &[])
+}
+
+/// [`stage_with`], where the folder outputs may also hold `known` files (what an earlier
+/// run of another kind wrote there, such as another `ibl` target's files): they go with the
+/// folder.
+pub fn stage_replacing(
+    files: &[(PathBuf, Vec<u8>)],
+    folders: &[PathBuf],
+    known: &[PathBuf],
+) -> Result<Staged> {
     // `-` names standard output: a command that cannot write there must not make a file or
     // a folder of that name.
     let dash = |p: &Path| p.components().any(|c| c.as_os_str() == "-");
@@ -178,10 +191,11 @@ pub fn stage_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> Result<S
     // A folder output behind a symbolic link is replaced where the link points.
     let mut folders = folders.to_vec();
     let mut paths: Vec<PathBuf> = files.iter().map(|(p, _)| p.clone()).collect();
+    let mut known = known.to_vec();
     for f in &mut folders {
         if std::fs::symlink_metadata(&*f).is_ok_and(|m| m.file_type().is_symlink()) {
             let real = std::fs::canonicalize(&*f).map_err(|e| Error::io(&*f, e))?;
-            for p in &mut paths {
+            for p in paths.iter_mut().chain(&mut known) {
                 if let Ok(rel) = p.strip_prefix(&*f) {
                     *p = real.join(rel);
                 }
@@ -195,13 +209,15 @@ pub fn stage_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> Result<S
     if let Some(path) = paths.iter().find(|p| p.is_dir()) {
         return Err(Error::file(path, "a folder of that name is in the way"));
     }
+    let ours: Vec<PathBuf> = paths.iter().chain(&known).cloned().collect();
     for f in &folders {
-        check_folder(f, &paths)?;
+        check_folder(f, &ours)?;
     }
     let mut staged = Staged {
         trees: Vec::new(),
         folders: folders.clone(),
         files: Vec::new(),
+        known,
     };
     let mut tmps = Vec::with_capacity(files.len());
     for path in &paths {
@@ -345,7 +361,7 @@ impl Staged {
         let trees = std::mem::take(&mut self.trees);
         for (i, (root, top, replace)) in trees.iter().enumerate() {
             let placed: Result<()> = if *replace {
-                folder::put(root, top).map(|replaced| old.extend(replaced))
+                folder::put(root, top, &self.known).map(|replaced| old.extend(replaced))
             } else {
                 // A new folder goes in with one rename. If another process made it
                 // meanwhile, its files join the others, moved one by one under the lock
@@ -417,7 +433,7 @@ impl Staged {
             let moved = temp_name(&f);
             guarded(|| std::fs::rename(&sub, &moved), |p| p.push(moved.clone()))
                 .map_err(|e| Error::io(&f, e))?;
-            old.extend(folder::put(&moved, &f)?);
+            old.extend(folder::put(&moved, &f, &self.known)?);
         }
         collect_files(root, root, top, &mut self.files);
         self.trees
