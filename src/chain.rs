@@ -1,7 +1,8 @@
 //! Prefiltered chains on disk. A chain folder holds `m0/`, `m1/`, ... (each a folder of six
-//! faces, each level half the size of the one before) and `levels.json`; a KTX2 chain keeps
-//! the same description under [`crate::io::ktx2::LEVELS_KEY`], a DDS chain beside it in
-//! `NAME.dds.levels.json`. One schema, [`LevelsFile`], for all three.
+//! faces, each level half the size of the one before) and `levels.json`; a KTX2 or DDS chain
+//! keeps the same description beside it in `NAME.ktx2.levels.json` or `NAME.dds.levels.json`
+//! (a KTX2 with `--cubeforge-keys` under [`crate::io::ktx2::LEVELS_KEY`] instead, which
+//! `ktx validate -e` rejects). One schema, [`LevelsFile`], for all of them.
 
 #![warn(missing_docs)]
 
@@ -80,9 +81,9 @@ pub fn level_dir(dir: &Path, k: usize) -> PathBuf {
     dir.join(format!("m{k}"))
 }
 
-/// Where a DDS chain's description goes: `NAME.dds.levels.json`.
-pub(crate) fn dds_sidecar(dds: &Path) -> PathBuf {
-    let mut s = dds.as_os_str().to_owned();
+/// Where a container chain's description goes: `NAME.dds.levels.json`, `NAME.ktx2.levels.json`.
+pub(crate) fn levels_sidecar(file: &Path) -> PathBuf {
+    let mut s = file.as_os_str().to_owned();
     s.push(".levels.json");
     PathBuf::from(s)
 }
@@ -93,18 +94,22 @@ pub(crate) fn container_levels(
     format: FileFormat,
     session: io::Session,
 ) -> Option<LevelsFile> {
-    let bytes = match format {
+    let key = match format {
         FileFormat::Ktx2 => io::ktx2::metadata_from_file(path)
             .into_iter()
             .find(|(k, _)| k == io::ktx2::LEVELS_KEY)
-            .map(|(_, v)| v)?,
-        FileFormat::Dds => {
-            let side = dds_sidecar(path);
+            .map(|(_, v)| v),
+        FileFormat::Dds => None,
+        _ => return None,
+    };
+    let bytes = match key {
+        Some(bytes) => bytes,
+        None => {
+            let side = levels_sidecar(path);
             let bytes = io::read_file(&side).ok()?;
             session.note(&side);
             bytes
         }
-        _ => return None,
     };
     LevelsFile::from_json(&bytes, path).ok()
 }
@@ -309,7 +314,8 @@ pub(crate) fn encode_dir(
 }
 
 /// The files a chain becomes at `target` (as [`crate::output::Encoding::resolve`] decided
-/// it): a KTX2 with its description in the metadata, a DDS and its sidecar, a KTX or .env, or
+/// it): a KTX2 or DDS and its sidecar (a KTX2 with `cubeforge_keys` holds the description
+/// in its metadata instead), a KTX or .env, or
 /// a chain folder of faces, with the count of texels every level had clamped to the format's
 /// range and a lossy format's quality, as [`crate::output::Target::encode`] reports them.
 /// Refuses to overwrite any of `inputs`.
@@ -334,16 +340,17 @@ pub fn encode(
     };
     let clamped = io::clamp_warning_with(path, format, &opts, chain.levels.iter().flatten());
     let files = match container {
-        Some(FileFormat::Ktx2) => {
+        Some(FileFormat::Ktx2) if opts.cubeforge_keys => {
             refuse(&[path.to_path_buf()])?;
             let json = description.to_json();
             let bytes =
                 io::encode_cube_as(format, path, chain, &opts, &[(io::ktx2::LEVELS_KEY, &json)])?;
             vec![(path.to_path_buf(), bytes)]
         }
-        Some(FileFormat::Dds) => {
-            // DDS has no room for metadata: a sidecar that `info` reads.
-            let side = dds_sidecar(path);
+        Some(FileFormat::Ktx2 | FileFormat::Dds) => {
+            // DDS has no room for metadata, and KTX2's keys are the specification's: a
+            // sidecar that `info` and `preview` read.
+            let side = levels_sidecar(path);
             refuse(&[path.to_path_buf(), side.clone()])?;
             let bytes = io::encode_cube_as(format, path, chain, &opts, &[])?;
             vec![(path.to_path_buf(), bytes), (side, description.to_json())]

@@ -22,7 +22,7 @@ Examples:
   cubeforge completions fish > ~/.config/fish/completions/cubeforge.fish";
 
 /// The command line as a user sees it: the hidden commands (`man`, `fixtures`: the project's
-/// own) are not offered.
+/// own) are not offered, and `--material` offers the presets' names (and `list`), not files.
 fn visible() -> clap::Command {
     let full = super::command();
     let mut cmd = clap::Command::new("cubeforge")
@@ -31,8 +31,20 @@ fn visible() -> clap::Command {
     for a in full.get_arguments() {
         cmd = cmd.arg(a.clone());
     }
+    let mut names: Vec<String> = cubeforge::internals::preview::material::presets()
+        .into_iter()
+        .map(|(m, _)| m.name)
+        .collect();
+    names.push("list".into());
     for s in full.get_subcommands().filter(|s| !s.is_hide_set()) {
-        cmd = cmd.subcommand(s.clone());
+        let names = names.clone();
+        cmd = cmd.subcommand(s.clone().mut_args(move |a| {
+            if a.get_id() == "material" {
+                a.value_parser(clap::builder::PossibleValuesParser::new(names.clone()))
+            } else {
+                a
+            }
+        }));
     }
     cmd
 }

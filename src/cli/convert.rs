@@ -79,6 +79,8 @@ pub struct Args {
     #[command(flatten)]
     pub hdr8: super::out::HdrEncodingArg,
     #[command(flatten)]
+    pub keys: super::out::CubeforgeKeysArg,
+    #[command(flatten)]
     pub input: super::InputArgs,
 }
 
@@ -127,6 +129,7 @@ pub fn job(a: Args) -> Result<ConvertJob> {
             png16: a.png16,
             edge_fixup: a.fixup.edge_fixup,
             hdr_encoding: a.hdr8.hdr_encoding,
+            cubeforge_keys: a.keys.cubeforge_keys,
             face_format,
             ultrahdr: a.ultrahdr,
             exposure: a.tone.exposure,

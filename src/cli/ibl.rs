@@ -39,6 +39,8 @@ pub struct Args {
     pub gpu_format: Option<GpuFormat>,
     #[command(flatten)]
     pub zstd: super::ZstdArg,
+    #[command(flatten)]
+    pub keys: super::out::CubeforgeKeysArg,
     /// Turn the environment about +Y first, degrees (90 brings +Z to +X).
     #[arg(value_parser = super::angle, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub yaw: f32,
@@ -90,6 +92,7 @@ pub fn job(a: Args) -> Result<IblJob> {
                 zstd: a.zstd.zstd,
                 exr_float: a.exr.exr_float,
                 exposure: a.exposure.exposure,
+                cubeforge_keys: a.keys.cubeforge_keys,
                 ..Default::default()
             },
             sheen: a.sheen,

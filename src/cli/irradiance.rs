@@ -53,6 +53,8 @@ pub struct Args {
     #[command(flatten)]
     pub hdr8: super::out::HdrEncodingArg,
     #[command(flatten)]
+    pub keys: super::out::CubeforgeKeysArg,
+    #[command(flatten)]
     pub input: super::InputArgs,
 }
 
@@ -88,6 +90,7 @@ pub fn job(a: Args) -> Result<IrradianceJob> {
             exr_float: a.exr.exr_float,
             edge_fixup: a.fixup.edge_fixup,
             hdr_encoding: a.hdr8.hdr_encoding,
+            cubeforge_keys: a.keys.cubeforge_keys,
             face_format: Some(face_format),
             exposure: a.tone.exposure,
             tonemap: a.tone.tonemap,

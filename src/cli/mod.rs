@@ -475,7 +475,7 @@ fn how_to_raise(e: &cubeforge::Error) -> &'static str {
 
 pub fn run() -> i32 {
     use std::io::Write;
-    let cli = match Cli::try_parse_from(zstd_level_joined(std::env::args_os())) {
+    let cli = match Cli::try_parse_from(help_flag_read(zstd_level_joined(std::env::args_os()))) {
         Ok(cli) => cli,
         Err(e) => {
             use clap::error::ErrorKind;
@@ -559,6 +559,23 @@ fn zstd_level_joined(args: impl Iterator<Item = std::ffi::OsString>) -> Vec<std:
                 out.push(a);
             }
         }
+    }
+    out
+}
+
+/// `help --help` and `help COMMAND --help` read as `help help` and `help COMMAND`: clap's
+/// `help` command takes every word for a command's name, `--help` too, and failed.
+fn help_flag_read(args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    if args.get(1).is_none_or(|a| a != "help") {
+        return args;
+    }
+    let flag = |a: &std::ffi::OsString| a == "--help" || a == "-h";
+    if !args[2..].iter().any(flag) {
+        return args;
+    }
+    let mut out: Vec<std::ffi::OsString> = args.into_iter().filter(|a| !flag(a)).collect();
+    if out.len() == 2 {
+        out.push("help".into());
     }
     out
 }

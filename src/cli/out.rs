@@ -73,9 +73,20 @@ pub struct EdgeFixupArg {
 /// `--hdr-encoding`, shared by the commands that write maps.
 #[derive(clap::Args, Debug)]
 pub struct HdrEncodingArg {
-    /// HDR in 8 bits: RGBM (L = rgb a 6 or 8, as cmft writes and three.js/Unity decode) or
-    /// Babylon's RGBD (L = rgb^2.2 / a, up to 255), into an 8-bit PNG or a KTX2/DDS with
-    /// --gpu-format rgba8; read back with --decode (KTX2s say so themselves).
+    /// HDR in 8 bits: RGBM (L = rgb a R: rgbm6 as cmft writes, rgbm7 as three.js's RGBMLoader
+    /// assumes, rgbm8, rgbm16 as its setMaxRange(16)) or Babylon's RGBD (L = rgb^2.2 / a, up
+    /// to 255), into an 8-bit PNG or a KTX2/DDS with --gpu-format rgba8; prints the loader
+    /// line; read back with --decode (PNGs, and KTX2s with --cubeforge-keys, say so themselves).
     #[arg(long, value_enum, value_name = "ENCODING")]
     pub hdr_encoding: Option<cubeforge::internals::io::HdrEncoding>,
+}
+
+/// `--cubeforge-keys`, shared by the commands that write KTX2 cube maps.
+#[derive(clap::Args, Debug)]
+pub struct CubeforgeKeysArg {
+    /// KTX2 outputs also carry cubeforge's keys (cubeforge.hdrEncoding, cubeforge.edgeFixup,
+    /// cubeforge.levels), which cubeforge reads back; `ktx validate -e` rejects such files
+    /// (warning 7010), so by default they are left out: see docs/formats.md.
+    #[arg(long)]
+    pub cubeforge_keys: bool,
 }

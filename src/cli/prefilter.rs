@@ -62,6 +62,8 @@ pub struct Args {
     #[command(flatten)]
     pub hdr8: super::out::HdrEncodingArg,
     #[command(flatten)]
+    pub keys: super::out::CubeforgeKeysArg,
+    #[command(flatten)]
     pub input: super::InputArgs,
 }
 
@@ -107,6 +109,7 @@ pub fn job(a: Args) -> Result<PrefilterJob> {
             exr_float: a.exr.exr_float,
             edge_fixup: a.fixup.edge_fixup,
             hdr_encoding: a.hdr8.hdr_encoding,
+            cubeforge_keys: a.keys.cubeforge_keys,
             face_format: Some(face_format),
             exposure: a.exposure.exposure,
             ..Encoding::default()

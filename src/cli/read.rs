@@ -30,8 +30,9 @@ impl PartArg {
 /// `--decode`: an 8-bit file that holds RGBM or RGBD radiance.
 #[derive(clap::Args, Debug)]
 pub struct DecodeArg {
-    /// Read an 8-bit PNG, TGA or RGBA8 KTX2/DDS as RGBM (L = rgb a 6 or 8) or Babylon's RGBD
-    /// (L = rgb^2.2 / a): HDR radiance. KTX2 files cubeforge wrote say so themselves.
+    /// Read an 8-bit PNG, TGA or RGBA8 KTX2/DDS as RGBM (L = rgb a 6, 7, 8 or 16) or Babylon's
+    /// RGBD (L = rgb^2.2 / a): HDR radiance. PNGs cubeforge wrote, and KTX2s written with
+    /// --cubeforge-keys, say so themselves.
     #[arg(long, value_enum, value_name = "ENCODING")]
     pub decode: Option<cubeforge::internals::io::HdrEncoding>,
 }

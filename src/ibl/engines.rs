@@ -169,7 +169,7 @@ pub fn pack(engine: Engine, l: &Lighting, ctx: &Context) -> Result<Delivery> {
 }
 
 /// A KTX2 cube map of `cube` in `format`, supercompressed when asked, its levels described in
-/// the metadata.
+/// the metadata with `--cubeforge-keys` (the engine's own mapping describes them otherwise).
 fn ktx2(
     path: &Path,
     cube: &CubeMap,
@@ -177,7 +177,8 @@ fn ktx2(
     format: GpuFormat,
     ctx: &Context,
 ) -> Result<Vec<u8>> {
-    let json = levels.map(LevelsFile::to_json);
+    let keys = ctx.opts.encoding.cubeforge_keys;
+    let json = levels.filter(|_| keys).map(LevelsFile::to_json);
     let extra: Vec<(&str, &[u8])> = json
         .as_deref()
         .map(|j| (io::ktx2::LEVELS_KEY, j))

@@ -51,3 +51,32 @@ pub fn specular_of(dir: &Path) -> Option<(PathBuf, Option<Engine>)> {
         _ => None,
     }
 }
+
+/// Every file some target writes into an `ibl` folder under the name stem `name`: what an
+/// earlier run for another target may have left there, which a new run replaces with the
+/// folder (an output folder is one target's). Anything else there stops the run.
+pub(crate) fn written_by_targets(dir: &Path, name: &str) -> Vec<PathBuf> {
+    const SUFFIXES: [&str; 15] = [
+        "_specular.ktx2",
+        "_diffuse.ktx2",
+        "_ggx.ktx2",
+        "_lambertian.ktx2",
+        "_charlie.ktx2",
+        "_ibl.ktx",
+        "_irradiance.ktx",
+        "_skybox.ktx",
+        "_sh.json",
+        "_dfg.png",
+        ".env",
+        ".exr",
+        ".hdr",
+        ".jpg",
+        ".ktx2",
+    ];
+    const FIXED: [&str; 3] = ["lut_ggx.png", "lut_charlie.png", "sh.txt"];
+    SUFFIXES
+        .iter()
+        .map(|s| dir.join(format!("{name}{s}")))
+        .chain(FIXED.iter().map(|f| dir.join(f)))
+        .collect()
+}

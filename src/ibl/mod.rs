@@ -66,6 +66,7 @@ impl Engine {
 
 pub use crate::filter::RoughnessMapping;
 pub use folder::specular_of;
+pub(crate) use folder::written_by_targets;
 
 /// What a caller may change; None takes the engine's default.
 #[derive(Clone, Debug, Default)]

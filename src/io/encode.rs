@@ -27,10 +27,14 @@ pub struct WriteOptions {
     /// means ACES there): radiance kept, not clipped.
     pub gain_map: Option<crate::tonemap::Tonemap>,
     /// Texel centres moved for per-face samplers (cube outputs; KTX2 records it under
-    /// [`ktx2::EDGE_FIXUP_KEY`]).
+    /// [`ktx2::EDGE_FIXUP_KEY`] with `cubeforge_keys`).
     pub edge_fixup: crate::cube::EdgeFixup,
     /// 8-bit PNG or RGBA8 KTX2/DDS texels as RGBM or RGBD: HDR in 8 bits.
     pub hdr_encoding: Option<HdrEncoding>,
+    /// KTX2 outputs also carry cubeforge's own keys (encoding, edge fixup, chain levels):
+    /// off by default, since `ktx validate -e` rejects every key the KTX2 specification does
+    /// not define (warning 7010).
+    pub cubeforge_keys: bool,
 }
 
 /// The sample type of EXR output: half floats (what tools expect, largest 65504) or 32-bit
@@ -122,8 +126,8 @@ pub fn encode_cube_with(
 }
 
 /// Encodes a cube map (every level) as the container `format` (KTX2, DDS, KTX or .env), in
-/// `opts.gpu_format`, with KTX2 key/value entries `extra`; `path` names the file in errors
-/// only. Zstandard supercompression (`opts.zstd`) is KTX2's: another container with it is
+/// `opts.gpu_format`, with KTX2 key/value entries `extra` (the caller's: cubeforge's own
+/// only with `opts.cubeforge_keys`); `path` names the file in errors only. Zstandard supercompression (`opts.zstd`) is KTX2's: another container with it is
 /// refused.
 pub(crate) fn encode_cube_as(
     format: FileFormat,
@@ -135,14 +139,16 @@ pub(crate) fn encode_cube_as(
     if let Some(e) = opts.hdr_encoding {
         let plain = hdr8::check(path, format, opts)?;
         let mut kv = extra.to_vec();
-        kv.push((hdr8::KTX2_KEY, e.name().as_bytes()));
+        if opts.cubeforge_keys {
+            kv.push((hdr8::KTX2_KEY, e.name().as_bytes()));
+        }
         return encode_cube_as(format, path, &hdr8::encode_cube(cube, e), &plain, &kv);
     }
     match format {
         FileFormat::Ktx2 => {
             let fixup = opts.edge_fixup.name().as_bytes();
             let mut kv = extra.to_vec();
-            if opts.edge_fixup != crate::cube::EdgeFixup::None {
+            if opts.cubeforge_keys && opts.edge_fixup != crate::cube::EdgeFixup::None {
                 kv.push((ktx2::EDGE_FIXUP_KEY, fixup));
             }
             ktx2::encode_cube_with(cube, opts.gpu_format, opts.zstd, &kv)

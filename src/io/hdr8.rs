@@ -1,7 +1,7 @@
 //! RGBM and RGBD: HDR radiance in four 8-bit channels, as cmft writes and engines still read
 //! (a shared multiplier in alpha), for PNG and RGBA8 (UNORM) KTX2 and DDS.
 //!
-//! - RGBM, range R (6 or 8): L = rgb * a * R. Written with the smallest a on the 8-bit grid
+//! - RGBM, range R (6, 7, 8 or 16): L = rgb * a * R. Written with the smallest a on the 8-bit grid
 //!   that holds the texel's largest channel, a = ceil(max(L) / R * 255) / 255 (at least
 //!   1/255), then rgb = L / (a R) rounded: what three.js's `RGBMToLinear` and a linear-space
 //!   Unity/cmft shader decode. Largest value R.
@@ -35,21 +35,33 @@ const GAMMA: f32 = 2.2;
 pub enum HdrEncoding {
     /// RGBM, L = rgb * a * 6 (cmft's, Marmoset's range).
     Rgbm6,
+    /// RGBM, L = rgb * a * 7: what three.js's `RGBMLoader` decodes unless told (its RGBM7).
+    Rgbm7,
     /// RGBM, L = rgb * a * 8.
     Rgbm8,
+    /// RGBM, L = rgb * a * 16: three.js's RGBM16 (`RGBMLoader.setMaxRange(16)`).
+    Rgbm16,
     /// Babylon's RGBD, L = rgb^2.2 / a, up to 255.
     Rgbd,
 }
 
 impl HdrEncoding {
     /// Every encoding, for messages.
-    pub const ALL: [HdrEncoding; 3] = [HdrEncoding::Rgbm6, HdrEncoding::Rgbm8, HdrEncoding::Rgbd];
+    pub const ALL: [HdrEncoding; 5] = [
+        HdrEncoding::Rgbm6,
+        HdrEncoding::Rgbm7,
+        HdrEncoding::Rgbm8,
+        HdrEncoding::Rgbm16,
+        HdrEncoding::Rgbd,
+    ];
 
     /// The name on the command line and in a KTX2's metadata.
     pub fn name(self) -> &'static str {
         match self {
             HdrEncoding::Rgbm6 => "rgbm6",
+            HdrEncoding::Rgbm7 => "rgbm7",
             HdrEncoding::Rgbm8 => "rgbm8",
+            HdrEncoding::Rgbm16 => "rgbm16",
             HdrEncoding::Rgbd => "rgbd",
         }
     }
@@ -64,8 +76,27 @@ impl HdrEncoding {
     pub fn largest(self) -> f32 {
         match self {
             HdrEncoding::Rgbm6 => 6.0,
+            HdrEncoding::Rgbm7 => 7.0,
             HdrEncoding::Rgbm8 => 8.0,
+            HdrEncoding::Rgbm16 => 16.0,
             HdrEncoding::Rgbd => RGBD_MAX,
+        }
+    }
+
+    /// How a reader decodes `file` (of `format`), printed with the output: engines disagree
+    /// on RGBM's range, and a loader told none assumes its own (three.js's RGBMLoader 7).
+    pub fn loader_line(self, format: FileFormat, file: &str) -> String {
+        let r = self.largest();
+        match (self, format) {
+            (HdrEncoding::Rgbd, _) => format!(
+                "{file}: RGBD, as Babylon.js writes it: L = rgb^2.2 / a (its fromRGBD), up to 255"
+            ),
+            (_, FileFormat::Png) => format!(
+                "{file}: RGBM range {r}, L = rgb a {r}; three.js's RGBMLoader (gone since 2025): \
+                 new RGBMLoader().setMaxRange({r}).load('{file}') (it assumes 7 when not told); \
+                 a shader: rgb * a * {r}.0"
+            ),
+            _ => format!("{file}: RGBM range {r} texels; decode in the shader: rgb * a * {r}.0"),
         }
     }
 

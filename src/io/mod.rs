@@ -27,7 +27,7 @@ use crate::image::{ColorSpace, Image};
 use std::path::Path;
 
 pub(crate) use crate::alloc::human_bytes;
-pub(crate) use atomic::stage_with;
+pub(crate) use atomic::stage_replacing;
 pub use atomic::{check_folder, remove_temporaries, Staged};
 pub use encode::{
     check_gpu_format, container_psnr, encode_cube, encode_cube_with, encode_image, zstd_needs_ktx2,

@@ -238,13 +238,13 @@ impl Job for ConvertJob {
         let files = encoded.into_files();
         output::deliver(&files, &self.output, &loaded.files)?;
         progress.stage("write");
+        let mut summary: Vec<String> = super::wrote(&files, &self.output).into_iter().collect();
+        summary.extend(gain_map.iter().map(|g| g.summary()));
+        summary.extend(target.notes());
         Ok(Report {
             written: files.paths(),
             warnings: warnings.into_vec(),
-            summary: gain_map
-                .iter()
-                .map(|g| crate::error::Text::new(g.summary()))
-                .collect(),
+            summary: super::texts(summary),
             quality,
         })
     }

@@ -200,6 +200,11 @@ impl Job for IblJob {
         if let Some(format) = self.options.encoding.gpu_format {
             self.check_gpu_format(format)?;
         }
+        // The folder is replaced whole: refused before the work when it holds an input or
+        // what no target wrote.
+        let name = self.options.name.as_deref().unwrap_or("env");
+        let known = ibl::written_by_targets(&self.output, name);
+        output::check_folder_output(&self.output, &self.inputs, &known)?;
         Ok(Vec::new())
     }
 
@@ -267,6 +272,13 @@ impl Job for IblJob {
                 asked as f64 / face as f64
             ));
         }
+        let chains = matches!(self.engine, Engine::Bevy | Engine::Gltf | Engine::Generic);
+        if self.options.encoding.cubeforge_keys && !chains {
+            warnings.push(format!(
+                "{} applies to the KTX2 chains of bevy, gltf and generic: ignored",
+                param("cubeforge_keys")
+            ));
+        }
         progress.begin(&self.plan_line(&loaded, &options));
         let delivery = ibl::deliver(&loaded, self.engine, &self.output, &options, progress)?;
         if let Some(w) = &delivery.clamped {
@@ -276,7 +288,13 @@ impl Job for IblJob {
             (Some(format), Some(psnr_db)) => Some(Quality { format, psnr_db }),
             _ => None,
         };
-        let files = Files::new(delivery.files);
+        // The folder is this target's, replaced whole: another target's files go with it.
+        let name = options.name.as_deref().unwrap_or("env");
+        let files = Files {
+            known: ibl::written_by_targets(&self.output, name),
+            folders: vec![self.output.clone()],
+            ..Files::new(delivery.files)
+        };
         output::deliver(
             &files,
             &Destination::Path(self.output.clone()),

@@ -1,6 +1,6 @@
 //! `irradiance` as a job: the diffuse side, an irradiance map and 9 SH coefficients.
 
-use super::{Job, Progress, Quality, Report, Text, Warning, Warnings};
+use super::{Job, Progress, Quality, Report, Warning, Warnings};
 use crate::chain;
 use crate::convert::{self, Loaded};
 use crate::error::{param, Error, Result};
@@ -199,27 +199,30 @@ impl Job for IrradianceJob {
         output::deliver(&files, &self.output, &loaded.files)?;
         progress.stage("write");
         let dc = set.radiance[0].map(|v| v * sh::BASIS[0].3);
+        let mut summary: Vec<String> = super::wrote(&files, &self.output).into_iter().collect();
+        summary.push(format!(
+            "irradiance {} px ({}); mean radiance {:.4} {:.4} {:.4}{}",
+            self.size,
+            match self.method {
+                filter::IrradianceMethod::Brute => "exact sum over the texels".to_string(),
+                filter::IrradianceMethod::Sh =>
+                    format!("from {} SH coefficients", set.radiance.len()),
+            },
+            dc[0],
+            dc[1],
+            dc[2],
+            match (&self.sh, set.cutoff) {
+                (None, None) => String::new(),
+                (_, Some(c)) =>
+                    format!("; SH {} bands, windowed to zero at band {c:.2}", set.bands),
+                (Some(_), None) => format!("; SH {} bands", set.bands),
+            }
+        ));
+        summary.extend(target.notes());
         Ok(Report {
             written: files.paths(),
             warnings: warnings.into_vec(),
-            summary: vec![Text::new(format!(
-                "irradiance {} px ({}); mean radiance {:.4} {:.4} {:.4}{}",
-                self.size,
-                match self.method {
-                    filter::IrradianceMethod::Brute => "exact sum over the texels".to_string(),
-                    filter::IrradianceMethod::Sh =>
-                        format!("from {} SH coefficients", set.radiance.len()),
-                },
-                dc[0],
-                dc[1],
-                dc[2],
-                match (&self.sh, set.cutoff) {
-                    (None, None) => String::new(),
-                    (_, Some(c)) =>
-                        format!("; SH {} bands, windowed to zero at band {c:.2}", set.bands),
-                    (Some(_), None) => format!("; SH {} bands", set.bands),
-                }
-            ))],
+            summary: super::texts(summary),
             quality,
         })
     }

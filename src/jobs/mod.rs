@@ -139,3 +139,35 @@ pub(crate) fn replaced_values(file: &std::path::Path, n: u64) -> Option<String> 
         )
     })
 }
+
+/// What a command wrote, as a summary line: each file with its size, a folder output (faces,
+/// a chain) as one entry with its count. None on standard output, whose data is the output.
+pub(crate) fn wrote(
+    files: &crate::output::Files,
+    dest: &crate::output::Destination,
+) -> Option<String> {
+    if dest.is_stdout() || files.files.is_empty() {
+        return None;
+    }
+    let mut parts = Vec::new();
+    for dir in &files.folders {
+        let inside: Vec<&Vec<u8>> = files
+            .files
+            .iter()
+            .filter(|(p, _)| p.starts_with(dir))
+            .map(|(_, b)| b)
+            .collect();
+        let bytes: usize = inside.iter().map(|b| b.len()).sum();
+        parts.push(format!(
+            "{}/ ({} files, {bytes} bytes)",
+            dir.display(),
+            inside.len()
+        ));
+    }
+    for (p, b) in &files.files {
+        if !files.folders.iter().any(|d| p.starts_with(d)) {
+            parts.push(format!("{} ({} bytes)", p.display(), b.len()));
+        }
+    }
+    Some(format!("wrote {}", parts.join(", ")))
+}

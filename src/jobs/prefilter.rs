@@ -29,10 +29,12 @@ const MOST: usize = 16384;
 ///     ..PrefilterJob::new(vec!["fixtures/sky.exr".into()], Destination::Path(out.clone()))
 /// };
 /// let report = job.run(&())?;
-/// // 64, 32 and 16 px levels (chains stop at 16 px unless `min_size` says otherwise), and
-/// // the line that says where it stopped.
-/// assert_eq!(report.summary.len(), 4);
+/// // What it wrote (the KTX2 and its levels description beside it), the 64, 32 and 16 px
+/// // levels (chains stop at 16 px unless `min_size` says otherwise), and the line that says
+/// // where it stopped.
+/// assert_eq!(report.summary.len(), 5);
 /// # std::fs::remove_file(&out).ok();
+/// # std::fs::remove_file(out.with_extension("ktx2.levels.json")).ok();
 /// # Ok(())
 /// # }
 /// ```
@@ -229,15 +231,27 @@ impl Job for PrefilterJob {
         progress.stage("encode");
         let mut files: Files = encoded.into_files();
         if self.output.is_stdout() && files.files.len() > 1 {
-            // A DDS chain's description goes beside it: there is no beside on standard output.
-            warnings.push(
-                "-o -: the DDS chain's levels description (NAME.dds.levels.json) is not written",
-            );
+            // A DDS or KTX2 chain's description goes beside it: there is no beside on
+            // standard output.
+            warnings.push(format!(
+                "-o -: the chain's levels description (NAME.{}.levels.json) is not written{}",
+                files.files[0]
+                    .0
+                    .extension()
+                    .unwrap_or_default()
+                    .to_string_lossy(),
+                match target.format() {
+                    Some(io::FileFormat::Ktx2) =>
+                        format!(" ({} puts it in the file)", param("cubeforge_keys")),
+                    _ => String::new(),
+                }
+            ));
             files.files.truncate(1);
         }
         output::deliver(&files, &self.output, &loaded.files)?;
         progress.stage("write");
-        let mut summary: Vec<String> = description.levels.iter().map(level_line).collect();
+        let mut summary: Vec<String> = super::wrote(&files, &self.output).into_iter().collect();
+        summary.extend(description.levels.iter().map(level_line));
         let full = CubeMap::full_chain_len(size);
         if let (Some(min), Some(last)) = (chain_options.min_size, description.levels.last()) {
             if description.levels.len() < full {
@@ -254,6 +268,7 @@ impl Job for PrefilterJob {
                 ));
             }
         }
+        summary.extend(target.notes());
         Ok(Report {
             written: files.paths(),
             warnings: warnings.into_vec(),

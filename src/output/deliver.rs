@@ -75,6 +75,9 @@ pub struct Files {
     pub files: Vec<(PathBuf, Vec<u8>)>,
     /// Folder outputs, replaced whole.
     pub folders: Vec<PathBuf>,
+    /// Files an earlier run of another kind may have left in the folder outputs (another
+    /// `ibl` target's): cubeforge's, so they go with the folder instead of stopping it.
+    pub known: Vec<PathBuf>,
 }
 
 impl Files {
@@ -83,6 +86,7 @@ impl Files {
         Files {
             files,
             folders: Vec::new(),
+            known: Vec::new(),
         }
     }
 
@@ -114,7 +118,7 @@ pub fn deliver(out: &Files, dest: &Destination, inputs: &[PathBuf]) -> Result<()
         return write_stdout(&out.files[0].1);
     }
     super::check_outputs(&out.paths(), &out.folders, inputs)?;
-    let staged = io::stage_with(&out.files, &out.folders)?;
+    let staged = io::stage_replacing(&out.files, &out.folders, &out.known)?;
     // Tests stop here to signal a command that has written its temporaries.
     if let Some(ms) = std::env::var("CUBEFORGE_TEST_PAUSE_BEFORE_COMMIT_MS")
         .ok()

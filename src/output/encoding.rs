@@ -46,6 +46,9 @@ pub struct Encoding {
     pub exposure: f32,
     /// Tone curve for 8-bit outputs; others stay linear.
     pub tonemap: Tonemap,
+    /// KTX2 outputs also carry cubeforge's keys (`cubeforge.hdrEncoding`, `.edgeFixup`,
+    /// `.levels`), which cubeforge reads back but `ktx validate -e` rejects (7010).
+    pub cubeforge_keys: bool,
 }
 
 /// The bytes a texel of a moved or encoded copy costs: its level, its mips (4/3) and the
@@ -126,8 +129,16 @@ impl Encoding {
             Some(io::Container::Ktx2) => {}
             Some(_) => return Err(io::zstd_needs_ktx2(path)),
         }
+        let ktx2 = container == Some(io::Container::Ktx2);
+        if self.cubeforge_keys && !ktx2 {
+            warnings.push(Text::new(format!(
+                "{} applies to KTX2 outputs: ignored",
+                param("cubeforge_keys")
+            )));
+        }
         let write = WriteOptions {
-            zstd: self.zstd.filter(|_| container == Some(io::Container::Ktx2)),
+            zstd: self.zstd.filter(|_| ktx2),
+            cubeforge_keys: self.cubeforge_keys && ktx2,
             ..self.write_options(linear)
         };
         if let (Some(_), Some(f)) = (self.hdr_encoding, format) {
@@ -157,6 +168,7 @@ impl Encoding {
             gain_map: self.ultrahdr.then_some(self.tonemap),
             edge_fixup: self.edge_fixup,
             hdr_encoding: self.hdr_encoding,
+            cubeforge_keys: self.cubeforge_keys,
         }
     }
 

@@ -64,6 +64,7 @@ impl Encoded {
         Files {
             files: self.files,
             folders: self.folders,
+            known: Vec::new(),
         }
     }
 }
@@ -72,6 +73,41 @@ impl Target {
     /// The file type the result is encoded in (None: faces whose type is not known yet).
     pub fn format(&self) -> Option<FileFormat> {
         self.format
+    }
+
+    /// Lines printed with the output: how a reader decodes an RGBM or RGBD file (engines
+    /// disagree on RGBM's range), and what a KTX2 without cubeforge's keys leaves unsaid.
+    pub fn notes(&self) -> Vec<String> {
+        let name = self
+            .path
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        let Some(format) = self.format else {
+            return Vec::new();
+        };
+        let mut notes = Vec::new();
+        if let Some(e) = self.write.hdr_encoding {
+            notes.push(e.loader_line(format, &name));
+        }
+        if format != FileFormat::Ktx2 || self.write.cubeforge_keys {
+            return notes;
+        }
+        let keys = param("cubeforge_keys");
+        if let Some(e) = self.write.hdr_encoding {
+            notes.push(format!(
+                "{name} does not name its encoding (KTX2 has no key for it; {keys} adds \
+                 cubeforge's): read it back with {} {}",
+                param("decode"),
+                e.name()
+            ));
+        }
+        if self.write.edge_fixup != crate::cube::EdgeFixup::None {
+            notes.push(format!(
+                "{name} does not record its edge fixup ({keys} adds cubeforge's key): \
+                 readers, cubeforge too, take its texels as stored"
+            ));
+        }
+        notes
     }
 
     /// Whether the result is stored in 8 bits a channel, where a tone curve applies.

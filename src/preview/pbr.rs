@@ -327,7 +327,7 @@ pub fn prepare(env: &LoadedEnv, name: &Path, target: Option<Engine>) -> Result<P
                 }
             }
             None => format!(
-                "has {count} levels but does not say their roughness (levels.json, KTX2 key {}; {} ENGINE reads an engine's chain as it is)",
+                "has {count} levels but does not say their roughness (levels.json, NAME.ktx2.levels.json or the KTX2 key {}; {} ENGINE reads an engine's chain as it is)",
                 crate::io::ktx2::LEVELS_KEY,
                 crate::error::param("target")
             ),

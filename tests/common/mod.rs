@@ -77,16 +77,24 @@ fn assert_same_size(a: &Image, b: &Image) {
     );
 }
 
-/// Runs the `cubeforge` binary with `args`.
+pub mod ktx2_rule;
+
+/// Runs the `cubeforge` binary with `args`; when it succeeds, every KTX2 it wrote at `-o`
+/// keeps the rule of [`ktx2_rule`] (`ktx validate -e` passes it).
 pub fn run<I, S>(args: I) -> Output
 where
     I: IntoIterator<Item = S>,
     S: AsRef<OsStr>,
 {
-    Command::new(env!("CARGO_BIN_EXE_cubeforge"))
-        .args(args)
+    let args: Vec<std::ffi::OsString> = args.into_iter().map(|a| a.as_ref().to_owned()).collect();
+    let out = Command::new(env!("CARGO_BIN_EXE_cubeforge"))
+        .args(&args)
         .output()
-        .expect("cubeforge runs")
+        .expect("cubeforge runs");
+    if out.status.success() {
+        ktx2_rule::check_command(&args);
+    }
+    out
 }
 
 /// Standard error of a run as text.

@@ -232,6 +232,11 @@ fn completions_for_every_shell() {
             !text.contains("fixtures") && !text.contains("man pages"),
             "{shell}: hidden commands"
         );
+        // --material completes the presets' names, not files.
+        assert!(
+            text.contains("mirror-decal") && text.contains("plastic-glossy"),
+            "{shell}: material names"
+        );
     }
     assert_eq!(
         run(&["completions", "tcsh"], t.path()).status.code(),

@@ -1,4 +1,4 @@
-//! RGBM (range 6 and 8) and RGBD in 8-bit PNGs and RGBA8 KTX2/DDS: written by
+//! RGBM (range 6, 7, 8 and 16) and RGBD in 8-bit PNGs and RGBA8 KTX2/DDS: written by
 //! `--hdr-encoding`, their bytes decoded here by the published formulas, and read back by
 //! `--decode` (a KTX2 by its metadata, a PNG by its text chunk, alone).
 
@@ -41,10 +41,9 @@ fn published(path: &Path, encoding: &str) -> Image {
     let mut out = Image::new(w as usize, h as usize);
     for (o, p) in out.pixels.iter_mut().zip(png.pixels()) {
         let [r, g, b, a] = p.0.map(|v| v as f32 / 255.0);
-        *o = match encoding {
-            "rgbm6" => Vec4::new(r, g, b, 0.0) * a * 6.0,
-            "rgbm8" => Vec4::new(r, g, b, 0.0) * a * 8.0,
-            _ => Vec4::new(r.powf(2.2), g.powf(2.2), b.powf(2.2), 0.0) / a.max(1.0 / 255.0),
+        *o = match encoding.strip_prefix("rgbm") {
+            Some(range) => Vec4::new(r, g, b, 0.0) * a * range.parse::<f32>().unwrap(),
+            None => Vec4::new(r.powf(2.2), g.powf(2.2), b.powf(2.2), 0.0) / a.max(1.0 / 255.0),
         }
         .truncate()
         .extend(1.0);
@@ -94,7 +93,9 @@ fn pngs_decode_by_the_published_formulas_and_read_back() {
     let mut errors = Vec::new();
     for (encoding, range, bound) in [
         ("rgbm6", 6.0, 0.03),
+        ("rgbm7", 7.0, 0.03),
         ("rgbm8", 8.0, 0.03),
+        ("rgbm16", 16.0, 0.03),
         ("rgbd", 255.0, 0.03),
     ] {
         let png = dir.path().join(format!("{encoding}.png"));
@@ -118,6 +119,10 @@ fn pngs_decode_by_the_published_formulas_and_read_back() {
                 "{}",
                 stderr(&r)
             );
+            // The loader line: three.js's RGBMLoader assumes 7 unless told the range.
+            let said = String::from_utf8_lossy(&r.stdout).to_string();
+            let line = format!("new RGBMLoader().setMaxRange({range})");
+            assert!(said.contains(&line), "{encoding}: {said}");
         }
         let by_formula = published(&png, encoding);
         let e = io::HdrEncoding::ALL
@@ -190,9 +195,14 @@ fn pngs_decode_by_the_published_formulas_and_read_back() {
 fn rgba8_containers_carry_their_encoding() {
     let dir = tempfile::tempdir().unwrap();
     let src = source(dir.path());
-    for (name, encoding) in [("m.ktx2", "rgbm6"), ("d.ktx2", "rgbd"), ("m.dds", "rgbm8")] {
+    for (name, encoding) in [
+        ("m.ktx2", "rgbm6"),
+        ("d.ktx2", "rgbd"),
+        ("plain.ktx2", "rgbm16"),
+        ("m.dds", "rgbm8"),
+    ] {
         let out = dir.path().join(name);
-        let r = run([
+        let mut args = vec![
             "convert",
             src.to_str().unwrap(),
             "-o",
@@ -203,14 +213,24 @@ fn rgba8_containers_carry_their_encoding() {
             encoding,
             "--gpu-format",
             "rgba8",
-        ]);
+        ];
+        let keys = name != "plain.ktx2" && name.ends_with(".ktx2");
+        if keys {
+            args.push("--cubeforge-keys");
+        }
+        let r = run(&args);
         assert!(r.status.success(), "{name}: {}", stderr(&r));
         let e = io::HdrEncoding::ALL
             .into_iter()
             .find(|e| e.name() == encoding)
             .unwrap();
-        // A KTX2 says what it holds; a DDS has no room and needs --decode.
-        let decode = name.ends_with(".dds").then_some(e);
+        // A KTX2 with cubeforge's keys says what it holds; one without, like a DDS, needs
+        // --decode, and the command says so.
+        let decode = (!keys).then_some(e);
+        if name == "plain.ktx2" {
+            let said = String::from_utf8_lossy(&r.stdout).to_string();
+            assert!(said.contains("--decode rgbm16"), "{said}");
+        }
         let Decoded::Cube(cube) = read_as(&out, decode) else {
             panic!("a cube")
         };

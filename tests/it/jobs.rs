@@ -86,8 +86,9 @@ fn a_chain_counts_its_progress_and_lists_its_levels() {
     let report = job.run(&record).unwrap();
     let (total, done) = *record.units.lock().unwrap();
     assert!(total > 0 && total == done, "{total} units, {done} done");
-    assert_eq!(report.summary.len(), 5, "{:?}", report.summary);
-    assert!(report.summary[0].to_string().starts_with("level  0"));
+    assert_eq!(report.summary.len(), 6, "{:?}", report.summary);
+    assert!(report.summary[0].to_string().starts_with("wrote "));
+    assert!(report.summary[1].to_string().starts_with("level  0"));
 }
 
 #[test]

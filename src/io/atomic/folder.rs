@@ -48,7 +48,7 @@ pub fn check_folder(dir: &Path, writing: &[PathBuf]) -> Result<()> {
         return Err(Error::file(
             dir,
             format!(
-                "holds {}, which cubeforge did not write: a faces or chain folder is replaced whole, so name a new or empty folder (or move that out)",
+                "holds {}, which cubeforge did not write: an output folder (faces, a chain, an ibl target's files) is replaced whole, so name a new or empty folder (or move that out)",
                 stranger.display()
             ),
         ));
@@ -108,9 +108,10 @@ fn is_face_file(name: &str) -> bool {
 }
 
 /// Puts the staged folder `tmp` in place as `dir`, replacing whatever folder is there whole
-/// (checked again: another process may have written it since). The folder it replaced, now
+/// (checked again: another process may have written it since; `known`: files an earlier
+/// run left there, which go with it). The folder it replaced, now
 /// under a registered temporary name, comes back to be removed.
-pub(super) fn put(tmp: &Path, dir: &Path) -> Result<Option<PathBuf>> {
+pub(super) fn put(tmp: &Path, dir: &Path, known: &[PathBuf]) -> Result<Option<PathBuf>> {
     // Another writer may put its folder there between the look and the move: look again.
     for _ in 0..16 {
         match std::fs::symlink_metadata(dir) {
@@ -123,7 +124,11 @@ pub(super) fn put(tmp: &Path, dir: &Path) -> Result<Option<PathBuf>> {
             Ok(m) if m.is_dir() => {
                 let mut staged = Vec::new();
                 super::collect_files(tmp, tmp, dir, &mut staged);
-                let writing: Vec<PathBuf> = staged.into_iter().map(|(_, p)| p).collect();
+                let writing: Vec<PathBuf> = staged
+                    .into_iter()
+                    .map(|(_, p)| p)
+                    .chain(known.iter().cloned())
+                    .collect();
                 check_folder(dir, &writing)?;
                 // One step where the system has it: `dir` always names a whole folder.
                 if guarded(|| exchange_folders(tmp, dir), |_| {}).is_ok() {

@@ -5,7 +5,7 @@
 //! complete or not at all, and a failed command leaves no empty folders behind.
 //!
 //! A folder that is an output in its own right (six faces, a chain's `m0/ m1/ ...`: see
-//! [`stage_with`]) is replaced whole: the new one is built beside it and exchanged with it in
+//! [`stage_replacing`]) is replaced whole: the new one is built beside it and exchanged with it in
 //! one step, so the old contents never mix with the new (a stale `m4/` of a longer chain,
 //! faces of another format), and of two writers one ends with its whole result in place. A
 //! folder that holds anything cubeforge did not write is refused, never emptied
@@ -111,6 +111,8 @@ pub struct Staged {
     folders: Vec<PathBuf>,
     /// Files in folders that exist: (temporary, target).
     files: Vec<(PathBuf, PathBuf)>,
+    /// Files an earlier run may have left in the folder outputs, replaced with them.
+    known: Vec<PathBuf>,
 }
 
 /// The longest file name the common file systems take (ext4, XFS, Btrfs, APFS, NTFS).
@@ -160,9 +162,14 @@ fn missing_top(path: &Path) -> Option<PathBuf> {
 /// where each of `folders` is an output in its own right (a faces folder, a chain folder):
 /// every file under it is staged in a new folder that replaces it whole on
 /// [`Staged::commit`]. Refuses a folder that holds what cubeforge did not write
-/// ([`check_folder`]). Crate-only: `output::deliver` calls it after the output check, which
-/// a caller here would skip.
-pub(crate) fn stage_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> Result<Staged> {
+/// ([`check_folder`]) other than the `known` files (what an earlier run of another kind wrote
+/// there, such as another `ibl` target's files), which go with the folder. Crate-only:
+/// `output::deliver` calls it after the output check, which a caller here would skip.
+pub(crate) fn stage_replacing(
+    files: &[(PathBuf, Vec<u8>)],
+    folders: &[PathBuf],
+    known: &[PathBuf],
+) -> Result<Staged> {
     // `-` names standard output: a command that cannot write there must not make a file or
     // a folder of that name.
     let dash = |p: &Path| p.components().any(|c| c.as_os_str() == "-");
@@ -175,10 +182,11 @@ pub(crate) fn stage_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> R
     // A folder output behind a symbolic link is replaced where the link points.
     let mut folders = folders.to_vec();
     let mut paths: Vec<PathBuf> = files.iter().map(|(p, _)| p.clone()).collect();
+    let mut known = known.to_vec();
     for f in &mut folders {
         if std::fs::symlink_metadata(&*f).is_ok_and(|m| m.file_type().is_symlink()) {
             let real = std::fs::canonicalize(&*f).map_err(|e| Error::io(&*f, e))?;
-            for p in &mut paths {
+            for p in paths.iter_mut().chain(&mut known) {
                 if let Ok(rel) = p.strip_prefix(&*f) {
                     *p = real.join(rel);
                 }
@@ -192,13 +200,15 @@ pub(crate) fn stage_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> R
     if let Some(path) = paths.iter().find(|p| p.is_dir()) {
         return Err(Error::file(path, "a folder of that name is in the way"));
     }
+    let ours: Vec<PathBuf> = paths.iter().chain(&known).cloned().collect();
     for f in &folders {
-        check_folder(f, &paths)?;
+        check_folder(f, &ours)?;
     }
     let mut staged = Staged {
         trees: Vec::new(),
         folders: folders.clone(),
         files: Vec::new(),
+        known,
     };
     let mut tmps = Vec::with_capacity(files.len());
     for path in &paths {
@@ -342,7 +352,7 @@ impl Staged {
         let trees = std::mem::take(&mut self.trees);
         for (i, (root, top, replace)) in trees.iter().enumerate() {
             let placed: Result<()> = if *replace {
-                folder::put(root, top).map(|replaced| old.extend(replaced))
+                folder::put(root, top, &self.known).map(|replaced| old.extend(replaced))
             } else {
                 // A new folder goes in with one rename. If another process made it
                 // meanwhile, its files join the others, moved one by one under the lock
@@ -414,7 +424,7 @@ impl Staged {
             let moved = temp_name(&f);
             guarded(|| std::fs::rename(&sub, &moved), |p| p.push(moved.clone()))
                 .map_err(|e| Error::io(&f, e))?;
-            old.extend(folder::put(&moved, &f)?);
+            old.extend(folder::put(&moved, &f, &self.known)?);
         }
         collect_files(root, root, top, &mut self.files);
         self.trees

@@ -1,9 +1,14 @@
 //! Staging and committing: new folders appear complete, failures leave neither temporaries
 //! nor empty folders, replaced files are never missing or partial.
 
-use super::stage_with;
+use super::{stage_replacing, Staged};
 use crate::error::Result;
 use std::path::{Path, PathBuf};
+
+/// The files and folder outputs staged, no other run's files known.
+fn stage_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> Result<Staged> {
+    stage_replacing(files, folders, &[])
+}
 
 /// Every entry under `dir`, relative, sorted.
 fn tree(dir: &Path) -> Vec<String> {

@@ -322,7 +322,7 @@ impl Job for PreviewJob {
         Ok(Report {
             written: files.paths(),
             warnings: warnings.into_vec(),
-            summary: Vec::new(),
+            summary: super::texts(super::wrote(&files, &self.output).into_iter().collect()),
             quality: None,
         })
     }

@@ -198,7 +198,10 @@ fn a_folder_of_hostile_names_builds_alike_under_batch_ninja_and_make() {
     let want = built(&b);
     let mut names: Vec<PathBuf> = jobs()
         .iter()
-        .flat_map(|(_, out)| [PathBuf::from(out), PathBuf::from(format!("{out}.d"))])
+        .flat_map(|(_, out)| {
+            // Each chain, its depfile and its levels description.
+            ["", ".d", ".levels.json"].map(|s| PathBuf::from(format!("{out}{s}")))
+        })
         .collect();
     names.sort();
     assert_eq!(

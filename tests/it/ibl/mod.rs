@@ -6,6 +6,7 @@
 
 mod command_line;
 mod engines;
+mod one_target;
 mod readers;
 mod snippets;
 
@@ -136,6 +137,10 @@ pub(crate) fn ibl(input: &Path, out: &Path, target: &str, extra: &[&str]) {
         target,
         "-q",
     ];
+    // The chains' descriptions in their metadata, which `levels_of` reads.
+    if matches!(target, "bevy" | "gltf" | "generic") {
+        args.push("--cubeforge-keys");
+    }
     args.extend_from_slice(extra);
     let o = run(&args);
     assert!(o.status.success(), "{target}: {}", stderr(&o));

@@ -70,9 +70,13 @@ fn a_file_name_never_steers_an_output() {
     // `{dir}` in a name is taken as it is: the template is filled once.
     let mut want = vec![
         "build/in/sky.ktx2",
+        "build/in/sky.ktx2.levels.json",
         "build/in/{dir}.ktx2",
+        "build/in/{dir}.ktx2.levels.json",
         "build/sky/x.ktx2",
+        "build/sky/x.ktx2.levels.json",
         "build/{dir}/x.ktx2",
+        "build/{dir}/x.ktx2.levels.json",
         "in/...exr",
         "in/..exr",
         "in/sky.exr",
