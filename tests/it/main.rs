@@ -54,6 +54,7 @@ mod streamed_info;
 mod sun;
 mod surface;
 mod texel_truth;
+mod three_background;
 mod uastc;
 mod ultrahdr;
 mod ultrahdr_readers;
