@@ -9,6 +9,7 @@
 //! level's flux against the base's.
 
 mod far_field;
+mod irradiance_source;
 mod reference;
 
 use crate::common;
