@@ -230,6 +230,7 @@ fn every_preset_at_lod_bias_0_and_3_matches_preview() {
     }
     let m = measure_gauss("presets", &preset_cases());
     assert_thresholds("presets on a Gaussian chain, LOD bias 0 and 3", &m);
+    super::quote("presets", &m.iter().map(|m| m.db).collect::<Vec<_>>());
 }
 
 #[test]
@@ -382,6 +383,7 @@ fn a_decal_matches_preview() {
         &cases,
     );
     assert_thresholds("a decal", &m);
+    super::quote("decal", &m.iter().map(|m| m.db).collect::<Vec<_>>());
     done(&dir);
 }
 
@@ -439,6 +441,7 @@ fn control_maps_match_preview() {
         all.extend(measure(&sub, chain, &["--control", &map], cases, &shots));
     }
     assert_thresholds("control maps", &all);
+    super::quote("control", &all.iter().map(|m| m.db).collect::<Vec<_>>());
     done(&dir);
 }
 
@@ -492,5 +495,6 @@ fn the_pbr_roughness_sweep_matches_preview() {
     let shots = shoot(&dir.join("page/index.html"), &dir.join("gpu"), &queries);
     let m = measure(&dir, "ggx.ktx2", &[], &cases, &shots);
     assert_thresholds("pbr roughness sweep on a GGX chain", &m);
+    super::quote("pbr", &m.iter().map(|m| m.db).collect::<Vec<_>>());
     done(&dir);
 }

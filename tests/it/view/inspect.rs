@@ -81,6 +81,7 @@ fn per_vertex_shading_and_a_finite_radius_match_preview() {
     ];
     let (dir, m) = page_vs_preview("vertex", "chain.ktx2", &[GAUSSIAN_CHAIN], &[], &[], &cases);
     assert_thresholds("per-vertex shading and Brennan's correction", &m);
+    super::quote("per-vertex", &m.iter().map(|m| m.db).collect::<Vec<_>>());
     done(&dir);
 }
 
@@ -120,12 +121,13 @@ fn the_cross_an_ibl_folder_and_the_inspection_views() {
     .map(String::from)
     .to_vec();
     let shots = shoot(&dir.join("sky/index.html"), &dir.join("gpu"), &queries);
-    // The cross: cubeforge's hcross, face for face (measured 70 dB).
+    // The cross: cubeforge's hcross, face for face (docs/view.md quotes it).
     let db = psnr(shots[0].png("the cross"), &dir.join("cross.png"));
     assert!(
         db >= 45.0,
         "the cross against convert --to hcross: {db:.1} dB"
     );
+    super::quote("cross", &[db]);
     // Seams tint the sphere: not the plain picture.
     let plain = dir.join("plain.png");
     ok(&[

@@ -303,6 +303,18 @@ pub(crate) fn measure(
         .collect()
 }
 
+/// docs/view.md's figure `view KEY`: the PSNR of `dbs` in whole dB ("A to B dB" for a group).
+pub(crate) fn quote(key: &str, dbs: &[f64]) {
+    let lo = dbs.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = dbs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let text = if dbs.len() == 1 {
+        format!("{lo:.0} dB")
+    } else {
+        format!("{lo:.0} to {hi:.0} dB")
+    };
+    crate::figures::check("docs/view.md", &format!("view {key}"), &text);
+}
+
 /// Prints every case's PSNR (shown with --nocapture, and when the test fails) and fails,
 /// listing each case under its threshold with the two pictures' paths.
 pub(crate) fn assert_thresholds(what: &str, measured: &[Measured]) {
