@@ -1,0 +1,288 @@
+//! py360convert's geometry, texel for texel, so that `cubeforge.e2c` and `cubeforge.c2e` give
+//! its faces and panoramas (its face grids run edge to edge, `linspace(-0.5, 0.5, w)`, not
+//! through texel centres as cubeforge's do, and its padding and face masks are its own).
+//! Faces are F R B L U D in one horizontal row, as its `cube_format="horizon"`; the Python
+//! half lays them out as dice, list or dict.
+
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray3, PyReadonlyArray4, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Bilinear (or nearest) taps of `get(y, x)` at (y, x), as scipy's `map_coordinates` with
+/// order 1 (0) inside the image; `sum` receives each tap's weight.
+fn taps(y: f32, x: f32, nearest: bool, mut sum: impl FnMut(usize, usize, f32)) {
+    if nearest {
+        sum(y.round() as usize, x.round() as usize, 1.0);
+        return;
+    }
+    let (y0, x0) = (y.floor(), x.floor());
+    let (fy, fx) = (y - y0, x - x0);
+    let (y0, x0) = (y0 as usize, x0 as usize);
+    sum(y0, x0, (1.0 - fy) * (1.0 - fx));
+    if fx > 0.0 {
+        sum(y0, x0 + 1, (1.0 - fy) * fx);
+    }
+    if fy > 0.0 {
+        sum(y0 + 1, x0, fy * (1.0 - fx));
+        if fx > 0.0 {
+            sum(y0 + 1, x0 + 1, fy * fx);
+        }
+    }
+}
+
+/// Face texel (row, col) of face `f` (F R B L U D) as py360convert's `xyzcube` places it.
+fn cube_dir(f: usize, row: usize, col: usize, n: usize) -> [f32; 3] {
+    let step = if n > 1 { 1.0 / (n - 1) as f32 } else { 0.0 };
+    let rng = |i: usize| -0.5 + i as f32 * step;
+    let (x, y) = (rng(col), -rng(row));
+    let (x_flip, y_flip) = (rng(n - 1 - col), -rng(n - 1 - row));
+    match f {
+        0 => [x, y, 0.5],
+        1 => [0.5, y, x_flip],
+        2 => [x_flip, y, -0.5],
+        3 => [-0.5, y, x],
+        4 => [x, 0.5, y_flip],
+        _ => [x, -0.5, y],
+    }
+}
+
+/// A panorama (h, w, c) to six faces of edge `face_w` in one row (face_w, 6 face_w, c).
+#[pyfunction]
+pub fn e2c_faces<'py>(
+    py: Python<'py>,
+    e_img: PyReadonlyArray3<'py, f32>,
+    face_w: usize,
+    nearest: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let [h, w, c] = [e_img.shape()[0], e_img.shape()[1], e_img.shape()[2]];
+    if face_w == 0 || h == 0 || w == 0 {
+        return Err(crate::bad_arg(py, "e2c: an empty panorama or face_w=0"));
+    }
+    let src = e_img
+        .as_slice()
+        .map_err(|e| crate::bad_arg(py, e.to_string()))?;
+    let n = face_w;
+    let mut out = vec![0f32; n * 6 * n * c];
+    py.detach(|| {
+        // py360convert pads the panorama by a texel: its top and bottom rows turned half a
+        // turn, its columns wrapped. `at` reads that padded image.
+        let at = |py_: usize, px: usize| -> &[f32] {
+            let px = match px {
+                0 => w,
+                p if p == w + 1 => 1,
+                p => p,
+            };
+            let ix = px - 1;
+            let (row, col) = match py_ {
+                0 => (0, (ix + w - w / 2) % w),
+                p if p == h + 1 => (h - 1, (ix + w - w / 2) % w),
+                p => (p - 1, ix),
+            };
+            &src[(row * w + col) * c..][..c]
+        };
+        out.par_chunks_mut(6 * n * c)
+            .enumerate()
+            .for_each(|(row, line)| {
+                for (col6, texel) in line.chunks_exact_mut(c).enumerate() {
+                    let [x, y, z] = cube_dir(col6 / n, row, col6 % n, n);
+                    let u = x.atan2(z);
+                    let v = y.atan2(x.hypot(z));
+                    let cx = (u / (2.0 * std::f32::consts::PI) + 0.5) * w as f32 - 0.5 + 1.0;
+                    let cy = (-v / std::f32::consts::PI + 0.5) * h as f32 - 0.5 + 1.0;
+                    taps(cy, cx, nearest, |ty, tx, wt| {
+                        for (o, s) in texel.iter_mut().zip(at(ty.min(h + 1), tx.min(w + 1))) {
+                            *o += wt * s;
+                        }
+                    });
+                }
+            });
+    });
+    Ok(PyArray1::from_vec(py, out)
+        .reshape([n, 6 * n, c])?
+        .into_any())
+}
+
+/// py360convert's `equirect_facetype`: which face (0 F, 1 R, 2 B, 3 L, 4 U, 5 D) each
+/// panorama texel reads (its rounded ceiling, to the texel).
+fn facetype(h: usize, w: usize) -> Vec<u8> {
+    let (w4, w8, h3) = (w / 4, w / 8, h / 3);
+    let idx: Vec<i64> = (0..w4)
+        .map(|k| {
+            let t = if w4 > 1 {
+                -PI + 2.0 * PI * k as f64 / (w4 - 1) as f64
+            } else {
+                -PI
+            };
+            (h as f64 / 2.0 - (t / 4.0).cos().atan() * h as f64 / PI).round_ties_even() as i64
+        })
+        .collect();
+    let mut tp = vec![0u8; h * w];
+    for j in 0..w {
+        let band = if j < w8 {
+            2
+        } else {
+            [3, 0, 1, 2][((j - w8) / w4.max(1)).min(3)]
+        };
+        let k = (j + w4 - w8 % w4.max(1)) % w4.max(1);
+        for r in 0..h {
+            let mut f = band;
+            if r < h3 && (r as i64) < idx[k] {
+                f = 4;
+            }
+            if r + h3 >= h && ((h - 1 - r) as i64) < idx[k] {
+                f = 5;
+            }
+            tp[r * w + j] = f;
+        }
+    }
+    tp
+}
+
+/// py360convert's `CubeFaceSampler._pad`: each face (F R B L U D) with a ring of its
+/// neighbours' texels, assigned in its order (later assignments overwrite the corners).
+fn padded_faces(src: &[f32], n: usize, c: usize) -> Vec<f32> {
+    let m = n + 2;
+    let mut p = vec![0f32; 6 * m * m * c];
+    let idx = move |f: usize, r: usize, col: usize| ((f * m + r) * m + col) * c;
+    for f in 0..6 {
+        for r in 0..n {
+            let from = ((f * n + r) * n) * c;
+            let to = idx(f, r + 1, 1);
+            p[to..to + n * c].copy_from_slice(&src[from..from + n * c]);
+        }
+    }
+    // A row or column of the padded faces, read or written whole (m texels).
+    let line = |p: &[f32], f: usize, row: Option<usize>, col: Option<usize>, rev: bool| {
+        let mut v: Vec<f32> = Vec::with_capacity(m * c);
+        for i in 0..m {
+            let i = if rev { m - 1 - i } else { i };
+            let at = idx(f, row.unwrap_or(i), col.unwrap_or(i));
+            v.extend_from_slice(&p[at..at + c]);
+        }
+        v
+    };
+    let put = |p: &mut [f32], f: usize, row: Option<usize>, col: Option<usize>, v: &[f32]| {
+        for i in 0..m {
+            let at = idx(f, row.unwrap_or(i), col.unwrap_or(i));
+            p[at..at + c].copy_from_slice(&v[i * c..][..c]);
+        }
+    };
+    let (top, bottom, left, right, one, last) =
+        (Some(0), Some(m - 1), Some(0), Some(m - 1), Some(1), Some(n));
+    const F: usize = 0;
+    const R: usize = 1;
+    const B: usize = 2;
+    const L: usize = 3;
+    const U: usize = 4;
+    const D: usize = 5;
+    // (face, row or column written, source face, source row, source column, reversed)
+    let rows = [
+        (F, top, U, last, None, false),
+        (F, bottom, D, one, None, false),
+        (R, top, U, None, last, true),
+        (R, bottom, D, None, last, false),
+        (B, top, U, one, None, true),
+        (B, bottom, D, last, None, true),
+        (L, top, U, None, one, false),
+        (L, bottom, D, None, one, true),
+        (U, top, B, one, None, true),
+        (U, bottom, F, one, None, false),
+        (D, top, F, last, None, false),
+        (D, bottom, B, last, None, true),
+    ];
+    for (f, row, sf, sr, sc, rev) in rows {
+        let v = line(&p, sf, sr, sc, rev);
+        put(&mut p, f, row, None, &v);
+    }
+    let cols = [
+        (F, left, L, None, last, false),
+        (F, right, R, None, one, false),
+        (R, left, F, None, last, false),
+        (R, right, B, None, one, false),
+        (B, left, R, None, last, false),
+        (B, right, L, None, one, false),
+        (L, left, B, None, last, false),
+        (L, right, F, None, one, false),
+        (U, left, L, one, None, false),
+        (U, right, R, one, None, true),
+        (D, left, L, last, None, true),
+        (D, right, R, last, None, false),
+    ];
+    for (f, col, sf, sr, sc, rev) in cols {
+        let v = line(&p, sf, sr, sc, rev);
+        put(&mut p, f, None, col, &v);
+    }
+    p
+}
+
+/// Six faces (6, n, n, c) in F R B L U D order to a panorama (h, w, c).
+#[pyfunction]
+pub fn c2e_faces<'py>(
+    py: Python<'py>,
+    faces: PyReadonlyArray4<'py, f32>,
+    h: usize,
+    w: usize,
+    nearest: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let s = faces.shape();
+    let (n, c) = (s[1], s[3]);
+    if s[0] != 6 || s[2] != n || n == 0 || h == 0 || w == 0 || !w.is_multiple_of(8) {
+        return Err(crate::bad_arg(
+            py,
+            "c2e: six square faces, and w a multiple of 8",
+        ));
+    }
+    let src = faces
+        .as_slice()
+        .map_err(|e| crate::bad_arg(py, e.to_string()))?;
+    let mut out = vec![0f32; h * w * c];
+    py.detach(|| {
+        let p = padded_faces(src, n, c);
+        let tp = facetype(h, w);
+        let m = n + 2;
+        let half = n as f64 / 2.0;
+        out.par_chunks_mut(w * c)
+            .enumerate()
+            .for_each(|(row, line)| {
+                let v = if h > 1 {
+                    PI / 2.0 - PI * row as f64 / (h - 1) as f64
+                } else {
+                    PI / 2.0
+                };
+                let v = v as f32 as f64;
+                for (col, texel) in line.chunks_exact_mut(c).enumerate() {
+                    let u = if w > 1 {
+                        -PI + 2.0 * PI * col as f64 / (w - 1) as f64
+                    } else {
+                        -PI
+                    };
+                    let u = u as f32 as f64;
+                    let f = tp[row * w + col] as usize;
+                    let (x, y) = match f {
+                        0..=3 => {
+                            let a = u - PI / 2.0 * f as f64;
+                            (half * a.tan(), -half * (v as f32).tan() as f64 / a.cos())
+                        }
+                        4 => {
+                            let r = half * (PI / 2.0 - v).tan();
+                            (r * u.sin(), r * u.cos())
+                        }
+                        _ => {
+                            let r = half * (PI / 2.0 - v.abs()).tan();
+                            (r * u.sin(), -r * u.cos())
+                        }
+                    };
+                    let cx = ((x + half) as f32).clamp(0.0, n as f32) + 1.0;
+                    let cy = ((y + half) as f32).clamp(0.0, n as f32) + 1.0;
+                    taps(cy, cx, nearest, |ty, tx, wt| {
+                        let at = ((f * m + ty.min(m - 1)) * m + tx.min(m - 1)) * c;
+                        for (o, s) in texel.iter_mut().zip(&p[at..at + c]) {
+                            *o += wt * s;
+                        }
+                    });
+                }
+            });
+    });
+    Ok(PyArray1::from_vec(py, out).reshape([h, w, c])?.into_any())
+}
