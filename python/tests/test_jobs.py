@@ -93,3 +93,29 @@ def test_batch_runs_a_manifest_and_keeps_the_working_folder(tmp_path):
     cubeforge.batch(tmp_path / "m.toml")
     assert os.getcwd() == here
     assert (tmp_path / "sky.png").exists()
+
+
+def test_ctrl_c_stops_a_job_and_writes_nothing(tmp_path):
+    """SIGINT while a job runs: KeyboardInterrupt in Python, no output, the process goes on."""
+    import signal
+    import subprocess
+    import sys
+
+    out = tmp_path / "long.ktx2"
+    script = (
+        "import sys, cubeforge\n"
+        "first = []\n"
+        "def tell(done, total, label):\n"
+        "    if not first: first.append(1); print('started', flush=True)\n"
+        "try:\n"
+        f"    cubeforge.prefilter({SKY!r}, {str(out)!r}, filter='ggx', size=512, samples=4096, progress=tell)\n"
+        "    print('finished')\n"
+        "except KeyboardInterrupt:\n"
+        "    print('interrupted', flush=True)\n"
+    )
+    p = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "started"
+    p.send_signal(signal.SIGINT)
+    rest, _ = p.communicate(timeout=120)
+    assert rest.strip() == "interrupted" and p.returncode == 0
+    assert list(tmp_path.iterdir()) == []

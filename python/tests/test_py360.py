@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import cubeforge
-from conftest import REAL, need, psnr
+from conftest import REAL, REPO, need, psnr
 
 FORMATS = ["dice", "horizon", "list", "dict"]
 
@@ -91,3 +91,19 @@ def test_real_panoramas_within_40_db(path):
     db = psnr(back_theirs, back_ours)
     print(f"{path.name}: c2e {db:.1f} dB")
     assert db >= 40
+
+
+def test_py360_faces_are_cubeforges_faces():
+    """docs/python.md's table: F R B L U D are pz px nz nx py ny, the same way up (the grids
+    differ by py360convert's edge-to-edge sampling, so the faces agree to a blur, not a
+    texel)."""
+    pano = cubeforge.read(REPO / "fixtures" / "sky.exr")
+    ours = cubeforge.convert(pano, to="faces", size=64)[..., :3]
+    theirs = cubeforge.e2c(pano[..., :3], face_w=64, cube_format="dict")
+    names = ["px", "nx", "py", "ny", "pz", "nz"]
+    for key, name in zip("FRBLUD", ["pz", "px", "nz", "nx", "py", "ny"]):
+        db = psnr(ours[names.index(name)], theirs[key])
+        others = [psnr(ours[i], theirs[key]) for i in range(6) if names[i] != name]
+        assert db > 25 and db > max(others) + 5, (key, name, db, others)
+    cross = cubeforge.convert(pano, to="hcross", size=64)[..., :3]
+    assert psnr(cross, cubeforge.e2c(pano[..., :3], face_w=64)) > 25

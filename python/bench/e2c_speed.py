@@ -1,0 +1,52 @@
+"""cubeforge.e2c and c2e beside py360convert's, in one process (BENCHMARKS.md's Python section).
+
+    python python/bench/e2c_speed.py [PANORAMA] [RUNS]
+
+A 4096 x 2048 RGB float32 panorama (PANORAMA, default ../shared/fixtures/real/hdr/esplanade.hdr,
+resampled to that size by cubeforge) to six 1024 faces (dice), and those faces back to a
+4096 x 2048 panorama; best of RUNS (default 3) for each, the two libraries alternating, and
+the PSNR of cubeforge's result against py360convert's (on v/(1+v), peak 1).
+"""
+
+import os
+import pathlib
+import sys
+import time
+
+import numpy as np
+import py360convert
+
+import cubeforge
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+path = sys.argv[1] if len(sys.argv) > 1 else REPO.parent / "shared/fixtures/real/hdr/esplanade.hdr"
+runs = int(sys.argv[2]) if len(sys.argv) > 2 else 3
+pano = cubeforge.convert(cubeforge.read(path), to="equirect", size=1024)[..., :3].copy()
+assert pano.shape == (2048, 4096, 3)
+
+
+def best(f):
+    times = []
+    for _ in range(runs):
+        t = time.perf_counter()
+        out = f()
+        times.append(time.perf_counter() - t)
+    return min(times), out
+
+
+def psnr(a, b):
+    a, b = a / (1 + np.abs(a)), b / (1 + np.abs(b))
+    return 10 * np.log10(1 / np.mean((a.astype(np.float64) - b) ** 2))
+
+
+print(f"{os.path.basename(str(path))} as 4096 x 2048 RGB float32; best of {runs}; "
+      f"{os.cpu_count()} CPUs, RAYON_NUM_THREADS={os.environ.get('RAYON_NUM_THREADS', 'all')}")
+cubeforge.e2c(pano, 64)  # first call's one-time costs (thread pool) out of the timing
+t_py, faces_py = best(lambda: py360convert.e2c(pano, face_w=1024))
+t_cf, faces_cf = best(lambda: cubeforge.e2c(pano, face_w=1024))
+print(f"e2c 1024 faces: py360convert {t_py:.3f} s, cubeforge {t_cf:.3f} s, "
+      f"{t_py / t_cf:.1f}x, {psnr(faces_py, faces_cf):.1f} dB")
+t_py, back_py = best(lambda: py360convert.c2e(faces_py, 2048, 4096))
+t_cf, back_cf = best(lambda: cubeforge.c2e(faces_py, 2048, 4096))
+print(f"c2e 4096 x 2048: py360convert {t_py:.3f} s, cubeforge {t_cf:.3f} s, "
+      f"{t_py / t_cf:.1f}x, {psnr(back_py, back_cf):.1f} dB")
