@@ -31,6 +31,34 @@ fn taps(y: f32, x: f32, nearest: bool, mut sum: impl FnMut(usize, usize, f32)) {
     }
 }
 
+/// atan2 for f32 within a few units of the last place (Cephes' atanf after its range
+/// reduction), without libm's special cases.
+fn atan2(y: f32, x: f32) -> f32 {
+    use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+    let (ax, ay) = (x.abs(), y.abs());
+    let q = if ax == 0.0 { f32::INFINITY } else { ay / ax };
+    let (base, t) = if q > 2.414_213_5 {
+        (FRAC_PI_2, -1.0 / q)
+    } else if q > 0.414_213_57 {
+        (FRAC_PI_4, (q - 1.0) / (q + 1.0))
+    } else {
+        (0.0, q)
+    };
+    let z = t * t;
+    let p = (((8.053_744_5e-2 * z - 1.387_768_6e-1) * z + 1.997_771_1e-1) * z - 3.333_294_9e-1) * z;
+    let r = if ay == 0.0 && ax == 0.0 {
+        0.0
+    } else {
+        base + (p * t + t)
+    };
+    let r = if x.is_sign_negative() { PI - r } else { r };
+    if y.is_sign_negative() {
+        -r
+    } else {
+        r
+    }
+}
+
 /// Face texel (row, col) of face `f` (F R B L U D) as py360convert's `xyzcube` places it.
 fn cube_dir(f: usize, row: usize, col: usize, n: usize) -> [f32; 3] {
     let step = if n > 1 { 1.0 / (n - 1) as f32 } else { 0.0 };
@@ -81,15 +109,42 @@ pub fn e2c_faces<'py>(
             };
             &src[(row * w + col) * c..][..c]
         };
+        let (wf, hf) = (w as f32, h as f32);
+        let to_cx = |u: f32| (u * (0.5 / std::f32::consts::PI) + 0.5) * wf + 0.5;
+        let to_cy = |v: f32| (-v * std::f32::consts::FRAC_1_PI + 0.5) * hf + 0.5;
+        // The side faces' columns: u and the distance from the axis are the same on every
+        // row (one atan2 a texel left).
+        let side: Vec<(f32, f32)> = (0..4 * n)
+            .map(|i| {
+                let [x, _, z] = cube_dir(i / n, 0, i % n, n);
+                (to_cx(atan2(x, z)), (x * x + z * z).sqrt())
+            })
+            .collect();
         out.par_chunks_mut(6 * n * c)
             .enumerate()
             .for_each(|(row, line)| {
+                let y_side = cube_dir(0, row, 0, n)[1];
                 for (col6, texel) in line.chunks_exact_mut(c).enumerate() {
-                    let [x, y, z] = cube_dir(col6 / n, row, col6 % n, n);
-                    let u = x.atan2(z);
-                    let v = y.atan2(x.hypot(z));
-                    let cx = (u / (2.0 * std::f32::consts::PI) + 0.5) * w as f32 - 0.5 + 1.0;
-                    let cy = (-v / std::f32::consts::PI + 0.5) * h as f32 - 0.5 + 1.0;
+                    let (cx, cy) = if col6 < 4 * n {
+                        let (cx, r) = side[col6];
+                        (cx, to_cy(atan2(y_side, r)))
+                    } else {
+                        let [x, y, z] = cube_dir(col6 / n, row, col6 % n, n);
+                        (to_cx(atan2(x, z)), to_cy(atan2(y, (x * x + z * z).sqrt())))
+                    };
+                    let (x0, y0) = (cx.floor(), cy.floor());
+                    // Inside the image (padded texels 1..=w, 1..=h): read it directly.
+                    if !nearest && x0 >= 1.0 && x0 < wf && y0 >= 1.0 && y0 < hf {
+                        let (fx, fy) = (cx - x0, cy - y0);
+                        let i = ((y0 as usize - 1) * w + x0 as usize - 1) * c;
+                        let (a, b) = (&src[i..i + 2 * c], &src[i + w * c..i + w * c + 2 * c]);
+                        for (k, o) in texel.iter_mut().enumerate() {
+                            let top = a[k] + fx * (a[c + k] - a[k]);
+                            let bottom = b[k] + fx * (b[c + k] - b[k]);
+                            *o = top + fy * (bottom - top);
+                        }
+                        continue;
+                    }
                     taps(cy, cx, nearest, |ty, tx, wt| {
                         for (o, s) in texel.iter_mut().zip(at(ty.min(h + 1), tx.min(w + 1))) {
                             *o += wt * s;
