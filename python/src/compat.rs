@@ -91,7 +91,10 @@ pub fn e2c_faces<'py>(
         .as_slice()
         .map_err(|e| crate::bad_arg(py, e.to_string()))?;
     let n = face_w;
-    let mut out = vec![0f32; n * 6 * n * c];
+    // Every texel is written whole below: no zeroing pass over the faces first (it was an
+    // eighth of the time, as the first touch of fresh pages).
+    let len = n * 6 * n * c;
+    let mut out: Vec<f32> = Vec::with_capacity(len);
     py.detach(|| {
         // py360convert pads the panorama by a texel: its top and bottom rows turned half a
         // turn, its columns wrapped. `at` reads that padded image.
@@ -120,7 +123,8 @@ pub fn e2c_faces<'py>(
                 (to_cx(atan2(x, z)), (x * x + z * z).sqrt())
             })
             .collect();
-        out.par_chunks_mut(6 * n * c)
+        out.spare_capacity_mut()[..len]
+            .par_chunks_mut(6 * n * c)
             .enumerate()
             .for_each(|(row, line)| {
                 let y_side = cube_dir(0, row, 0, n)[1];
@@ -132,7 +136,8 @@ pub fn e2c_faces<'py>(
                         let [x, y, z] = cube_dir(col6 / n, row, col6 % n, n);
                         (to_cx(atan2(x, z)), to_cy(atan2(y, (x * x + z * z).sqrt())))
                     };
-                    let (x0, y0) = (cx.floor(), cy.floor());
+                    // cx and cy are at least 0.5: truncation is the floor.
+                    let (x0, y0) = ((cx as usize) as f32, (cy as usize) as f32);
                     // Inside the image (padded texels 1..=w, 1..=h): read it directly.
                     if !nearest && x0 >= 1.0 && x0 < wf && y0 >= 1.0 && y0 < hf {
                         let (fx, fy) = (cx - x0, cy - y0);
@@ -141,18 +146,24 @@ pub fn e2c_faces<'py>(
                         for (k, o) in texel.iter_mut().enumerate() {
                             let top = a[k] + fx * (a[c + k] - a[k]);
                             let bottom = b[k] + fx * (b[c + k] - b[k]);
-                            *o = top + fy * (bottom - top);
+                            o.write(top + fy * (bottom - top));
                         }
                         continue;
                     }
+                    let mut tapped: [(&[f32], f32); 4] = [(&[], 0.0); 4];
+                    let mut count = 0;
                     taps(cy, cx, nearest, |ty, tx, wt| {
-                        for (o, s) in texel.iter_mut().zip(at(ty.min(h + 1), tx.min(w + 1))) {
-                            *o += wt * s;
-                        }
+                        tapped[count] = (at(ty.min(h + 1), tx.min(w + 1)), wt);
+                        count += 1;
                     });
+                    for (k, o) in texel.iter_mut().enumerate() {
+                        o.write(tapped[..count].iter().map(|(t, wt)| wt * t[k]).sum());
+                    }
                 }
             });
     });
+    // SAFETY: the loop above wrote every one of the `len` floats (each texel whole).
+    unsafe { out.set_len(len) };
     Ok(PyArray1::from_vec(py, out)
         .reshape([n, 6 * n, c])?
         .into_any())
