@@ -116,25 +116,40 @@ pub fn e2c_faces<'py>(
         let to_cx = |u: f32| (u * (0.5 / std::f32::consts::PI) + 0.5) * wf + 0.5;
         let to_cy = |v: f32| (-v * std::f32::consts::FRAC_1_PI + 0.5) * hf + 0.5;
         // The side faces' columns: u and the distance from the axis are the same on every
-        // row (one atan2 a texel left).
+        // row, and the distance is the same on all four faces (their grids are one grid
+        // turned), so a row's v is one atan2 a column for the four.
         let side: Vec<(f32, f32)> = (0..4 * n)
             .map(|i| {
                 let [x, _, z] = cube_dir(i / n, 0, i % n, n);
                 (to_cx(atan2(x, z)), (x * x + z * z).sqrt())
             })
             .collect();
+        // U's (u, v) a texel; D's row r is U's row n - 1 - r with v negated.
+        let mut up = vec![(0f32, 0f32); n * n];
+        up.par_chunks_mut(n).enumerate().for_each(|(row, line)| {
+            for (col, uv) in line.iter_mut().enumerate() {
+                let [x, y, z] = cube_dir(4, row, col, n);
+                *uv = (atan2(x, z), atan2(y, (x * x + z * z).sqrt()));
+            }
+        });
         out.spare_capacity_mut()[..len]
             .par_chunks_mut(6 * n * c)
             .enumerate()
             .for_each(|(row, line)| {
                 let y_side = cube_dir(0, row, 0, n)[1];
+                let side_cy: Vec<f32> = side[..n]
+                    .iter()
+                    .map(|&(_, r)| to_cy(atan2(y_side, r)))
+                    .collect();
                 for (col6, texel) in line.chunks_exact_mut(c).enumerate() {
                     let (cx, cy) = if col6 < 4 * n {
-                        let (cx, r) = side[col6];
-                        (cx, to_cy(atan2(y_side, r)))
+                        (side[col6].0, side_cy[col6 % n])
+                    } else if col6 < 5 * n {
+                        let (u, v) = up[row * n + col6 - 4 * n];
+                        (to_cx(u), to_cy(v))
                     } else {
-                        let [x, y, z] = cube_dir(col6 / n, row, col6 % n, n);
-                        (to_cx(atan2(x, z)), to_cy(atan2(y, (x * x + z * z).sqrt())))
+                        let (u, v) = up[(n - 1 - row) * n + col6 - 5 * n];
+                        (to_cx(u), to_cy(-v))
                     };
                     // cx and cy are at least 0.5: truncation is the floor.
                     let (x0, y0) = ((cx as usize) as f32, (cy as usize) as f32);
