@@ -184,6 +184,16 @@ pub fn e2c_faces<'py>(
         .into_any())
 }
 
+/// The side face (0 F, 1 R, 2 B, 3 L) of panorama column `j` of `w` in py360convert's masks.
+fn band_of(j: usize, w: usize) -> u8 {
+    let (w4, w8) = (w / 4, w / 8);
+    if j < w8 {
+        2
+    } else {
+        [3, 0, 1, 2][((j - w8) / w4.max(1)).min(3)]
+    }
+}
+
 /// py360convert's `equirect_facetype`: which face (0 F, 1 R, 2 B, 3 L, 4 U, 5 D) each
 /// panorama texel reads (its rounded ceiling, to the texel).
 fn facetype(h: usize, w: usize) -> Vec<u8> {
@@ -200,11 +210,7 @@ fn facetype(h: usize, w: usize) -> Vec<u8> {
         .collect();
     let mut tp = vec![0u8; h * w];
     for j in 0..w {
-        let band = if j < w8 {
-            2
-        } else {
-            [3, 0, 1, 2][((j - w8) / w4.max(1)).min(3)]
-        };
+        let band = band_of(j, w);
         let k = (j + w4 - w8 % w4.max(1)) % w4.max(1);
         for r in 0..h {
             let mut f = band;
@@ -323,6 +329,20 @@ pub fn c2e_faces<'py>(
         let tp = facetype(h, w);
         let m = n + 2;
         let half = n as f64 / 2.0;
+        // Every sine, cosine and tangent depends on the column alone (u, its side face) or on
+        // the row alone (v): computed once each, as py360convert computes them.
+        let cols: Vec<[f64; 4]> = (0..w)
+            .map(|col| {
+                let u = if w > 1 {
+                    -PI + 2.0 * PI * col as f64 / (w - 1) as f64
+                } else {
+                    -PI
+                };
+                let u = u as f32 as f64;
+                let a = u - PI / 2.0 * band_of(col, w) as f64;
+                [half * a.tan(), a.cos(), u.sin(), u.cos()]
+            })
+            .collect();
         out.par_chunks_mut(w * c)
             .enumerate()
             .for_each(|(row, line)| {
@@ -332,27 +352,18 @@ pub fn c2e_faces<'py>(
                     PI / 2.0
                 };
                 let v = v as f32 as f64;
+                let tan_v = (v as f32).tan() as f64;
+                let (r_up, r_down) = (
+                    half * (PI / 2.0 - v).tan(),
+                    half * (PI / 2.0 - v.abs()).tan(),
+                );
                 for (col, texel) in line.chunks_exact_mut(c).enumerate() {
-                    let u = if w > 1 {
-                        -PI + 2.0 * PI * col as f64 / (w - 1) as f64
-                    } else {
-                        -PI
-                    };
-                    let u = u as f32 as f64;
+                    let [x_side, cos_a, sin_u, cos_u] = cols[col];
                     let f = tp[row * w + col] as usize;
                     let (x, y) = match f {
-                        0..=3 => {
-                            let a = u - PI / 2.0 * f as f64;
-                            (half * a.tan(), -half * (v as f32).tan() as f64 / a.cos())
-                        }
-                        4 => {
-                            let r = half * (PI / 2.0 - v).tan();
-                            (r * u.sin(), r * u.cos())
-                        }
-                        _ => {
-                            let r = half * (PI / 2.0 - v.abs()).tan();
-                            (r * u.sin(), -r * u.cos())
-                        }
+                        0..=3 => (x_side, -half * tan_v / cos_a),
+                        4 => (r_up * sin_u, r_up * cos_u),
+                        _ => (r_down * sin_u, -r_down * cos_u),
                     };
                     let cx = ((x + half) as f32).clamp(0.0, n as f32) + 1.0;
                     let cy = ((y + half) as f32).clamp(0.0, n as f32) + 1.0;
