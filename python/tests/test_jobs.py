@@ -57,7 +57,7 @@ def test_a_raising_callback_stops_the_job_and_writes_nothing(tmp_path):
 
 def test_info_lut_preview_convert(tmp_path):
     d = cubeforge.info(SKY)
-    assert d["layout"] == "equirect" if "layout" in d else isinstance(d, dict)
+    assert d["kind"] == "equirect" and d["width"] == 512
     lut = tmp_path / "lut.png"
     cubeforge.lut(lut, size=16)
     assert lut.exists()
