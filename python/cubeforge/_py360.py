@@ -58,9 +58,13 @@ def e2c(e_img: np.ndarray, face_w: int = 256, mode: str = "bilinear",
         raise ValueError("e_img must have 2 or 3 dimensions.")
     squeeze = e_img.ndim == 2
     src = e_img[..., None] if squeeze else e_img
-    horizon = _cubeforge.e2c_faces(_as_float(src), int(face_w), _nearest(mode))
-    horizon = _back(horizon, e_img.dtype)
     w = int(face_w)
+    if cube_format == "dice":
+        # Laid out as a dice by cubeforge itself: no row of faces copied into it after.
+        dice = _back(_cubeforge.e2c_faces(_as_float(src), w, _nearest(mode), True), e_img.dtype)
+        return dice[..., 0] if squeeze else dice
+    horizon = _cubeforge.e2c_faces(_as_float(src), w, _nearest(mode), False)
+    horizon = _back(horizon, e_img.dtype)
     faces = [horizon[:, i * w:(i + 1) * w] for i in range(6)]
     if squeeze:
         faces = [f[..., 0] for f in faces]
@@ -71,11 +75,6 @@ def e2c(e_img: np.ndarray, face_w: int = 256, mode: str = "bilinear",
         return faces
     if cube_format == "dict":
         return dict(zip(_KEYS, faces))
-    if cube_format == "dice":
-        dice = np.zeros((w * 3, w * 4) + faces[0].shape[2:], dtype=horizon.dtype)
-        for (sx, sy), face in zip(_DICE, faces):
-            dice[sy * w:(sy + 1) * w, sx * w:(sx + 1) * w] = face
-        return dice
     raise NotImplementedError
 
 

@@ -75,113 +75,188 @@ fn cube_dir(f: usize, row: usize, col: usize, n: usize) -> [f32; 3] {
     }
 }
 
-/// A panorama (h, w, c) to six faces of edge `face_w` in one row (face_w, 6 face_w, c).
+/// py360convert's e2c sampler of one panorama: its geometry computed once.
+struct E2c<'a> {
+    src: &'a [f32],
+    h: usize,
+    w: usize,
+    c: usize,
+    n: usize,
+    nearest: bool,
+    /// The side faces' columns (face * n + col): the panorama column and the distance from
+    /// the axis, the same on every row; the distance is the same on all four faces (their
+    /// grids are one grid turned), so a row's v is one atan2 a column for the four.
+    side: Vec<(f32, f32)>,
+    /// U's (u, v) a texel; D's row r is U's row n - 1 - r with v negated.
+    up: Vec<(f32, f32)>,
+}
+
+impl E2c<'_> {
+    fn to_cx(&self, u: f32) -> f32 {
+        (u * (0.5 / std::f32::consts::PI) + 0.5) * self.w as f32 + 0.5
+    }
+
+    fn to_cy(&self, v: f32) -> f32 {
+        (-v * std::f32::consts::FRAC_1_PI + 0.5) * self.h as f32 + 0.5
+    }
+
+    fn new(src: &[f32], [h, w, c]: [usize; 3], n: usize, nearest: bool) -> E2c<'_> {
+        let mut e = E2c {
+            src,
+            h,
+            w,
+            c,
+            n,
+            nearest,
+            side: Vec::new(),
+            up: vec![(0.0, 0.0); n * n],
+        };
+        e.side = (0..4 * n)
+            .map(|i| {
+                let [x, _, z] = cube_dir(i / n, 0, i % n, n);
+                (e.to_cx(atan2(x, z)), (x * x + z * z).sqrt())
+            })
+            .collect();
+        e.up.par_chunks_mut(n).enumerate().for_each(|(row, line)| {
+            for (col, uv) in line.iter_mut().enumerate() {
+                let [x, y, z] = cube_dir(4, row, col, n);
+                *uv = (atan2(x, z), atan2(y, (x * x + z * z).sqrt()));
+            }
+        });
+        e
+    }
+
+    /// A texel of py360convert's padded panorama (a texel more each side: its top and
+    /// bottom rows turned half a turn, its columns wrapped).
+    fn at(&self, py_: usize, px: usize) -> &[f32] {
+        let (h, w) = (self.h, self.w);
+        let px = match px {
+            0 => w,
+            p if p == w + 1 => 1,
+            p => p,
+        };
+        let ix = px - 1;
+        let (row, col) = match py_ {
+            0 => (0, (ix + w - w / 2) % w),
+            p if p == h + 1 => (h - 1, (ix + w - w / 2) % w),
+            p => (p - 1, ix),
+        };
+        &self.src[(row * w + col) * self.c..][..self.c]
+    }
+
+    /// The side faces' v on face row `row`, a column each.
+    fn side_row(&self, row: usize) -> Vec<f32> {
+        let y = cube_dir(0, row, 0, self.n)[1];
+        self.side[..self.n]
+            .iter()
+            .map(|&(_, r)| self.to_cy(atan2(y, r)))
+            .collect()
+    }
+
+    /// Row `row` of face `face` into `seg` (n texels); `side_cy` from [`E2c::side_row`].
+    fn fill(&self, face: usize, row: usize, seg: &mut [f32], side_cy: &[f32]) {
+        let (n, c, w) = (self.n, self.c, self.w);
+        let (wf, hf) = (w as f32, self.h as f32);
+        for (col, texel) in seg.chunks_exact_mut(c).enumerate() {
+            let (cx, cy) = match face {
+                0..=3 => (self.side[face * n + col].0, side_cy[col]),
+                4 => {
+                    let (u, v) = self.up[row * n + col];
+                    (self.to_cx(u), self.to_cy(v))
+                }
+                _ => {
+                    let (u, v) = self.up[(n - 1 - row) * n + col];
+                    (self.to_cx(u), self.to_cy(-v))
+                }
+            };
+            // cx and cy are at least 0.5: truncation is the floor.
+            let (x0, y0) = ((cx as usize) as f32, (cy as usize) as f32);
+            // Inside the image (padded texels 1..=w, 1..=h): read it directly.
+            if !self.nearest && x0 >= 1.0 && x0 < wf && y0 >= 1.0 && y0 < hf {
+                let (fx, fy) = (cx - x0, cy - y0);
+                let i = ((y0 as usize - 1) * w + x0 as usize - 1) * c;
+                let (a, b) = (
+                    &self.src[i..i + 2 * c],
+                    &self.src[i + w * c..i + w * c + 2 * c],
+                );
+                for (k, o) in texel.iter_mut().enumerate() {
+                    let top = a[k] + fx * (a[c + k] - a[k]);
+                    let bottom = b[k] + fx * (b[c + k] - b[k]);
+                    *o = top + fy * (bottom - top);
+                }
+                continue;
+            }
+            let mut tapped: [(&[f32], f32); 4] = [(&[], 0.0); 4];
+            let mut count = 0;
+            taps(cy, cx, self.nearest, |ty, tx, wt| {
+                tapped[count] = (self.at(ty.min(self.h + 1), tx.min(w + 1)), wt);
+                count += 1;
+            });
+            for (k, o) in texel.iter_mut().enumerate() {
+                *o = tapped[..count].iter().map(|(t, wt)| wt * t[k]).sum();
+            }
+        }
+    }
+}
+
+/// A panorama (h, w, c) to six faces of edge `face_w` in one row (face_w, 6 face_w, c), or
+/// laid out as py360convert's dice (3 face_w, 4 face_w, c) with `dice`.
 #[pyfunction]
 pub fn e2c_faces<'py>(
     py: Python<'py>,
     e_img: PyReadonlyArray3<'py, f32>,
     face_w: usize,
     nearest: bool,
+    dice: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let [h, w, c] = [e_img.shape()[0], e_img.shape()[1], e_img.shape()[2]];
-    if face_w == 0 || h == 0 || w == 0 {
+    let shape = [e_img.shape()[0], e_img.shape()[1], e_img.shape()[2]];
+    if face_w == 0 || shape[0] == 0 || shape[1] == 0 {
         return Err(crate::bad_arg(py, "e2c: an empty panorama or face_w=0"));
     }
     let src = e_img
         .as_slice()
         .map_err(|e| crate::bad_arg(py, e.to_string()))?;
-    let n = face_w;
-    // Every texel is written whole below: no zeroing pass over the faces first (it was an
-    // eighth of the time, as the first touch of fresh pages).
-    let len = n * 6 * n * c;
-    let mut out: Vec<f32> = Vec::with_capacity(len);
+    let (n, c) = (face_w, shape[2]);
+    let cell = n * c;
+    // Zeroed by the allocator (fresh pages, zero until written): a dice's empty cells are
+    // never touched.
+    let mut out = vec![0f32; if dice { 12 * n * cell } else { 6 * n * cell }];
     py.detach(|| {
-        // py360convert pads the panorama by a texel: its top and bottom rows turned half a
-        // turn, its columns wrapped. `at` reads that padded image.
-        let at = |py_: usize, px: usize| -> &[f32] {
-            let px = match px {
-                0 => w,
-                p if p == w + 1 => 1,
-                p => p,
-            };
-            let ix = px - 1;
-            let (row, col) = match py_ {
-                0 => (0, (ix + w - w / 2) % w),
-                p if p == h + 1 => (h - 1, (ix + w - w / 2) % w),
-                p => (p - 1, ix),
-            };
-            &src[(row * w + col) * c..][..c]
-        };
-        let (wf, hf) = (w as f32, h as f32);
-        let to_cx = |u: f32| (u * (0.5 / std::f32::consts::PI) + 0.5) * wf + 0.5;
-        let to_cy = |v: f32| (-v * std::f32::consts::FRAC_1_PI + 0.5) * hf + 0.5;
-        // The side faces' columns: u and the distance from the axis are the same on every
-        // row, and the distance is the same on all four faces (their grids are one grid
-        // turned), so a row's v is one atan2 a column for the four.
-        let side: Vec<(f32, f32)> = (0..4 * n)
-            .map(|i| {
-                let [x, _, z] = cube_dir(i / n, 0, i % n, n);
-                (to_cx(atan2(x, z)), (x * x + z * z).sqrt())
-            })
-            .collect();
-        // U's (u, v) a texel; D's row r is U's row n - 1 - r with v negated.
-        let mut up = vec![(0f32, 0f32); n * n];
-        up.par_chunks_mut(n).enumerate().for_each(|(row, line)| {
-            for (col, uv) in line.iter_mut().enumerate() {
-                let [x, y, z] = cube_dir(4, row, col, n);
-                *uv = (atan2(x, z), atan2(y, (x * x + z * z).sqrt()));
-            }
-        });
-        out.spare_capacity_mut()[..len]
-            .par_chunks_mut(6 * n * c)
-            .enumerate()
-            .for_each(|(row, line)| {
-                let y_side = cube_dir(0, row, 0, n)[1];
-                let side_cy: Vec<f32> = side[..n]
-                    .iter()
-                    .map(|&(_, r)| to_cy(atan2(y_side, r)))
-                    .collect();
-                for (col6, texel) in line.chunks_exact_mut(c).enumerate() {
-                    let (cx, cy) = if col6 < 4 * n {
-                        (side[col6].0, side_cy[col6 % n])
-                    } else if col6 < 5 * n {
-                        let (u, v) = up[row * n + col6 - 4 * n];
-                        (to_cx(u), to_cy(v))
-                    } else {
-                        let (u, v) = up[(n - 1 - row) * n + col6 - 5 * n];
-                        (to_cx(u), to_cy(-v))
-                    };
-                    // cx and cy are at least 0.5: truncation is the floor.
-                    let (x0, y0) = ((cx as usize) as f32, (cy as usize) as f32);
-                    // Inside the image (padded texels 1..=w, 1..=h): read it directly.
-                    if !nearest && x0 >= 1.0 && x0 < wf && y0 >= 1.0 && y0 < hf {
-                        let (fx, fy) = (cx - x0, cy - y0);
-                        let i = ((y0 as usize - 1) * w + x0 as usize - 1) * c;
-                        let (a, b) = (&src[i..i + 2 * c], &src[i + w * c..i + w * c + 2 * c]);
-                        for (k, o) in texel.iter_mut().enumerate() {
-                            let top = a[k] + fx * (a[c + k] - a[k]);
-                            let bottom = b[k] + fx * (b[c + k] - b[k]);
-                            o.write(top + fy * (bottom - top));
+        let e = E2c::new(src, shape, n, nearest);
+        if dice {
+            // py360convert's dice: U above F, then L F R B, then D below F.
+            out.par_chunks_mut(4 * cell)
+                .enumerate()
+                .for_each(|(r, line)| {
+                    let (band, row) = (r / n, r % n);
+                    match band {
+                        0 => e.fill(4, row, &mut line[cell..2 * cell], &[]),
+                        1 => {
+                            let cy = e.side_row(row);
+                            for (i, face) in [3, 0, 1, 2].into_iter().enumerate() {
+                                e.fill(face, row, &mut line[i * cell..(i + 1) * cell], &cy);
+                            }
                         }
-                        continue;
+                        _ => e.fill(5, row, &mut line[cell..2 * cell], &[]),
                     }
-                    let mut tapped: [(&[f32], f32); 4] = [(&[], 0.0); 4];
-                    let mut count = 0;
-                    taps(cy, cx, nearest, |ty, tx, wt| {
-                        tapped[count] = (at(ty.min(h + 1), tx.min(w + 1)), wt);
-                        count += 1;
-                    });
-                    for (k, o) in texel.iter_mut().enumerate() {
-                        o.write(tapped[..count].iter().map(|(t, wt)| wt * t[k]).sum());
+                });
+        } else {
+            out.par_chunks_mut(6 * cell)
+                .enumerate()
+                .for_each(|(row, line)| {
+                    let cy = e.side_row(row);
+                    for (face, seg) in line.chunks_exact_mut(cell).enumerate() {
+                        e.fill(face, row, seg, &cy);
                     }
-                }
-            });
+                });
+        }
     });
-    // SAFETY: the loop above wrote every one of the `len` floats (each texel whole).
-    unsafe { out.set_len(len) };
-    Ok(PyArray1::from_vec(py, out)
-        .reshape([n, 6 * n, c])?
-        .into_any())
+    let shape = if dice {
+        [3 * n, 4 * n, c]
+    } else {
+        [n, 6 * n, c]
+    };
+    Ok(PyArray1::from_vec(py, out).reshape(shape)?.into_any())
 }
 
 /// The side face (0 F, 1 R, 2 B, 3 L) of panorama column `j` of `w` in py360convert's masks.
