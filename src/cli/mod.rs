@@ -19,6 +19,8 @@ mod serve;
 mod signals;
 mod view;
 
+#[allow(unused_imports)] // the Python package's way in (python/src/run.rs)
+pub use batch::{job_of_words, run_words};
 use clap::{Parser, Subcommand};
 use cubeforge::internals::tonemap::Tonemap;
 pub use observer::Observer;
@@ -438,7 +440,7 @@ pub fn gloss_bias(s: &str) -> Result<f32, String> {
 }
 
 /// A clap error on one line: the message and clap's tip, without the usage block.
-fn one_line(e: &clap::Error) -> String {
+pub(crate) fn one_line(e: &clap::Error) -> String {
     let text = e.render().to_string();
     let parts: Vec<&str> = text
         .lines()

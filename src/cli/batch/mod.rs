@@ -106,6 +106,25 @@ fn job_of(parser: &mut clap::Command, argv: &[String]) -> Result<Box<dyn Job + S
     })
 }
 
+/// The job a command line (its words after `cubeforge`) describes, built as a manifest's
+/// are: the Python package (python/, which compiles the command line in) runs the CLI's own
+/// jobs from keyword arguments named as its flags.
+#[allow(dead_code)]
+pub fn job_of_words(argv: &[String]) -> Result<Box<dyn Job + Send + Sync>> {
+    job_of(&mut <Cli as clap::CommandFactory>::command(), argv)
+}
+
+/// A command line (its words after `cubeforge`) parsed and run as the command runs it,
+/// printing what it prints: the Python package's `batch`.
+#[allow(dead_code)]
+pub fn run_words(argv: &[String]) -> Result<()> {
+    let words = std::iter::once("cubeforge").chain(argv.iter().map(String::as_str));
+    let cli = <Cli as clap::Parser>::try_parse_from(words)
+        .map_err(|e| Error::usage(super::one_line(&e)))?;
+    super::QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
+    super::dispatch(cli)
+}
+
 /// A job that cannot even be built (a bad flag) fails alone, as a job that runs and fails.
 struct Unbuilt(String, cubeforge::Limits);
 
