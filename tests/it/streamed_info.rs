@@ -49,11 +49,7 @@ fn panorama(path: &Path, w: usize, h: usize) {
 /// The report without its sun and lights (a streamed panorama's come from a reduced cube,
 /// see `info/stream.rs`), after checking that the streamed sun is the whole read's: the same
 /// presence, direction within 0.5 degree, irradiance within 5% of its largest channel.
-fn without_sun(
-    v: serde_json::Value,
-    whole: &serde_json::Value,
-    what: &str,
-) -> serde_json::Value {
+fn without_sun(v: serde_json::Value, whole: &serde_json::Value, what: &str) -> serde_json::Value {
     let (got, want) = (&v["sun"], &whole["sun"]);
     assert_eq!(got.is_null(), want.is_null(), "{what}: {got} vs {want}");
     if !got.is_null() {
