@@ -170,6 +170,7 @@ const TARGETS: [(&str, &str); 9] = [
 fn each_targets_light_shines_from_its_sun() {
     let dir = tempfile::tempdir().unwrap();
     let input = sky_with_sun(dir.path());
+    let mut offs: Vec<f32> = Vec::new();
     let small = [
         "--size",
         "64",
@@ -205,6 +206,7 @@ fn each_targets_light_shines_from_its_sun() {
                 off < 1.0,
                 "{target} --yaw {yaw}: {off} degrees off ({w} in the world)"
             );
+            offs.push(off);
             let json: serde_json::Value =
                 serde_json::from_slice(&std::fs::read(lit.join("sun.json")).unwrap()).unwrap();
             let e = &json["engine_direction"];
@@ -219,6 +221,11 @@ fn each_targets_light_shines_from_its_sun() {
             );
         }
     }
+    let (lo, hi) = offs
+        .iter()
+        .fold((f32::MAX, 0.0f32), |(a, b), &o| (a.min(o), b.max(o)));
+    let text = format!("the light {lo:.2} to {hi:.2} degrees from that disc");
+    crate::figures::check("docs/engines.md", "sun targets", &text);
 }
 
 /// The known disc: found within 0.5 degree, its irradiance within 3%, gone from the maps, and
@@ -258,6 +265,7 @@ fn the_sun_leaves_the_maps_with_its_light() {
     };
     let spec = read_cube(&out.join("env_specular.ktx2"));
     let four_pi = 4.0 * std::f64::consts::PI;
+    let mut flux_off = 0.0f64;
     for c in 0..3 {
         let got = common::sphere_mean(&spec.levels[0], c);
         let want = source[c] - e[c] / four_pi;
@@ -269,7 +277,19 @@ fn the_sun_leaves_the_maps_with_its_light() {
             (got / want - 1.0).abs() < 0.005,
             "channel {c}: {got} vs {want}"
         );
+        flux_off = flux_off.max((got / want - 1.0).abs());
     }
+    let e_off = (0..3)
+        .map(|c| (e[c] / want[c] - 1.0).abs())
+        .fold(0.0, f64::max);
+    let text = format!(
+        "direction {:.3} degrees off, irradiance within {:.2}%, the chain's flux the source's less \
+         the sun's irradiance over 4 pi within {:.3}%",
+        off.to_degrees(),
+        e_off * 100.0,
+        flux_off * 100.0
+    );
+    crate::figures::check("docs/engines.md", "sun disc", &text);
     let top = spec.levels[0]
         .iter()
         .flat_map(|f| &f.pixels)
@@ -345,4 +365,12 @@ fn three_renders_the_suns_shadow() {
     assert!(off < 0.08, "{v}");
     assert!(shade("sun") < 0.5, "no shadow: {v}");
     assert!(shade("full") > 0.8, "{v}");
+    let text = format!(
+        "the sphere {:.1}% apart, the ground in the sun's shadow {:.2} of the sunlit ground beside \
+         it (the full map: {:.2})",
+        off * 100.0,
+        shade("sun"),
+        shade("full")
+    );
+    crate::figures::check("docs/engines.md", "sun three", &text);
 }
