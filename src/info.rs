@@ -16,7 +16,9 @@ use serde::Serialize;
 use std::path::Path;
 
 mod stream;
+pub mod sun;
 mod tally;
+pub use sun::LightInfo;
 use tally::Tally;
 
 /// Value statistics of a file's texels, as `cubeforge info` prints them.
@@ -104,6 +106,12 @@ pub struct Report {
     /// `NAME.dds.levels.json` sidecar), as `cubeforge prefilter` wrote it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub levels: Option<LevelsFile>,
+    /// The map's sun (JSON null when it has none, or no known layout): see
+    /// [`crate::flux::sun`] for the threshold that tells a sun from a sky.
+    pub sun: Option<LightInfo>,
+    /// The other compact lights (lamps, a second bright patch), brightest first.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub lights: Vec<LightInfo>,
 }
 
 /// Statistics over images; luminance ignores non-finite values. Each row is summed on its own
@@ -285,6 +293,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
             let n = cube.size();
             let mut stats = stats(cube.levels[0].iter());
             let bad_levels = count_levels(&cube.levels, &mut stats);
+            let (sun, lights) = sun::of_faces(&cube.levels[0]);
             Report {
                 file,
                 file_format: meta.file_format,
@@ -303,6 +312,8 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 bad_levels,
                 flux: Some(cube_flux(&cube.levels[0])),
                 levels: chain::container_levels(path, meta.file_format, opts.limits.session),
+                sun,
+                lights,
             }
         }
         Decoded::Image(img) => {
@@ -335,6 +346,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                     Err(e) => (None, Some(e)),
                 },
             };
+            let (sun, lights) = sun::of_image(kind, &img);
             Report {
                 file,
                 file_format: meta.file_format,
@@ -354,6 +366,8 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 bad_levels: Vec::new(),
                 flux: kind.and_then(|k| image_flux(k, &img)),
                 levels: None,
+                sun,
+                lights,
             }
         }
     })
@@ -398,6 +412,7 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
     let n = base[0].width;
     let mut stats = stats(base.iter());
     let bad_levels = count_levels(&cube.levels, &mut stats);
+    let (sun, lights) = sun::of_faces(base);
     Ok(Report {
         file: dir.display().to_string(),
         file_format: meta.file_format,
@@ -416,6 +431,8 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
         bad_levels,
         flux: Some(cube_flux(base)),
         levels,
+        sun,
+        lights,
     })
 }
 
@@ -518,6 +535,7 @@ impl std::fmt::Display for Report {
                 f,
                 "\n  flux:         {r:.6} {g:.6} {b:.6} (mean radiance over the sphere)"
             )?;
+            sun::lines(f, self.sun.as_ref(), &self.lights)?;
         }
         for l in self.levels.iter().flat_map(|d| &d.levels) {
             let what = match (l.roughness, l.power, l.sigma) {

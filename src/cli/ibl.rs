@@ -47,6 +47,11 @@ pub struct Args {
     /// gltf: also write the Charlie (sheen) chain.
     #[arg(long)]
     pub sheen: bool,
+    /// Take the sun out of the maps (replaced by the sky around it) and add a directional
+    /// light in its place to the snippet, with sun.json beside the files (a map with no sun:
+    /// the maps as they are, no light).
+    #[arg(long)]
+    pub sun: bool,
     #[command(flatten)]
     pub exposure: super::ExposureArg,
     #[command(flatten)]
@@ -97,6 +102,7 @@ pub fn job(a: Args) -> Result<IblJob> {
             },
             sheen: a.sheen,
             yaw: a.yaw,
+            sun: a.sun,
         },
         read: a.input.read_options(&a.inputs)?,
         ..IblJob::new(a.inputs, a.output, a.target)

@@ -73,7 +73,7 @@ pub(crate) fn written_by_targets(dir: &Path, name: &str) -> Vec<PathBuf> {
         ".jpg",
         ".ktx2",
     ];
-    const FIXED: [&str; 3] = ["lut_ggx.png", "lut_charlie.png", "sh.txt"];
+    const FIXED: [&str; 4] = ["lut_ggx.png", "lut_charlie.png", "sh.txt", "sun.json"];
     SUFFIXES
         .iter()
         .map(|s| dir.join(format!("{name}{s}")))

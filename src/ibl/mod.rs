@@ -11,6 +11,8 @@
 pub mod engines;
 mod folder;
 pub mod panorama;
+pub mod sun;
+mod sun_snippets;
 
 use crate::convert::{self, Loaded};
 use crate::cube::CubeMap;
@@ -91,6 +93,9 @@ pub struct IblOptions {
     /// Turn the environment about +Y first (degrees; 90 brings +Z to +X), e.g. to put the sun
     /// where the scene wants it.
     pub yaw: f32,
+    /// Take the sun out of the maps and hand it to the engine as a directional light
+    /// (`sun.json` and the snippet's lines; [`sun`]).
+    pub sun: bool,
 }
 
 /// The files for one engine, and how to load them.
@@ -206,6 +211,12 @@ pub fn deliver(
             "name {name:?}: a plain file-name stem (no folders, not hidden)"
         )));
     }
+    // --sun: every file made from the input without its sun.
+    let (without, light) = match opts.sun {
+        true => sun::take_out(loaded)?,
+        false => (None, None),
+    };
+    let loaded = without.as_ref().unwrap_or(loaded);
     let ctx = engines::Context {
         out,
         name: &name,
@@ -231,6 +242,12 @@ pub fn deliver(
         delivery.levels = lighting.levels;
         delivery
     };
+    let mut delivery = delivery;
+    if opts.sun {
+        let (json, lines) = sun::deliver(engine, ctx.orientation, light.as_ref());
+        delivery.files.push((out.join("sun.json"), json));
+        delivery.snippet.push_str(&lines);
+    }
     // output::deliver refuses to write over an input.
     Ok(delivery)
 }

@@ -89,6 +89,7 @@ pub(super) fn describe(
         tally.add(&t);
         sums.push(s);
     }
+    let (sun, lights) = sun(path, kind, opts)?;
     Ok(Some(Report {
         file: path.display().to_string(),
         file_format: meta.file_format,
@@ -107,5 +108,47 @@ pub(super) fn describe(
         bad_levels: Vec::new(),
         flux: Some(flux::mean_of_rows(sums)),
         levels: None,
+        sun,
+        lights,
     }))
+}
+
+/// Face edge of the cube a streamed panorama's sun is found in.
+const SUN_FACE: usize = 1024;
+
+/// The lights of a panorama too large to hold whole, from a cube of [`SUN_FACE`]: the
+/// panorama reduced as it is decoded (`convert::stream`, the reduction `ibl` takes for
+/// faces of 256) with its peaks at full resolution splatted in, so the sun's light and
+/// direction are kept and only its size is measured on the cube's texels (0.09 degrees).
+/// The finder needs the sky's median before it knows which texels are the sun, a second
+/// look at every texel the bands' single pass does not give. A layout the reduction does not
+/// take (balls, angular maps) is read whole when that fits the budget, its sun found on its own
+/// texels; else no sun is reported.
+fn sun(
+    path: &Path,
+    kind: Kind,
+    opts: &ReadOptions,
+) -> Result<(Option<super::LightInfo>, Vec<super::LightInfo>)> {
+    use crate::convert;
+    let opts = ReadOptions {
+        as_stored: false,
+        ..*opts
+    };
+    let footprint = 2.0 * std::f32::consts::SQRT_2 / 3.0 / 256.0;
+    let loaded = match convert::stream::load(path, &opts, footprint)? {
+        Some(l) => l,
+        None => match convert::load_planned(&[path.to_path_buf()], Some(kind), &opts) {
+            Ok(l) => l,
+            Err(crate::Error::Limit { .. }) => return Ok((None, Vec::new())),
+            Err(e) => return Err(e),
+        },
+    };
+    // Read whole: found on its own texels, as the whole read's report finds it.
+    if let convert::Source::Projection(p, img) = &loaded.source {
+        let grid = Grid::Projection(*p, img.width, img.height);
+        return Ok(super::sun::of_grid(grid, &[img]));
+    }
+    let face = SUN_FACE.min(loaded.face_size().next_power_of_two());
+    let cube = convert::to_cube(&loaded, face, &crate::resample::Resampler::default());
+    Ok(super::sun::of_faces(&cube.levels[0]))
 }

@@ -134,7 +134,11 @@ impl IblJob {
         let [input] = self.inputs.as_slice() else {
             return Ok(None);
         };
-        if !cubes_only || !matches!(self.from, None | Some(crate::layout::Kind::Equirect)) {
+        // --sun finds and takes out the sun on the input's own texels.
+        if !cubes_only
+            || self.options.sun
+            || !matches!(self.from, None | Some(crate::layout::Kind::Equirect))
+        {
             return Ok(None);
         }
         // The finest texel of the specular base: a face's corner, 2 sqrt(2) / 3 of its centre.

@@ -129,3 +129,42 @@ fn venice_has_no_sun_and_the_others_say_what_they_hold() {
         }
     }
 }
+
+/// `info --json`'s `"sun"`: esplanade's where the finder puts it, with its lux at the stated
+/// scale; venice's null.
+#[test]
+fn info_json_says_where_the_sun_is() {
+    let Some(real) = common::real_dir() else {
+        return;
+    };
+    let info = |name: &str| -> serde_json::Value {
+        let path = real.join("hdr").join(name);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_cubeforge"))
+            .args(["info", "--json"])
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let v = info("esplanade.hdr");
+    let (img, grid) = panorama("esplanade.hdr").unwrap();
+    let s = sun::find(grid, &[&img]).sun.unwrap();
+    let s_json = &v["sun"];
+    for c in 0..3 {
+        let d = s_json["direction"][c].as_f64().unwrap();
+        assert!((d - s.direction[c] as f64).abs() < 1e-6, "{s_json}");
+        let e = s_json["irradiance"][c].as_f64().unwrap();
+        assert!(
+            (e - s.irradiance[c]).abs() < 1e-9 * s.luminance(),
+            "{s_json}"
+        );
+    }
+    let lux = s_json["illuminance_lux"].as_f64().unwrap();
+    assert!((lux - s.luminance()).abs() < 1e-9 * lux, "{s_json}");
+    assert_eq!(s_json["nits_per_unit"].as_f64(), Some(1.0));
+    assert!(s_json["angular_diameter_deg"].as_f64().unwrap() > 0.0);
+    assert!(v["lights"].as_array().is_some_and(|l| !l.is_empty()));
+    let v = info("venice.hdr");
+    assert!(v["sun"].is_null(), "{}", v["sun"]);
+}

@@ -1,0 +1,132 @@
+// Renders ibl --sun's scene in three.js (npm `three`) in headless Chromium: a white diffuse
+// sphere (radius 1 at the origin) on a ground plane (y = -1), lit once by the full map alone
+// and once by the map without its sun plus the snippet's DirectionalLight (its shadow on):
+//   node three_sun.cjs FULL.hdr SUNLESS.hdr SUN.json
+// SUN.json is ibl --sun's sun.json (engine_direction, engine_intensity, engine_color). Prints
+// one JSON line: for each render the sphere's mean radiance (RGB, linear, over the disc it
+// covers on screen) and the ground's luminance where the sun's shadow of the sphere falls and
+// on the sunlit side opposite; or {"error": "..."}. Needs puppeteer-core and three
+// (target/tools) and chromium.
+'use strict';
+const path = require('path');
+const fs = require('fs');
+const tools = path.join(process.env.CUBEFORGE_TOOLS || path.join(__dirname, '..', '..', 'target', 'tools'), 'node_modules');
+const puppeteer = require(path.join(tools, 'puppeteer-core'));
+
+const ORIGIN = 'http://cubeforge.test/';
+const PAGE = `<!doctype html><script type="importmap">
+{"imports": {"three": "${ORIGIN}three/build/three.module.js",
+             "three/addons/": "${ORIGIN}three/examples/jsm/"}}</script>
+<script type="module">
+import * as THREE from 'three';
+import { HDRLoader } from 'three/addons/loaders/HDRLoader.js';
+const W = 256, H = 256;
+const renderer = new THREE.WebGLRenderer();
+renderer.shadowMap.enabled = true;
+renderer.shadowMap.type = THREE.PCFSoftShadowMap;
+const load = (url) => new Promise((ok, fail) => new HDRLoader().setDataType(THREE.FloatType).load(url, ok, undefined, fail));
+window.render = async (mapUrl, sun) => {
+  const tex = await load(mapUrl);
+  tex.mapping = THREE.EquirectangularReflectionMapping;
+  const pmrem = new THREE.PMREMGenerator(renderer);
+  const scene = new THREE.Scene();
+  scene.environment = pmrem.fromEquirectangular(tex).texture;
+  const white = new THREE.MeshStandardMaterial({ color: 0xffffff, roughness: 1, metalness: 0 });
+  const ball = new THREE.Mesh(new THREE.SphereGeometry(1, 96, 48), white);
+  ball.castShadow = true;
+  scene.add(ball);
+  const ground = new THREE.Mesh(new THREE.PlaneGeometry(40, 40), white);
+  ground.rotation.x = -Math.PI / 2;
+  ground.position.y = -1;
+  ground.receiveShadow = true;
+  scene.add(ground);
+  if (sun) {
+    // The snippet's lines, with its numbers.
+    const [x, y, z] = sun.engine_direction;
+    const light = new THREE.DirectionalLight(new THREE.Color(...sun.engine_color), sun.engine_intensity);
+    light.position.set(x * 50, y * 50, z * 50);
+    light.castShadow = true;
+    light.shadow.mapSize.set(2048, 2048);
+    Object.assign(light.shadow.camera, { left: -6, right: 6, top: 6, bottom: -6, near: 1, far: 100 });
+    light.shadow.bias = -0.0005;
+    scene.add(light);
+  }
+  const camera = new THREE.PerspectiveCamera(45, W / H, 0.1, 100);
+  camera.position.set(0, 5, 7);
+  camera.lookAt(0, -0.5, 0);
+  camera.updateMatrixWorld();
+  const rt = new THREE.WebGLRenderTarget(W, H, { type: THREE.FloatType });
+  renderer.setRenderTarget(rt);
+  renderer.render(scene, camera);
+  const px = new Float32Array(W * H * 4);
+  renderer.readRenderTargetPixels(rt, 0, 0, W, H, px);
+  renderer.setRenderTarget(null);
+  // Screen position (x right, y up from the bottom row, as read) of a world point.
+  const at = (p) => {
+    const v = new THREE.Vector3(...p).project(camera);
+    return [(v.x + 1) / 2 * W, (v.y + 1) / 2 * H];
+  };
+  const lum = (i) => 0.2126 * px[i] + 0.7152 * px[i + 1] + 0.0722 * px[i + 2];
+  const mean = (cx, cy, r) => {
+    const s = [0, 0, 0]; let n = 0;
+    for (let y = 0; y < H; y++) for (let x = 0; x < W; x++) {
+      if ((x + 0.5 - cx) ** 2 + (y + 0.5 - cy) ** 2 > r * r) continue;
+      const i = (y * W + x) * 4;
+      for (let c = 0; c < 3; c++) s[c] += px[i + c];
+      n++;
+    }
+    return s.map((v) => v / n);
+  };
+  // The sphere's disc on screen, taken at 0.8 of its radius (no edge, no ground).
+  const [cx, cy] = at([0, 0, 0]);
+  const edge = at(new THREE.Vector3(1, 0, 0).applyQuaternion(camera.quaternion).toArray());
+  const r = Math.hypot(edge[0] - cx, edge[1] - cy) * 0.8;
+  const [dx, dy, dz] = window.sunDir;
+  const shadow = at([-dx / dy, -1, -dz / dy]);
+  const spot = (p) => { const m = mean(p[0], p[1], 3); return 0.2126 * m[0] + 0.7152 * m[1] + 0.0722 * m[2]; };
+  // The sunlit ground beside the shadow: 2.5 units across the shadow's axis, on either side
+  // (the brighter: the other may lie behind the sphere on screen).
+  const k = 2.5 / Math.hypot(dx, dz);
+  const sides = [1, -1].map((s) => at([-dx / dy - s * dz * k, -1, -dz / dy + s * dx * k]));
+  const lits = sides.map(spot);
+  const i = lits[0] >= lits[1] ? 0 : 1;
+  return { sphere: mean(cx, cy, r), shadow: spot(shadow), lit: lits[i], shadow_px: shadow, lit_px: sides[i] };
+};
+window.pageReady = true;
+</script>`;
+
+(async () => {
+  const [full, sunless, sunJson] = process.argv.slice(2);
+  const sun = JSON.parse(fs.readFileSync(sunJson, 'utf8'));
+  const browser = await puppeteer.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    headless: true,
+    args: ['--no-sandbox', '--force-color-profile=srgb'],
+  });
+  try {
+    const tab = await browser.newPage();
+    tab.on('pageerror', (e) => console.error('page:', e.message));
+    await tab.setRequestInterception(true);
+    const files = [full, sunless];
+    tab.on('request', (req) => {
+      const url = req.url();
+      if (!url.startsWith(ORIGIN)) return req.abort();
+      const rel = decodeURIComponent(url.slice(ORIGIN.length));
+      if (rel === 'index.html') return req.respond({ contentType: 'text/html', body: PAGE });
+      let file;
+      if (rel.startsWith('three/')) file = path.join(tools, rel);
+      else if (rel.startsWith('file/')) file = files[Number(rel.split('/')[1])];
+      if (!file || !fs.existsSync(file)) return req.respond({ status: 404, body: '' });
+      const type = file.endsWith('.js') ? 'text/javascript' : 'application/octet-stream';
+      req.respond({ contentType: type, body: fs.readFileSync(file) });
+    });
+    await tab.goto(ORIGIN + 'index.html');
+    await tab.waitForFunction('window.pageReady === true', { timeout: 60000 });
+    await tab.evaluate((d) => { window.sunDir = d; }, sun.engine_direction);
+    const a = await tab.evaluate(() => window.render(location.origin + '/file/0/x.hdr', null));
+    const b = await tab.evaluate((s) => window.render(location.origin + '/file/1/x.hdr', s), sun);
+    console.log(JSON.stringify({ full: a, sun: b }));
+  } finally {
+    await browser.close();
+  }
+})().catch((e) => { console.log(JSON.stringify({ error: String(e) })); process.exit(1); });
