@@ -4,7 +4,9 @@
 //! manifest errors name their line; depfiles list exactly what was read; the emitted
 //! build.ninja runs under real Ninja; shards split the jobs with no overlap.
 
+mod cache;
 mod incremental;
+pub(crate) mod nginx;
 mod runners;
 
 use crate::cli_options::{err, run, run_ok};
