@@ -6,8 +6,10 @@
 
 mod cache;
 mod incremental;
+mod k8s;
 pub(crate) mod nginx;
 mod runners;
+mod slurm;
 
 use crate::cli_options::{err, run, run_ok};
 use std::path::Path;
