@@ -375,6 +375,52 @@ fn sha_file(path: &Path) -> Option<String> {
 mod tests {
     use super::*;
 
+    /// A store in memory, counting its writes.
+    #[derive(Default)]
+    struct Memory(
+        Mutex<HashMap<String, Vec<u8>>>,
+        std::sync::atomic::AtomicUsize,
+    );
+
+    impl Store for std::sync::Arc<Memory> {
+        fn get(&self, path: &str) -> std::result::Result<Option<Vec<u8>>, String> {
+            Ok(self.0.lock().unwrap().get(path).cloned())
+        }
+        fn put(&self, path: &str, bytes: &[u8]) -> std::result::Result<(), String> {
+            self.1.fetch_add(1, Ordering::Relaxed);
+            self.0.lock().unwrap().insert(path.into(), bytes.to_vec());
+            Ok(())
+        }
+        fn name(&self) -> String {
+            "memory".into()
+        }
+    }
+
+    /// A hit needs the bytes of every file the job read; a changed file is a miss, and a
+    /// read-only cache never writes.
+    #[test]
+    fn a_hit_needs_the_same_bytes() {
+        let t = tempfile::tempdir().unwrap();
+        let (input, out) = (t.path().join("in.txt"), t.path().join("out.png"));
+        std::fs::write(&input, b"one").unwrap();
+        std::fs::write(&out, b"result").unwrap();
+        let mem = std::sync::Arc::new(Memory::default());
+        let (reads, written) = (vec![input.clone()], vec![out.clone()]);
+        Cache::new(mem.clone(), true).upload("job", &out, &reads, &written);
+        assert_eq!(mem.1.load(Ordering::Relaxed), 0);
+        Cache::new(mem.clone(), false).upload("job", &out, &reads, &written);
+        assert_eq!(mem.1.load(Ordering::Relaxed), 3);
+        let hit = Cache::new(mem.clone(), false)
+            .fetch("job", &out)
+            .expect("a hit");
+        assert_eq!(hit.files, vec![(out.clone(), b"result".to_vec())]);
+        assert!(Cache::new(mem.clone(), false)
+            .fetch("other job", &out)
+            .is_none());
+        std::fs::write(&input, b"two").unwrap();
+        assert!(Cache::new(mem.clone(), false).fetch("job", &out).is_none());
+    }
+
     /// A manifest's paths must stay inside the job's output.
     #[test]
     fn only_inside_the_output() {
