@@ -161,20 +161,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         );
         return super::report(cubeforge::internals::error::escape_text(&line));
     }
-    let mut jobs = Vec::new();
-    let mut parser = <Cli as clap::CommandFactory>::command();
-    for p in &planned {
-        let job: Box<dyn Job + Send + Sync> = match job_of(&mut parser, &p.argv) {
-            Ok(j) => j,
-            Err(e) => Box::new(Unbuilt(e.with_flags(), cubeforge::Limits::default())),
-        };
-        jobs.push(BatchJob {
-            id: p.line_text(),
-            input: p.input.clone(),
-            output: PathBuf::from(&p.output),
-            job,
-        });
-    }
+    let jobs = jobs_of(&planned);
     let lines: std::collections::HashMap<String, usize> =
         planned.iter().map(|p| (p.line_text(), p.line)).collect();
     let cache = cache_of(&a)?;
@@ -201,6 +188,26 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         start.elapsed().as_secs_f64(),
         &lines,
     )
+}
+
+/// The batch's jobs, one per planned command line (one that cannot be built fails alone).
+fn jobs_of(planned: &[Planned]) -> Vec<BatchJob> {
+    let mut parser = <Cli as clap::CommandFactory>::command();
+    planned
+        .iter()
+        .map(|p| {
+            let job: Box<dyn Job + Send + Sync> = match job_of(&mut parser, &p.argv) {
+                Ok(j) => j,
+                Err(e) => Box::new(Unbuilt(e.with_flags(), cubeforge::Limits::default())),
+            };
+            BatchJob {
+                id: p.line_text(),
+                input: p.input.clone(),
+                output: PathBuf::from(&p.output),
+                job,
+            }
+        })
+        .collect()
 }
 
 /// The cache `--cache` or `$CUBEFORGE_CACHE` names (an empty one: none).
