@@ -40,10 +40,16 @@
 //! # }
 //! ```
 
+mod cache;
 mod conflicts;
+#[cfg(feature = "http-cache")]
+mod http;
 mod shard;
 mod state;
 
+pub use cache::{Cache, Store};
+#[cfg(feature = "http-cache")]
+pub use http::HttpStore;
 pub use state::Why;
 
 use crate::error::{Error, Result};
@@ -151,6 +157,9 @@ pub struct Batch {
     pub depfiles: bool,
     /// The budget of the jobs that run at once (each job still checks its own plan).
     pub max_memory: u64,
+    /// A cache shared with other machines: a job that would run is fetched from it when it
+    /// holds the job's outputs for these inputs, and a job that ran is uploaded to it.
+    pub cache: Option<Cache>,
 }
 
 impl Batch {
@@ -164,6 +173,7 @@ impl Batch {
             shard: None,
             depfiles: false,
             max_memory: Limits::default().max_memory,
+            cache: None,
         }
     }
 }
@@ -173,10 +183,15 @@ impl Batch {
 pub enum Outcome {
     /// It ran, for this reason.
     Ran(Why, Report),
+    /// It would have run, for this reason, and its outputs came from the cache instead
+    /// (the files written).
+    Fetched(Why, Vec<PathBuf>),
     /// Its outputs are up to date: it did not run.
     UpToDate,
     /// A dry run: it would run, for this reason.
     WouldRun(Why),
+    /// A dry run: it would run, and the cache would serve it.
+    WouldFetch(Why),
     /// It failed; its outputs are as they were.
     Failed(Error),
 }
@@ -190,6 +205,8 @@ pub struct Done {
     pub outcome: Outcome,
     /// Seconds it took.
     pub seconds: f64,
+    /// The cache was asked for it and had nothing (or nothing that could be used).
+    pub cache_miss: bool,
 }
 
 /// What a batch did.
@@ -218,9 +235,17 @@ impl BatchReport {
     pub fn up_to_date(&self) -> usize {
         self.count(|o| matches!(o, Outcome::UpToDate))
     }
+    /// Jobs whose outputs came from the cache.
+    pub fn fetched(&self) -> usize {
+        self.count(|o| matches!(o, Outcome::Fetched(..)))
+    }
     /// Jobs that a dry run would run.
     pub fn would_run(&self) -> usize {
         self.count(|o| matches!(o, Outcome::WouldRun(_)))
+    }
+    /// Jobs that a dry run would fetch from the cache.
+    pub fn would_fetch(&self) -> usize {
+        self.count(|o| matches!(o, Outcome::WouldFetch(_)))
     }
     /// Jobs that failed.
     pub fn failed(&self) -> usize {

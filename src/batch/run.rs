@@ -1,6 +1,7 @@
 //! Running a batch: which jobs run and why, inputs side by side within the budget, the jobs
 //! of one input in turn over its one decode, and the state file brought up to date.
 
+use super::cache::Cache;
 use super::state::{self, Hashes, Record, State, Why};
 use super::{conflicts, save, share, Batch, BatchJob, BatchReport, Done, Outcome};
 use crate::error::{Error, Result};
@@ -8,6 +9,7 @@ use crate::io::Session;
 use crate::output::depfile;
 use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Condvar, Mutex};
 use std::time::{Duration, Instant};
 
@@ -73,6 +75,8 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
         }),
         wake: Condvar::new(),
         jobs: Vec::new(),
+        missed: batch.jobs.iter().map(|_| AtomicBool::new(false)).collect(),
+        cache: batch.cache,
     };
     let todo: Vec<Group> = mine
         .iter()
@@ -88,6 +92,12 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
         ..run
     };
     run.all(&todo, batch.max_memory);
+    if let Some(c) = &run.cache {
+        let ws = c.take_warnings();
+        report
+            .warnings
+            .extend(ws.into_iter().map(crate::jobs::Warning::new));
+    }
     report.jobs = run
         .slots
         .into_iter()
@@ -192,6 +202,9 @@ struct Running<'a> {
     /// Wakes the saver when the workers are done.
     wake: Condvar,
     jobs: Vec<Mutex<Option<BatchJob>>>,
+    /// The cache was asked for each job and did not serve it.
+    missed: Vec<AtomicBool>,
+    cache: Option<Cache>,
 }
 
 impl Running<'_> {
@@ -201,6 +214,7 @@ impl Running<'_> {
             id: self.ids[i].clone(),
             outcome,
             seconds,
+            cache_miss: self.missed[i].load(Ordering::Relaxed),
         };
         (self.on_done)(&done);
         *self.slots[i].lock().unwrap_or_else(|e| e.into_inner()) = Some(done);
@@ -233,7 +247,14 @@ impl Running<'_> {
                     false
                 }
                 Some(w) if dry_run => {
-                    self.finish(i, Outcome::WouldRun(w), 0.0);
+                    let cache = self.cache.as_ref().filter(|_| w != Why::Forced);
+                    let hit = cache.and_then(|c| c.lookup(&self.ids[i], &self.outputs[i]));
+                    self.missed[i].store(cache.is_some() && hit.is_none(), Ordering::Relaxed);
+                    let outcome = match hit {
+                        Some(_) => Outcome::WouldFetch(w),
+                        None => Outcome::WouldRun(w),
+                    };
+                    self.finish(i, outcome, 0.0);
                     false
                 }
                 Some(_) => true,
@@ -312,6 +333,9 @@ impl Running<'_> {
             };
             share(bj.job.as_mut(), guard.session());
             let start = Instant::now();
+            if self.fetched(i) {
+                continue;
+            }
             let ran = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bj.job.run(&())))
                 .unwrap_or_else(|_| Err(Error::usage("the job stopped on an internal error")));
             let reads = guard.session().take_reads();
@@ -327,6 +351,9 @@ impl Running<'_> {
             });
             let (outcome, record) = match ran {
                 Ok(report) => {
+                    if let Some(c) = &self.cache {
+                        c.upload(&self.ids[i], &self.outputs[i], &reads, &report.written);
+                    }
                     let r =
                         state::record(&self.ids[i], reads, report.written.clone(), &self.hashes);
                     let why = self.whys[i].clone().flatten().unwrap_or(Why::NeverRan);
@@ -336,6 +363,48 @@ impl Running<'_> {
             };
             self.keep_record(&self.ids[i], record);
             self.finish(i, outcome, start.elapsed().as_secs_f64());
+        }
+    }
+
+    /// Job `i`'s outputs from the cache, written and recorded as if it ran (with its
+    /// depfile); false when there is no cache, it missed, or `--force` runs every job.
+    fn fetched(&self, i: usize) -> bool {
+        let why = self.whys[i].clone().flatten().unwrap_or(Why::NeverRan);
+        let Some(cache) = self.cache.as_ref().filter(|_| why != Why::Forced) else {
+            return false;
+        };
+        let start = Instant::now();
+        let (id, output) = (&self.ids[i], &self.outputs[i]);
+        let Some(hit) = cache.fetch(id, output) else {
+            self.missed[i].store(true, Ordering::Relaxed);
+            return false;
+        };
+        let reads = hit.reads.clone();
+        let written = hit.deliver(output).and_then(|written| {
+            for p in &written {
+                self.hashes.forget(p);
+            }
+            if self.depfiles {
+                depfile::write(&depfile::beside(output), output, &reads, &written)?;
+            }
+            Ok(written)
+        });
+        match written {
+            Ok(w) => {
+                let r = state::record(id, reads, w.clone(), &self.hashes);
+                self.keep_record(id, r);
+                let outcome = Outcome::Fetched(why, w);
+                self.finish(i, outcome, start.elapsed().as_secs_f64());
+                true
+            }
+            // Written as a run would have been, it would have failed the same way: it runs.
+            Err(e) => {
+                cache.warn(format!(
+                    "`{id}`: the cache's outputs not written ({e}); it runs here"
+                ));
+                self.missed[i].store(true, Ordering::Relaxed);
+                false
+            }
         }
     }
 

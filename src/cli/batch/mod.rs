@@ -44,6 +44,16 @@ pub struct Args {
     /// job's own budget is its --max-memory in the manifest's args.
     #[arg(long, value_parser = super::bytes)]
     pub max_memory: Option<u64>,
+    /// A cache the team shares, in Bazel's HTTP remote-cache protocol (bazel-remote,
+    /// BuildBuddy, nginx with WebDAV PUT; default: $CUBEFORGE_CACHE): a job that would run
+    /// is fetched when the cache holds its outputs for the same build, command and input
+    /// bytes, and uploaded when it ran. Credentials: $CUBEFORGE_CACHE_TOKEN (bearer), or
+    /// $CUBEFORGE_CACHE_USER and $CUBEFORGE_CACHE_PASSWORD (basic).
+    #[arg(long, value_name = "URL")]
+    pub cache: Option<String>,
+    /// Read the cache, never write to it (a CI job that may not change what others get).
+    #[arg(long)]
+    pub cache_read_only: bool,
 }
 
 /// Build files `--emit` writes.
@@ -62,7 +72,9 @@ Examples (assets.toml: [[job]] tables of inputs, command, args, output; docs/pip
   # this machine's third of the jobs (CI matrix, Slurm array, Kubernetes Indexed Job)
   cubeforge batch assets.toml --shard 2/3
   # a build.ninja beside the manifest, for ninja -j 8
-  cubeforge batch assets.toml --emit ninja";
+  cubeforge batch assets.toml --emit ninja
+  # fetch what a team's cache holds, build the rest and upload it
+  cubeforge batch assets.toml --cache http://cache.studio:8080";
 
 /// The state file of `manifest` (and of a shard, which keeps its own).
 fn state_path(manifest: &Path, shard: Option<Shard>) -> PathBuf {
@@ -168,23 +180,13 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
         );
         return super::report(cubeforge::internals::error::escape_text(&line));
     }
-    let mut jobs = Vec::new();
-    let mut parser = <Cli as clap::CommandFactory>::command();
-    for p in &planned {
-        let job: Box<dyn Job + Send + Sync> = match job_of(&mut parser, &p.argv) {
-            Ok(j) => j,
-            Err(e) => Box::new(Unbuilt(e.with_flags(), cubeforge::Limits::default())),
-        };
-        jobs.push(BatchJob {
-            id: p.line_text(),
-            input: p.input.clone(),
-            output: PathBuf::from(&p.output),
-            job,
-        });
-    }
+    let jobs = jobs_of(&planned);
     let lines: std::collections::HashMap<String, usize> =
         planned.iter().map(|p| (p.line_text(), p.line)).collect();
+    let cache = cache_of(&a)?;
+    let cached = cache.is_some();
     let batch = Batch {
+        cache,
         state: Some(state_path(&name, a.shard)),
         force: a.force,
         dry_run: a.dry_run,
@@ -198,7 +200,54 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let start = std::time::Instant::now();
     let tell = |d: &Done| show(d, verbose || a.dry_run);
     let report = batch.run(&tell)?;
-    summarize(&report, a.dry_run, start.elapsed().as_secs_f64(), &lines)
+    summarize(
+        &report,
+        a.dry_run,
+        cached,
+        start.elapsed().as_secs_f64(),
+        &lines,
+    )
+}
+
+/// The batch's jobs, one per planned command line (one that cannot be built fails alone).
+fn jobs_of(planned: &[Planned]) -> Vec<BatchJob> {
+    let mut parser = <Cli as clap::CommandFactory>::command();
+    planned
+        .iter()
+        .map(|p| {
+            let job: Box<dyn Job + Send + Sync> = match job_of(&mut parser, &p.argv) {
+                Ok(j) => j,
+                Err(e) => Box::new(Unbuilt(e.with_flags(), cubeforge::Limits::default())),
+            };
+            BatchJob {
+                id: p.line_text(),
+                input: p.input.clone(),
+                output: PathBuf::from(&p.output),
+                job,
+            }
+        })
+        .collect()
+}
+
+/// The cache `--cache` or `$CUBEFORGE_CACHE` names (an empty one: none).
+fn cache_of(a: &Args) -> Result<Option<cubeforge::internals::batch::Cache>> {
+    use cubeforge::internals::batch::{Cache, HttpStore};
+    let url = a
+        .cache
+        .clone()
+        .or_else(|| std::env::var("CUBEFORGE_CACHE").ok())
+        .filter(|u| !u.is_empty());
+    match url {
+        None if a.cache_read_only => Err(Error::usage(
+            "--cache-read-only needs a cache: --cache URL or $CUBEFORGE_CACHE",
+        )),
+        None => Ok(None),
+        Some(u) => {
+            let store =
+                HttpStore::from_env(&u).map_err(|e| Error::usage(format!("--cache: {e}")))?;
+            Ok(Some(Cache::new(store, a.cache_read_only)))
+        }
+    }
 }
 
 /// The summary line, then each failure in one line with its manifest line; an error when any
@@ -206,6 +255,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
 fn summarize(
     report: &cubeforge::internals::batch::BatchReport,
     dry_run: bool,
+    cached: bool,
     seconds: f64,
     lines: &std::collections::HashMap<String, usize>,
 ) -> Result<()> {
@@ -228,15 +278,19 @@ fn summarize(
     };
     let n = report.jobs.len();
     super::report(if dry_run {
+        let fetch = cached.then(|| format!(", {} from the cache", report.would_fetch()));
         format!(
-            "batch: {n} jobs: {} would run, {} up to date{shards}",
+            "batch: {n} jobs: {} would run{}, {} up to date{shards}",
             report.would_run(),
+            fetch.unwrap_or_default(),
             report.up_to_date()
         )
     } else {
+        let fetched = cached.then(|| format!(", {} from the cache", report.fetched()));
         format!(
-            "batch: {n} jobs: {} ran, {} up to date, {} failed{shards} ({seconds:.2} s)",
+            "batch: {n} jobs: {} ran{}, {} up to date, {} failed{shards} ({seconds:.2} s)",
             report.ran(),
+            fetched.unwrap_or_default(),
             report.up_to_date(),
             report.failed()
         )
@@ -271,10 +325,20 @@ fn show(d: &Done, verbose: bool) {
             for w in &report.warnings {
                 super::warn(format_args!("{id}: {}", w.with_flags()));
             }
+            if d.cache_miss && verbose {
+                say(format!("cache miss  cubeforge {id}"));
+            }
             say(format!("ran         cubeforge {id} ({:.2} s)", d.seconds));
         }
+        Outcome::Fetched(..) => say(format!("from cache  cubeforge {id} ({:.2} s)", d.seconds)),
+        Outcome::WouldFetch(why) => say(format!(
+            "would fetch cubeforge {id} ({why}): the cache has it"
+        )),
         Outcome::UpToDate if verbose => say(format!("up to date  cubeforge {id}")),
         Outcome::UpToDate => {}
+        Outcome::WouldRun(why) if d.cache_miss => say(format!(
+            "would run   cubeforge {id} ({why}; not in the cache)"
+        )),
         Outcome::WouldRun(why) => say(format!("would run   cubeforge {id} ({why})")),
         Outcome::Failed(_) => {}
     }

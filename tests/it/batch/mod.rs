@@ -4,8 +4,12 @@
 //! manifest errors name their line; depfiles list exactly what was read; the emitted
 //! build.ninja runs under real Ninja; shards split the jobs with no overlap.
 
+mod cache;
 mod incremental;
+mod k8s;
+pub(crate) mod nginx;
 mod runners;
+mod slurm;
 
 use crate::cli_options::{err, run, run_ok};
 use std::path::Path;
