@@ -16,7 +16,10 @@ use crate::resample::Resampler;
 use glam::Vec4;
 use std::path::{Path, PathBuf};
 
+mod envmap;
+mod read;
 pub mod stream;
+pub use read::{read, read_raw};
 pub use stream::Reduced;
 
 /// A loaded input: a cube map (faces, cross, strip, container) or a single-image projection.
@@ -59,6 +62,7 @@ impl Loaded {
                 replaced_values: 0,
                 stored_levels: 1,
                 declared: None,
+                undo: Default::default(),
                 part: None,
             },
             files: Vec::new(),
@@ -489,7 +493,7 @@ fn load_faces(files: &[PathBuf], naming: FaceNaming, opts: &ReadOptions) -> Resu
     let mut replaced = 0;
     let mut formats: Vec<String> = Vec::new();
     for f in files {
-        let (decoded, m) = io::read(f, opts)?;
+        let (decoded, m) = read(f, opts)?;
         replaced += m.replaced_values;
         if !formats.contains(&m.pixel_format) {
             formats.push(m.pixel_format.clone());
@@ -513,7 +517,7 @@ fn load_faces(files: &[PathBuf], naming: FaceNaming, opts: &ReadOptions) -> Resu
         meta.pixel_format = format!("mixed: {}", formats.join(", "));
     }
     let cube = if naming == FaceNaming::OpenExr {
-        let faces = io::exr::split_cube(&images).map_err(|e| Error::file(&files[0], e))?;
+        let faces = envmap::split_cube(&images).map_err(|e| Error::file(&files[0], e))?;
         CubeMap::from_faces(faces)?
     } else {
         faces_from_images(images, files)?
@@ -528,7 +532,7 @@ fn load_faces(files: &[PathBuf], naming: FaceNaming, opts: &ReadOptions) -> Resu
 }
 
 fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Loaded> {
-    let (decoded, meta) = io::read(path, opts)?;
+    let (decoded, meta) = read(path, opts)?;
     let files = vec![path.to_path_buf()];
     let hdr = meta.hdr;
     let (source, kind) = match decoded {

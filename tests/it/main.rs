@@ -49,6 +49,7 @@ mod real_images;
 mod rgbe;
 mod sh_bands;
 mod simd;
+mod sizes;
 mod streamed;
 mod streamed_info;
 mod sun;

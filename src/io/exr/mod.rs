@@ -11,7 +11,7 @@
 
 #![warn(missing_docs)]
 
-use super::{Decoded, FileFormat, Limits, Meta};
+use super::{Decoded, Envmap, FileFormat, Limits, Meta, Undo};
 use crate::error::{Error, Result};
 use crate::image::{ColorSpace, Image};
 use exr::meta::{BlockDescription, MetaData};
@@ -22,14 +22,12 @@ use std::path::Path;
 
 mod blocks;
 mod checks;
-mod envmap;
 mod piz;
 mod planes;
 mod select;
 pub mod stream;
 mod zstd;
 use checks::{read_chunks, read_meta, RawChunk};
-pub(crate) use envmap::split_cube;
 
 /// Where a user meets OpenEXR's layouts: its latlong runs the other way round from cubeforge's
 /// equirect, so a cubeforge panorama given to `exrenvmap -li` comes back mirrored.
@@ -128,20 +126,20 @@ pub(crate) fn decode_with(
         }
     }
     .map_err(fail)?;
-    // OpenEXR's own environment maps, read by their definitions (see `envmap`).
-    let (decoded, declared) = match header.own_attributes.environment_map {
-        None => (Decoded::Image(image), None),
+    // OpenEXR's own environment maps: named here, resampled by their definitions above io
+    // (`convert::read`).
+    let (envmap, declared) = match header.own_attributes.environment_map {
+        None => (None, None),
         Some(exr::meta::attribute::EnvironmentMap::LatitudeLongitude) => (
-            Decoded::Image(envmap::latlong(&image)),
+            Some(Envmap::LatLong),
             Some(format!("declared by its envmap attribute: an OpenEXR latlong map, read by OpenEXR's mapping{MIRROR_HINT}")),
         ),
         Some(exr::meta::attribute::EnvironmentMap::Cube) => (
-            Decoded::Cube(crate::cube::CubeMap {
-                levels: vec![envmap::cube(&image).map_err(|e| Error::file(path, e))?],
-            }),
+            Some(Envmap::Cube),
             Some(format!("declared by its envmap attribute: an OpenEXR cube map, read by OpenEXR's faces{MIRROR_HINT}")),
         ),
     };
+    let decoded = Decoded::Image(image);
     let meta = Meta {
         file_format: FileFormat::Exr,
         pixel_format,
@@ -151,6 +149,10 @@ pub(crate) fn decode_with(
         stored_levels: levels,
         declared,
         part: select::part_note(&meta, part, opts.exr_part.is_some()),
+        undo: Undo {
+            envmap,
+            ..Undo::default()
+        },
     };
     Ok((decoded, meta))
 }

@@ -333,5 +333,5 @@ impl Job for PreviewJob {
 }
 
 fn encode(name: &std::path::Path, img: &Image) -> Result<Vec<u8>> {
-    io::encode_image(name, img, &WriteOptions::default())
+    crate::output::encode_image(name, img, &WriteOptions::default())
 }
