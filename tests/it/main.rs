@@ -55,6 +55,7 @@ mod streamed_info;
 mod sun;
 mod surface;
 mod texel_truth;
+mod tree;
 mod uastc;
 mod ultrahdr;
 mod ultrahdr_readers;
