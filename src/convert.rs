@@ -343,6 +343,32 @@ pub fn load_planned(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) 
     }
 }
 
+impl Loaded {
+    /// The warnings of a load, gathered in one place for every job: how a folder's skybox
+    /// names or OpenEXR's split faces were read, which part of a multi-part OpenEXR file was,
+    /// and how many values were replaced.
+    pub fn warnings(&self, inputs: &[PathBuf], read: &ReadOptions) -> Vec<String> {
+        let replaced = self
+            .files
+            .first()
+            .and_then(|f| replaced_note(f, self.meta.replaced_values as u64));
+        [skybox_note(inputs), part_note(self, read), replaced]
+            .into_iter()
+            .flatten()
+            .collect()
+    }
+}
+
+/// The warning for `n` values of `file` replaced as it was read (None for none).
+pub fn replaced_note(file: &Path, n: u64) -> Option<String> {
+    (n > 0).then(|| {
+        format!(
+            "{}: replaced {n} NaN, infinite or negative values by 0 (and values above 1e28 by 1e28)",
+            file.display()
+        )
+    })
+}
+
 /// The warning for a multi-part OpenEXR input read without a part chosen: which was read.
 pub fn part_note(loaded: &Loaded, read: &ReadOptions) -> Option<String> {
     let part = loaded

@@ -13,7 +13,6 @@ const KNOWN_LONG_FUNCTIONS: &[(&str, &str)] = &[
     ("info.rs", "describe"),
     ("io/exr/zstd.rs", "unpack"),
     ("resample.rs", "render_row"),
-    ("jobs/ibl.rs", "run"),
     ("info.rs", "fmt"),
 ];
 
