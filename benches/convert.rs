@@ -13,7 +13,7 @@
 use cubeforge::internals::convert::{self, Output, Source};
 use cubeforge::internals::cube::FACE_NAMES;
 use cubeforge::internals::image::Image;
-use cubeforge::internals::io::{self, Decoded, ReadOptions, WriteOptions};
+use cubeforge::internals::io::{Decoded, ReadOptions, WriteOptions};
 use cubeforge::internals::layout::{Kind, Projection};
 use cubeforge::internals::output::{self, Destination, Files};
 use cubeforge::internals::resample::{FnEnv, Orientation, Resampler};
@@ -165,7 +165,9 @@ fn exr_decode(dir: &Path) {
         let mut best = f64::MAX;
         for _ in 0..RUNS {
             let t = Instant::now();
-            std::hint::black_box(io::read(&path, &ReadOptions::default()).unwrap());
+            std::hint::black_box(
+                cubeforge::internals::convert::read(&path, &ReadOptions::default()).unwrap(),
+            );
             best = best.min(t.elapsed().as_secs_f64());
         }
         let mb = std::fs::metadata(&path).unwrap().len() as f64 / 1e6;
@@ -272,7 +274,7 @@ fn py360convert(dir: &Path, exr: &Path, ours: f64) {
 fn write(path: &Path, img: &Image) {
     std::fs::write(
         path,
-        io::encode_image(path, img, &WriteOptions::default()).unwrap(),
+        cubeforge::internals::output::encode_image(path, img, &WriteOptions::default()).unwrap(),
     )
     .unwrap();
 }
@@ -293,7 +295,9 @@ fn photo_image() -> Option<Image> {
         println!("photo: skipped, ../shared/fixtures/real is absent");
         return None;
     }
-    let (Decoded::Image(park), _) = io::read(&src, &ReadOptions::default()).unwrap() else {
+    let (Decoded::Image(park), _) =
+        cubeforge::internals::convert::read(&src, &ReadOptions::default()).unwrap()
+    else {
         unreachable!()
     };
     Some(Image::from_fn(4096, 2048, |x, y| {
@@ -331,7 +335,8 @@ fn faces(input: &Path, name: &str, dir: &Path, ext: &str) {
             .zip(cube.levels[0].par_iter())
             .map(|(n, f)| {
                 let p = out.join(format!("{n}.{ext}"));
-                let b = io::encode_image(&p, f, &WriteOptions::default()).unwrap();
+                let b = cubeforge::internals::output::encode_image(&p, f, &WriteOptions::default())
+                    .unwrap();
                 (p, b)
             })
             .collect();

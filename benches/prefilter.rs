@@ -10,7 +10,7 @@ use cubeforge::internals::convert::{self, Loaded};
 use cubeforge::internals::cube::CubeMap;
 use cubeforge::internals::filter::{self, brute, lobe, ChainOptions, FilterKind, LightingModel};
 use cubeforge::internals::image::Image;
-use cubeforge::internals::io::{self, Decoded, ReadOptions, WriteOptions};
+use cubeforge::internals::io::{Decoded, ReadOptions, WriteOptions};
 use cubeforge::internals::layout::Projection;
 use cubeforge::internals::resample::{FnEnv, Resampler};
 use cubeforge::internals::synthetic;
@@ -106,7 +106,8 @@ fn panorama(dir: &Path) -> PathBuf {
         (
             "esplanade4k.hdr",
             Box::new(move || {
-                let (Decoded::Image(small), _) = io::read(&src, &ReadOptions::default()).unwrap()
+                let (Decoded::Image(small), _) =
+                    cubeforge::internals::convert::read(&src, &ReadOptions::default()).unwrap()
                 else {
                     unreachable!()
                 };
@@ -131,7 +132,9 @@ fn panorama(dir: &Path) -> PathBuf {
     };
     let path = dir.join(name);
     if !path.exists() {
-        let bytes = io::encode_image(&path, &img(), &WriteOptions::default()).unwrap();
+        let bytes =
+            cubeforge::internals::output::encode_image(&path, &img(), &WriteOptions::default())
+                .unwrap();
         std::fs::write(&path, bytes).unwrap();
     }
     path

@@ -343,8 +343,13 @@ pub fn encode(
         Some(FileFormat::Ktx2) if opts.cubeforge_keys => {
             refuse(&[path.to_path_buf()])?;
             let json = description.to_json();
-            let bytes =
-                io::encode_cube_as(format, path, chain, &opts, &[(io::ktx2::LEVELS_KEY, &json)])?;
+            let bytes = crate::output::encode_cube_as(
+                format,
+                path,
+                chain,
+                &opts,
+                &[(io::ktx2::LEVELS_KEY, &json)],
+            )?;
             vec![(path.to_path_buf(), bytes)]
         }
         Some(FileFormat::Ktx2 | FileFormat::Dds) => {
@@ -352,7 +357,7 @@ pub fn encode(
             // sidecar that `info` and `preview` read.
             let side = levels_sidecar(path);
             refuse(&[path.to_path_buf(), side.clone()])?;
-            let bytes = io::encode_cube_as(format, path, chain, &opts, &[])?;
+            let bytes = crate::output::encode_cube_as(format, path, chain, &opts, &[])?;
             vec![(path.to_path_buf(), bytes), (side, description.to_json())]
         }
         Some(_) => {
@@ -360,7 +365,7 @@ pub fn encode(
             refuse(&[path.to_path_buf()])?;
             vec![(
                 path.to_path_buf(),
-                io::encode_cube_as(format, path, chain, &opts, &[])?,
+                crate::output::encode_cube_as(format, path, chain, &opts, &[])?,
             )]
         }
         None => encode_dir(path, chain, description, format, &opts, inputs)?,

@@ -268,7 +268,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
     if let Some(report) = stream::describe(path, from, opts)? {
         return Ok(report);
     }
-    let (decoded, mut meta) = io::read_raw(path, opts)?;
+    let (decoded, mut meta) = crate::convert::read_raw(path, opts)?;
     let declared = meta.declared.take();
     let part = meta.part.take();
     let file = path.display().to_string();

@@ -134,7 +134,8 @@ pub fn write_exr(
     path: PathBuf,
     array: PyReadonlyArrayDyn<'_, f32>,
 ) -> PyResult<()> {
-    use cubeforge::internals::io::{encode_image, WriteOptions};
+    use cubeforge::internals::io::WriteOptions;
+    use cubeforge::internals::output::encode_image;
     use cubeforge::internals::output::{deliver, Files};
     let images = images_of(py, &array)?;
     py.detach(|| {
@@ -162,7 +163,8 @@ pub fn write_exr(
 /// One image file as it is (a preview, a table: no layout), as a (height, width, 4) array.
 #[pyfunction]
 pub fn read_image<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAny>> {
-    use cubeforge::internals::io::{read, Decoded};
+    use cubeforge::internals::convert::read;
+    use cubeforge::internals::io::Decoded;
     let got = py.detach(|| read(&path, &cubeforge::ReadOptions::default()));
     match got.map_err(|e| crate::error(py, &e))? {
         (Decoded::Image(img), _) => image_array(py, &img),

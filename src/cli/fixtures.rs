@@ -1,7 +1,7 @@
 //! Writes the project's own fixtures: the demo sky the README's set-up and examples read, and
 //! a two-part OpenEXR file of it (as renderers write their passes) for `--part`.
 
-use cubeforge::internals::io::{self, WriteOptions};
+use cubeforge::internals::io::WriteOptions;
 use cubeforge::internals::layout::Projection;
 use cubeforge::internals::resample::{FnEnv, Resampler};
 use cubeforge::internals::synthetic;
@@ -24,7 +24,8 @@ pub fn run(args: Args) -> Result<()> {
     let mut files = Vec::new();
     for name in ["sky.exr", "sky.png"] {
         let path = args.dir.join(name);
-        let bytes = io::encode_image(&path, &img, &WriteOptions::default())?;
+        let bytes =
+            cubeforge::internals::output::encode_image(&path, &img, &WriteOptions::default())?;
         files.push((path, bytes));
     }
     let small = img.downsample_2x();

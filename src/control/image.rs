@@ -173,7 +173,7 @@ fn load_image(name: &str) -> std::result::Result<ImageFile, String> {
                 .map_err(|e| e.to_string())?;
             ctx.held = ctx.held.saturating_add(c.held_bytes);
         }
-        let (decoded, meta) = io::read(&path, &read).map_err(|e| e.to_string())?;
+        let (decoded, meta) = crate::convert::read(&path, &read).map_err(|e| e.to_string())?;
         let image = match decoded {
             Decoded::Image(img) => Arc::new(img),
             Decoded::Cube(_) => {

@@ -56,6 +56,14 @@ const C1: f64 = 0.429043;
 const C1X2: f64 = 0.858086;
 
 impl SphericalPolynomial {
+    /// The nine coefficients in the order Babylon's `.env` manifest names them (x, y, z,
+    /// xx, yy, zz, yz, zx, xy): what `io::babylon_env` writes.
+    pub fn coefficients(&self) -> [[f64; 3]; 9] {
+        [
+            self.x, self.y, self.z, self.xx, self.yy, self.zz, self.yz, self.zx, self.xy,
+        ]
+    }
+
     /// The polynomial Babylon stores for a cube map whose order-2 radiance coefficients (in
     /// cubeforge's basis, [`crate::filter::sh::BASIS`], per channel) are `radiance`: the
     /// harmonics of `E / pi` (radiance times pi, 2pi/3, pi/4 per band, over pi; Babylon's

@@ -271,7 +271,7 @@ fn make_lut_png(path: &Path, charlie: bool) -> Result<Vec<u8>> {
         png16: true,
         ..io::WriteOptions::default()
     };
-    io::encode_image_as(FileFormat::Png, path, &img, &write)
+    crate::output::encode_image_as(FileFormat::Png, path, &img, &write)
 }
 
 fn gltf(l: &Lighting, ctx: &Context) -> Result<Delivery> {
@@ -329,7 +329,7 @@ fn filament(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     // cmgen's own format: R11F_G11F_B10F.
     let gpu = ctx.opts.encoding.gpu_format.unwrap_or(GpuFormat::Rg11b10);
     let format = Ktx1Format::from_gpu(gpu).map_err(crate::Error::usage)?;
-    let sh = ktx1::filament_sh(&l.sh);
+    let sh = crate::filter::sh_engines::filament_sh(&l.sh);
     let levels_json = describe(l).to_json();
     let ibl = ctx.path(FILAMENT_SPECULAR);
     let irr = ctx.path("_irradiance.ktx");
@@ -410,7 +410,8 @@ scene.setSkybox(engine.createSkyFromKtx1('{k}'));"#,
 }
 
 fn babylon(l: &Lighting, ctx: &Context) -> Result<Delivery> {
-    use io::babylon_env::{self, SphericalPolynomial};
+    use crate::filter::sh_engines::SphericalPolynomial;
+    use io::babylon_env;
     no_zstd(ctx, "Babylon's .env")?;
     if ctx.opts.encoding.gpu_format.is_some() {
         return Err(crate::Error::usage(format!(
@@ -422,7 +423,7 @@ fn babylon(l: &Lighting, ctx: &Context) -> Result<Delivery> {
     let poly = SphericalPolynomial::from_radiance_sh(&l.sh);
     let bytes = babylon_env::encode(
         &l.specular,
-        Some(&poly),
+        Some(&poly.coefficients()),
         babylon_env::DEFAULT_LOD_GENERATION_SCALE,
     )
     .map_err(crate::Error::usage)?;

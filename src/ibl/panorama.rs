@@ -55,7 +55,7 @@ pub fn panorama(engine: Engine, ctx: &Context, size: Option<usize>) -> Result<De
         exr_float: ctx.opts.encoding.exr_float,
         ..Default::default()
     };
-    let bytes = io::encode_image_as(format, &path, &img, &write)?;
+    let bytes = crate::output::encode_image_as(format, &path, &img, &write)?;
     let clamped = io::clamp_warning_with(&path, format, &write, [&img]);
     let snippet = snippet.replace("{f}", &file_name(&path));
     Ok(Delivery::new(vec![(path, bytes)], snippet, clamped))
@@ -136,7 +136,7 @@ fn godot_ktx2(ctx: &Context, img: Image, format: GpuFormat) -> Result<Delivery> 
 /// and `NAME.hdr` for older three.js; 4 faces wide, the face a power of two (256 to 4096, from
 /// the input's or `size`), which PMREM takes whole.
 fn three(ctx: &Context, size: Option<usize>) -> Result<Delivery> {
-    use crate::io::ultrahdr::{self, Reader};
+    use crate::io::ultrahdr::Reader;
     let face = size
         .unwrap_or_else(|| ctx.loaded.face_size().next_power_of_two())
         .clamp(256, 4096);
@@ -148,9 +148,10 @@ fn three(ctx: &Context, size: Option<usize>) -> Result<Delivery> {
         &ctx.resampler(),
     );
     let (jpg, hdr) = (ctx.path(".jpg"), ctx.path(".hdr"));
-    let (bytes, stats) = ultrahdr::encode(&img, Tonemap::Aces, Reader::Three, true)
+    let (bytes, stats) = crate::output::ultrahdr_encode(&img, Tonemap::Aces, Reader::Three, true)
         .map_err(|e| crate::error::Error::file(&jpg, e))?;
-    let fallback = io::encode_image_as(FileFormat::Hdr, &hdr, &img, &io::WriteOptions::default())?;
+    let fallback =
+        crate::output::encode_image_as(FileFormat::Hdr, &hdr, &img, &io::WriteOptions::default())?;
     // UASTC HDR: the same panorama with its mips, which KTX2Loader transcodes per device.
     let ktx2 = match ctx.opts.encoding.gpu_format {
         Some(format) => Some(panorama_ktx2(ctx, img, format, true)?),

@@ -33,13 +33,54 @@ use std::path::Path;
 pub const MAGIC: [u8; 8] = [0x86, 0x16, 0x87, 0x96, 0xF6, 0xD6, 0x96, 0x36];
 /// The largest value RGBD stores (D = 1/255).
 pub const RGBD_MAX: f32 = super::hdr8::RGBD_MAX;
-/// Babylon's default `lodGenerationScale` (also what it assumes when a file has none).
-pub const DEFAULT_LOD_GENERATION_SCALE: f64 = crate::filter::BABYLON_LOD_GENERATION_SCALE;
+/// Babylon's default `lodGenerationScale` (also what it assumes when a file has none; the
+/// roughness mapping's `filter::BABYLON_LOD_GENERATION_SCALE`, the same number).
+pub const DEFAULT_LOD_GENERATION_SCALE: f64 = 0.8;
 /// The manifest version written (Babylon reads 1 and 2).
 pub const VERSION: u32 = 2;
 
 use super::hdr8::HdrEncoding;
-pub use crate::filter::sh_engines::SphericalPolynomial;
+
+/// The manifest's irradiance polynomial, per channel [r, g, b], in its order: x, y, z, xx,
+/// yy, zz, yz, zx, xy (computed above `io`, by `filter::sh_engines::SphericalPolynomial`).
+pub type Polynomial = [[f64; 3]; 9];
+
+/// The manifest's `irradiance` object: the polynomial's nine coefficients by name.
+#[derive(Clone, Copy, Serialize, Deserialize)]
+struct PolynomialJson {
+    x: [f64; 3],
+    y: [f64; 3],
+    z: [f64; 3],
+    xx: [f64; 3],
+    yy: [f64; 3],
+    zz: [f64; 3],
+    yz: [f64; 3],
+    zx: [f64; 3],
+    xy: [f64; 3],
+}
+
+impl PolynomialJson {
+    /// JSON has no NaN or infinity: those coefficients are written as 0.
+    fn finite(p: &Polynomial) -> PolynomialJson {
+        let f = |i: usize| p[i].map(|v| if v.is_finite() { v } else { 0.0 });
+        PolynomialJson {
+            x: f(0),
+            y: f(1),
+            z: f(2),
+            xx: f(3),
+            yy: f(4),
+            zz: f(5),
+            yz: f(6),
+            zx: f(7),
+            xy: f(8),
+        }
+    }
+
+    fn coefficients(&self) -> Polynomial {
+        let p = self;
+        [p.x, p.y, p.z, p.xx, p.yy, p.zz, p.yz, p.zx, p.xy]
+    }
+}
 
 /// One image's place in the file: bytes from the end of the manifest.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
@@ -100,7 +141,7 @@ fn face_png(face: &Image) -> std::result::Result<Vec<u8>, String> {
 /// edge must be a power of two and the chain complete down to 1x1, as Babylon requires.
 pub fn encode(
     cube: &CubeMap,
-    irradiance: Option<&SphericalPolynomial>,
+    irradiance: Option<&Polynomial>,
     lod_generation_scale: f64,
 ) -> std::result::Result<Vec<u8>, String> {
     let n = cube.size();
@@ -143,7 +184,7 @@ pub fn encode(
         image_type: Some("image/png".into()),
         irradiance: Some(
             irradiance
-                .map(|p| serde_json::to_value(finite_polynomial(p)))
+                .map(|p| serde_json::to_value(PolynomialJson::finite(p)))
                 .transpose()
                 .map_err(|e| e.to_string())?
                 .unwrap_or(serde_json::Value::Null),
@@ -168,22 +209,6 @@ pub fn encode(
     Ok(out)
 }
 
-/// JSON has no NaN or infinity: those coefficients are written as 0.
-fn finite_polynomial(p: &SphericalPolynomial) -> SphericalPolynomial {
-    let f = |c: [f64; 3]| c.map(|v| if v.is_finite() { v } else { 0.0 });
-    SphericalPolynomial {
-        x: f(p.x),
-        y: f(p.y),
-        z: f(p.z),
-        xx: f(p.xx),
-        yy: f(p.yy),
-        zz: f(p.zz),
-        yz: f(p.yz),
-        zx: f(p.zx),
-        xy: f(p.xy),
-    }
-}
-
 /// A `.env` file as read.
 #[derive(Clone, Debug)]
 pub struct BabylonEnv {
@@ -192,7 +217,7 @@ pub struct BabylonEnv {
     /// The manifest's version (1 or 2).
     pub version: u32,
     /// The irradiance polynomial, when the manifest has one.
-    pub irradiance: Option<SphericalPolynomial>,
+    pub irradiance: Option<Polynomial>,
     /// `lodGenerationScale` (0.8 when absent, as Babylon reads it).
     pub lod_generation_scale: f64,
     /// Edge of the optional irradiance cube map's faces, which is not decoded.
@@ -304,7 +329,9 @@ pub fn read(bytes: &[u8], path: &Path, limits: &Limits) -> Result<BabylonEnv> {
         .get("irradianceTexture")
         .and_then(|t| t.get("size"))
         .and_then(|s| s.as_u64());
-    let irradiance = serde_json::from_value::<SphericalPolynomial>(irradiance_json).ok();
+    let irradiance = serde_json::from_value::<PolynomialJson>(irradiance_json)
+        .ok()
+        .map(|p| p.coefficients());
     Ok(BabylonEnv {
         cube: CubeMap {
             levels: cube_levels,
@@ -370,6 +397,7 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Deco
         replaced_values: 0,
         stored_levels: levels,
         declared: None,
+        undo: Default::default(),
         part: None,
     };
     Ok((Decoded::Cube(env.cube), meta))
@@ -394,6 +422,16 @@ mod tests {
         }
         // Above 255 it clamps.
         assert!((from_rgbd(&rgbd(Vec4::splat(1000.0))).x - 255.0).abs() < 1.0);
+    }
+
+    use crate::filter::sh_engines::SphericalPolynomial;
+
+    #[test]
+    fn lod_generation_scale_is_the_roughness_mappings() {
+        assert_eq!(
+            DEFAULT_LOD_GENERATION_SCALE,
+            crate::filter::BABYLON_LOD_GENERATION_SCALE
+        );
     }
 
     #[test]
@@ -428,11 +466,11 @@ mod tests {
         })
         .with_box_mips(None);
         let p = SphericalPolynomial::from_radiance_sh(&crate::filter::sh::project(&cube));
-        let bytes = encode(&cube, Some(&p), 0.8).unwrap();
+        let bytes = encode(&cube, Some(&p.coefficients()), 0.8).unwrap();
         let env = read(&bytes, Path::new("t.env"), &Limits::default()).unwrap();
         assert_eq!(env.cube.levels.len(), 4);
         // serde_json parses floats to within an ulp or so.
-        let back = serde_json::to_value(env.irradiance.unwrap()).unwrap();
+        let back = serde_json::to_value(PolynomialJson::finite(&env.irradiance.unwrap())).unwrap();
         let want = serde_json::to_value(p).unwrap();
         for (k, v) in want.as_object().unwrap() {
             for c in 0..3 {

@@ -1,11 +1,8 @@
-//! Encoding by format: an image or a cube map as the bytes of the format an output was
-//! resolved to ([`crate::output::Encoding::resolve`]), and the checks a container makes.
+//! What the codecs are told when they write ([`WriteOptions`]), and the checks a container
+//! makes. Choosing the codec by format and the pixel work before it (RGBM/RGBD, the SH of a
+//! .env, UltraHDR's SDR picture) is `output::encode`'s.
 
-use super::{
-    babylon_env, dds, exr, gpu, hdr8, ktx1, ktx2, raster, rgbe, ultrahdr, unknown_ext, Decoded,
-    FileFormat, GpuFormat, HdrEncoding, Limits,
-};
-use crate::cube::CubeMap;
+use super::{dds, gpu, ktx2, Decoded, FileFormat, GpuFormat, HdrEncoding, Limits};
 use crate::error::{Error, Result};
 use crate::image::Image;
 use std::path::Path;
@@ -47,137 +44,6 @@ pub enum ExrFloat {
     Half,
     /// 32-bit floats.
     F32,
-}
-
-/// Encodes an image in the format its name asks for ([`encode_image_as`]).
-pub fn encode_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<Vec<u8>> {
-    let format = FileFormat::from_extension(path).ok_or_else(|| unknown_ext(path))?;
-    encode_image_as(format, path, img, opts)
-}
-
-/// Encodes an image as `format`, decided once by the output's resolution
-/// ([`crate::output::Encoding::resolve`]); `path` names the file in errors only.
-pub(crate) fn encode_image_as(
-    format: FileFormat,
-    path: &Path,
-    img: &Image,
-    opts: &WriteOptions,
-) -> Result<Vec<u8>> {
-    if let Some(e) = opts.hdr_encoding {
-        let plain = hdr8::check(path, format, opts)?;
-        let bytes = encode_image_as(format, path, &e.encode_image(img), &plain)?;
-        return Ok(hdr8::marked(format, bytes, e));
-    }
-    match format {
-        FileFormat::Exr => {
-            exr::encode(img, opts.exr_float == ExrFloat::F32).map_err(|e| Error::file(path, e))
-        }
-        FileFormat::Hdr => Ok(rgbe::encode(img)),
-        FileFormat::UltraHdr => {
-            let curve = opts.gain_map.unwrap_or_default();
-            ultrahdr::encode(img, curve, ultrahdr::Reader::Format, false)
-                .map(|(bytes, _)| bytes)
-                .map_err(|e| Error::file(path, e))
-        }
-        f => match f.container() {
-            Some(c) => Err(Error::file(
-                path,
-                format!(
-                    "{} holds cube maps: write a cube map ({} {})",
-                    f.name(),
-                    crate::error::param("to"),
-                    c.name()
-                ),
-            )),
-            None if f == FileFormat::Jpeg && opts.gain_map.is_some() => {
-                encode_image_as(FileFormat::UltraHdr, path, img, opts)
-            }
-            None => raster::encode(img, f, opts).map_err(|e| Error::file(path, e)),
-        },
-    }
-}
-
-/// Encodes a cube map (every level) as KTX2, DDS or KTX in `format`, or as a Babylon env
-/// (RGBD, with the irradiance polynomial of its level 0), by the name's extension.
-pub fn encode_cube(path: &Path, cube: &CubeMap, format: GpuFormat) -> Result<Vec<u8>> {
-    encode_cube_with(
-        path,
-        cube,
-        &WriteOptions {
-            gpu_format: format,
-            ..WriteOptions::default()
-        },
-        &[],
-    )
-}
-
-/// Encodes a cube map (every level) as KTX2 or DDS, by the name's extension, in
-/// `opts.gpu_format`, with KTX2 key/value entries `extra` ([`encode_cube_as`]).
-pub fn encode_cube_with(
-    path: &Path,
-    cube: &CubeMap,
-    opts: &WriteOptions,
-    extra: &[(&str, &[u8])],
-) -> Result<Vec<u8>> {
-    match FileFormat::from_extension(path) {
-        Some(f) => encode_cube_as(f, path, cube, opts, extra),
-        None => Err(not_a_container(path)),
-    }
-}
-
-/// Encodes a cube map (every level) as the container `format` (KTX2, DDS, KTX or .env), in
-/// `opts.gpu_format`, with KTX2 key/value entries `extra` (the caller's: cubeforge's own
-/// only with `opts.cubeforge_keys`); `path` names the file in errors only. Zstandard supercompression (`opts.zstd`) is KTX2's: another container with it is
-/// refused.
-pub(crate) fn encode_cube_as(
-    format: FileFormat,
-    path: &Path,
-    cube: &CubeMap,
-    opts: &WriteOptions,
-    extra: &[(&str, &[u8])],
-) -> Result<Vec<u8>> {
-    if let Some(e) = opts.hdr_encoding {
-        let plain = hdr8::check(path, format, opts)?;
-        let mut kv = extra.to_vec();
-        if opts.cubeforge_keys {
-            kv.push((hdr8::KTX2_KEY, e.name().as_bytes()));
-        }
-        return encode_cube_as(format, path, &hdr8::encode_cube(cube, e), &plain, &kv);
-    }
-    match format {
-        FileFormat::Ktx2 => {
-            let fixup = opts.edge_fixup.name().as_bytes();
-            let mut kv = extra.to_vec();
-            if opts.cubeforge_keys && opts.edge_fixup != crate::cube::EdgeFixup::None {
-                kv.push((ktx2::EDGE_FIXUP_KEY, fixup));
-            }
-            ktx2::encode_cube_with(cube, opts.gpu_format, opts.zstd, &kv)
-                .map_err(|e| Error::file(path, e))
-        }
-        FileFormat::Dds | FileFormat::Ktx1 | FileFormat::Env if opts.zstd.is_some() => {
-            Err(zstd_needs_ktx2(path))
-        }
-        FileFormat::Dds => dds::encode(cube, opts.gpu_format).map_err(|e| Error::file(path, e)),
-        FileFormat::Ktx1 => {
-            let format = ktx1::Ktx1Format::from_gpu(opts.gpu_format)
-                .map_err(|e| Error::unsupported(path, e))?;
-            ktx1::encode(cube, format, &[]).map_err(|e| Error::file(path, e))
-        }
-        FileFormat::Env => {
-            let sh = crate::filter::sh::project(cube);
-            let poly = babylon_env::SphericalPolynomial::from_radiance_sh(&sh);
-            babylon_env::encode(cube, Some(&poly), babylon_env::DEFAULT_LOD_GENERATION_SCALE)
-                .map_err(|e| Error::file(path, e))
-        }
-        _ => Err(not_a_container(path)),
-    }
-}
-
-fn not_a_container(path: &Path) -> Error {
-    Error::file(
-        path,
-        "a cube-map container must be named .ktx2, .dds, .ktx or .env",
-    )
 }
 
 /// Refuses `format` for a `container` file (named `path`) that cannot hold it, or that this

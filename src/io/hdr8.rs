@@ -12,7 +12,7 @@
 
 #![warn(missing_docs)]
 
-use super::{Decoded, FileFormat, GpuFormat, Meta, WriteOptions};
+use super::{FileFormat, GpuFormat, WriteOptions};
 use crate::cube::CubeMap;
 use crate::error::{param, Error, Result};
 use crate::image::Image;
@@ -150,14 +150,6 @@ impl HdrEncoding {
             });
         out
     }
-
-    /// An image read as stored (values k / 255) decoded in place.
-    pub fn decode_image(self, img: &mut Image) {
-        img.pixels.par_iter_mut().for_each(|p| {
-            let b = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-            *p = self.decode([b(p.x), b(p.y), b(p.z), b(p.w)]);
-        });
-    }
 }
 
 /// The options that write `format` as an encoding's bytes (data, no sRGB; the encoding
@@ -259,54 +251,6 @@ pub(crate) fn ktx2_encoding(bytes: &[u8]) -> Option<HdrEncoding> {
         .iter()
         .find(|(k, _)| k == KTX2_KEY)
         .and_then(|(_, v)| HdrEncoding::from_name(v))
-}
-
-/// A file read as stored, decoded: its 8-bit texels become radiance, and `meta` says so. A
-/// float file, or one read through sRGB, is refused: its values are not the encoding's bytes.
-/// `given`: the encoding was asked for (`--decode`), not named by the file's own metadata.
-pub(crate) fn decode(
-    path: &Path,
-    e: HdrEncoding,
-    given: bool,
-    decoded: Decoded,
-    mut meta: Meta,
-) -> Result<(Decoded, Meta)> {
-    let eight_bit = matches!(
-        meta.file_format,
-        FileFormat::Png | FileFormat::Tga | FileFormat::Ktx2 | FileFormat::Dds
-    ) && !meta.hdr
-        && meta.color_space == crate::image::ColorSpace::Linear
-        && !meta.pixel_format.contains("16");
-    if !eight_bit {
-        let asked = if given {
-            format!("{} {}: this file holds", param("decode"), e.name())
-        } else {
-            format!("its metadata ({KTX2_KEY}) names {}, but it holds", e.name())
-        };
-        return Err(Error::file(
-            path,
-            format!(
-                "{asked} {} {}, not 8-bit RGBA data (a PNG, or a KTX2/DDS of rgba8)",
-                meta.file_format.name(),
-                meta.pixel_format
-            ),
-        ));
-    }
-    let decoded = match decoded {
-        Decoded::Image(mut img) => {
-            e.decode_image(&mut img);
-            Decoded::Image(img)
-        }
-        Decoded::Cube(mut cube) => {
-            for faces in &mut cube.levels {
-                faces.iter_mut().for_each(|f| e.decode_image(f));
-            }
-            Decoded::Cube(cube)
-        }
-    };
-    meta.hdr = true;
-    meta.pixel_format = format!("{} as {}", meta.pixel_format, e.name().to_uppercase());
-    Ok((decoded, meta))
 }
 
 #[cfg(test)]

@@ -203,49 +203,22 @@ fn decode_bytes(
         },
         _ => opts.hdr_encoding,
     };
-    if let Some(e) = encoding {
-        // The bytes as stored, then the encoding undone.
-        let raw = ReadOptions {
-            linear: true,
-            hdr_encoding: None,
-            ..*opts
-        };
-        let (decoded, meta) = decode_format(bytes, format, path, &raw, sanitize)?;
-        let (decoded, meta) =
-            super::hdr8::decode(path, e, opts.hdr_encoding.is_some(), decoded, meta)?;
-        return Ok(fixed_back(bytes, format, decoded, meta));
-    }
-    let (decoded, meta) = decode_format(bytes, format, path, opts, sanitize)?;
-    Ok(fixed_back(bytes, format, decoded, meta))
-}
-
-/// A KTX2 written with an edge fixup, its texels moved back where every other reader of
-/// cube maps expects them (and `info` says so).
-fn fixed_back(
-    bytes: &[u8],
-    format: FileFormat,
-    decoded: Decoded,
-    mut meta: Meta,
-) -> (Decoded, Meta) {
-    use crate::cube::{fixup, EdgeFixup};
-    let mode = match (format, &decoded) {
-        (FileFormat::Ktx2, Decoded::Cube(_)) => super::ktx2::metadata(bytes)
+    // RGBM/RGBD: the bytes as stored (linear), undone above io, as is an edge fixup.
+    let raw = ReadOptions {
+        linear: true,
+        hdr_encoding: None,
+        ..*opts
+    };
+    let stored = if encoding.is_some() { &raw } else { opts };
+    let (decoded, mut meta) = decode_format(bytes, format, path, stored, sanitize)?;
+    meta.undo.hdr_encoding = encoding.map(|e| (e, opts.hdr_encoding.is_some()));
+    if let (FileFormat::Ktx2, Decoded::Cube(_)) = (format, &decoded) {
+        meta.undo.edge_fixup = super::ktx2::metadata(bytes)
             .iter()
             .find(|(k, _)| k == super::ktx2::EDGE_FIXUP_KEY)
-            .and_then(|(_, v)| EdgeFixup::from_name(v)),
-        _ => None,
-    };
-    match (mode, decoded) {
-        (Some(mode), Decoded::Cube(cube)) => {
-            meta.declared = Some(format!(
-                "edge fixup {}: texels read back to the usual centres",
-                mode.name()
-            ));
-            let levels = cube.levels.iter().map(|f| fixup::undo(f, mode)).collect();
-            (Decoded::Cube(crate::cube::CubeMap { levels }), meta)
-        }
-        (_, decoded) => (decoded, meta),
+            .and_then(|(_, v)| crate::cube::EdgeFixup::from_name(v));
     }
+    Ok((decoded, meta))
 }
 
 /// Decodes bytes known to be `format`.

@@ -29,11 +29,7 @@ use std::path::Path;
 pub(crate) use crate::alloc::human_bytes;
 pub(crate) use atomic::stage_replacing;
 pub use atomic::{check_folder, remove_temporaries, Staged};
-pub use encode::{
-    check_gpu_format, container_psnr, encode_cube, encode_cube_with, encode_image, zstd_needs_ktx2,
-    ExrFloat, WriteOptions,
-};
-pub(crate) use encode::{encode_cube_as, encode_image_as};
+pub use encode::{check_gpu_format, container_psnr, zstd_needs_ktx2, ExrFloat, WriteOptions};
 pub use gpu::{finite, unorm8, GpuFormat, HALF_MAX};
 pub use hdr8::HdrEncoding;
 mod encode;
@@ -248,6 +244,32 @@ pub struct Meta {
     /// Which part of a multi-part file was read, for `info` and a warning (None: the file has
     /// one).
     pub part: Option<String>,
+    /// What the texels hold beyond what the codec decodes (RGBM/RGBD, an edge fixup): `io`
+    /// names it and returns the texels as stored; `convert::read` undoes it.
+    #[serde(skip)]
+    pub undo: Undo,
+}
+
+/// What a file says of its texels that a reader above `io` undoes (`convert::read`): `io`
+/// decodes codecs and filters no pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Undo {
+    /// 8-bit texels as RGBM or RGBD, decoded as stored (linear bytes), and whether `--decode`
+    /// named it (true) rather than the file's own metadata.
+    pub hdr_encoding: Option<(HdrEncoding, bool)>,
+    /// A KTX2 cube map written with an edge fixup (`cubeforge.edgeFixup`).
+    pub edge_fixup: Option<crate::cube::EdgeFixup>,
+    /// An OpenEXR image whose `envmap` attribute declares OpenEXR's own layout.
+    pub envmap: Option<Envmap>,
+}
+
+/// OpenEXR's own environment-map layouts (`ImfEnvmap`), which an `envmap` attribute declares.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Envmap {
+    /// `LatLongMap`: a panorama, +X a quarter turn left of the centre.
+    LatLong,
+    /// `CubeMap`: six faces +X -X +Y -Y +Z -Z stacked top to bottom.
+    Cube,
 }
 
 impl Meta {
@@ -271,6 +293,7 @@ impl Meta {
             stored_levels,
             declared: None,
             part: None,
+            undo: Undo::default(),
         }
     }
 }
@@ -338,9 +361,10 @@ pub fn exr_part(path: &Path, choice: &str) -> Result<usize> {
     exr::part_index(&read_file(path)?, path, choice)
 }
 
-/// Reads any supported file and replaces NaN, infinite and negative values by 0, counting
-/// them in `Meta::replaced_values`.
-pub fn read(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
+/// Decodes any supported file and replaces NaN, infinite and negative values by 0, counting
+/// them in `Meta::replaced_values`; the texels as stored otherwise (what `Meta::undo` names
+/// is undone by `convert::read`, the reader every caller uses).
+pub fn decode_file(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     let session = opts.limits.session;
     if !opts.usual() {
         return read_sanitized(path, opts);
@@ -395,9 +419,9 @@ fn read_sanitized(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     Ok((decoded, meta))
 }
 
-/// Reads any supported file as stored, by content, with the size limit checked from the
+/// Decodes any supported file as stored, by content, with the size limit checked from the
 /// header before pixels are allocated.
-pub fn read_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
+pub fn decode_file_raw(path: &Path, opts: &ReadOptions) -> Result<(Decoded, Meta)> {
     read_with(path, opts, false)
 }
 

@@ -79,6 +79,7 @@ pub fn decode(
         replaced_values: 0,
         stored_levels: 1,
         declared: None,
+        undo: Default::default(),
         part: None,
     };
     Ok((

@@ -153,16 +153,16 @@ mod tests {
         let guard = Session::open_shared();
         let mut opts = crate::io::ReadOptions::default();
         opts.limits.session = guard.session();
-        let (first, _) = crate::io::read(&path, &opts).unwrap();
+        let (first, _) = crate::io::decode_file(&path, &opts).unwrap();
         // Gone from the disk: the second job's read is the kept decode.
         std::fs::remove_file(&path).unwrap();
-        let (again, _) = crate::io::read(&path, &opts).unwrap();
+        let (again, _) = crate::io::decode_file(&path, &opts).unwrap();
         let (Decoded::Image(a), Decoded::Image(b)) = (first, again) else {
             panic!("images")
         };
         assert_eq!(a.pixels, b.pixels);
         assert_eq!(guard.session().take_reads(), std::slice::from_ref(&path));
         drop(guard);
-        assert!(crate::io::read(&path, &opts).is_err());
+        assert!(crate::io::decode_file(&path, &opts).is_err());
     }
 }

@@ -117,13 +117,13 @@ impl ControlJob {
                 (bytes, what)
             }
             FileFormat::Exr => (
-                io::encode_image_as(format, &self.output, image, &write)?,
+                crate::output::encode_image_as(format, &self.output, image, &write)?,
                 "half-float EXR".to_string(),
             ),
             _ => {
                 let bits = if self.encoding.png16 { 16 } else { 8 };
                 (
-                    io::encode_image_as(format, &self.output, image, &write)?,
+                    crate::output::encode_image_as(format, &self.output, image, &write)?,
                     format!("{bits}-bit PNG"),
                 )
             }

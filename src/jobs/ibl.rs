@@ -244,10 +244,7 @@ impl Job for IblJob {
         };
         loaded.expose(self.options.encoding.exposure);
         progress.stage("decode");
-        if let Some(w) = convert::skybox_note(&self.inputs) {
-            warnings.push(w);
-        }
-        if let Some(w) = convert::part_note(&loaded, &self.read) {
+        for w in loaded.warnings(&self.inputs, &self.read) {
             warnings.push(w);
         }
         if let Some(w) = super::display_referred(&loaded) {

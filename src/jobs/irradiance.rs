@@ -145,10 +145,7 @@ impl Job for IrradianceJob {
         )?;
         let loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
         progress.stage("decode");
-        if let Some(w) = convert::skybox_note(&self.inputs) {
-            warnings.push(w);
-        }
-        if let Some(w) = convert::part_note(&loaded, &self.read) {
+        for w in loaded.warnings(&self.inputs, &self.read) {
             warnings.push(w);
         }
         if let Some(w) = super::display_referred(&loaded) {

@@ -133,7 +133,7 @@ impl Job for LutJob {
                 "KTX2 RGBA16F".to_string(),
             ),
             FileFormat::Exr => (
-                io::encode_image_as(format, &self.output, &table, &write)?,
+                crate::output::encode_image_as(format, &self.output, &table, &write)?,
                 "half-float EXR".to_string(),
             ),
             _ => {
@@ -146,7 +146,7 @@ impl Job for LutJob {
                 }
                 let bits = if self.encoding.png16 { 16 } else { 8 };
                 (
-                    io::encode_image_as(format, &self.output, &table, &write)?,
+                    crate::output::encode_image_as(format, &self.output, &table, &write)?,
                     format!("{bits}-bit PNG, linear"),
                 )
             }

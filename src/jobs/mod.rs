@@ -131,15 +131,6 @@ pub(crate) fn display_referred(loaded: &crate::convert::Loaded) -> Option<String
     })
 }
 
-pub(crate) fn replaced_values(file: &std::path::Path, n: u64) -> Option<String> {
-    (n > 0).then(|| {
-        format!(
-            "{}: replaced {n} NaN, infinite or negative values by 0 (and values above 1e28 by 1e28)",
-            file.display()
-        )
-    })
-}
-
 /// What a command wrote, as a summary line: each file with its size, a folder output (faces,
 /// a chain) as one entry with its count. None on standard output, whose data is the output.
 pub(crate) fn wrote(

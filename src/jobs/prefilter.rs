@@ -1,6 +1,6 @@
 //! `prefilter` as a job: a mip chain for blurred or glossy reflections.
 
-use super::{replaced_values, Job, Progress, Quality, Report, Warning, Warnings};
+use super::{Job, Progress, Quality, Report, Warning, Warnings};
 use crate::chain::{self, LevelsFile};
 use crate::convert;
 use crate::cube::CubeMap;
@@ -177,13 +177,7 @@ impl Job for PrefilterJob {
         }
         let loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
         progress.stage("decode");
-        if let Some(w) = convert::skybox_note(&self.inputs) {
-            warnings.push(w);
-        }
-        if let Some(w) = convert::part_note(&loaded, &self.read) {
-            warnings.push(w);
-        }
-        if let Some(w) = replaced_values(&loaded.files[0], loaded.meta.replaced_values as u64) {
+        for w in loaded.warnings(&self.inputs, &self.read) {
             warnings.push(w);
         }
         let size = self.size.unwrap_or_else(|| loaded.face_size());

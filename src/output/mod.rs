@@ -15,10 +15,13 @@ use std::path::{Path, PathBuf};
 
 mod deliver;
 pub mod depfile;
+mod encode;
 mod encoding;
 pub use deliver::{
     deliver, is_closed_pipe, stdout_open, write_stdout, write_summary, Destination, Files,
 };
+pub use encode::{encode_cube, encode_cube_with, encode_image, ultrahdr_encode};
+pub(crate) use encode::{encode_cube_as, encode_image_as};
 pub use encoding::Encoding;
 
 /// An output as [`Encoding::resolve`] decided it: where, in which layout and format, with
@@ -196,7 +199,7 @@ impl Target {
                 let cube: CubeMap =
                     fixup::apply_cube(cube.with_box_mips(levels), self.write.edge_fixup);
                 let format = self.format.ok_or_else(|| io::unknown_ext(&self.path))?;
-                let bytes = io::encode_cube_as(format, &self.path, &cube, &self.write, &[])?;
+                let bytes = encode_cube_as(format, &self.path, &cube, &self.write, &[])?;
                 if self.write.gpu_format.is_lossy() {
                     let faces: Vec<&Image> = cube.levels[0].iter().collect();
                     psnr = io::container_psnr(&bytes, self.write.gpu_format, &faces);
@@ -208,7 +211,7 @@ impl Target {
                 let curve = self.write.gain_map.unwrap_or_default();
                 let equirect = self.kind == MapKind::Layout(Kind::Equirect);
                 let (bytes, stats) =
-                    io::ultrahdr::encode(&img, curve, io::ultrahdr::Reader::Format, equirect)
+                    ultrahdr_encode(&img, curve, io::ultrahdr::Reader::Format, equirect)
                         .map_err(|e| Error::file(&self.path, e))?;
                 gain_map = Some(stats);
                 vec![(self.path.clone(), bytes)]
@@ -216,7 +219,7 @@ impl Target {
             Output::Image(img) => {
                 refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
                 let format = self.format.ok_or_else(|| io::unknown_ext(&self.path))?;
-                let bytes = io::encode_image_as(format, &self.path, &img, &self.write)?;
+                let bytes = encode_image_as(format, &self.path, &img, &self.write)?;
                 vec![(self.path.clone(), bytes)]
             }
         };
@@ -316,7 +319,7 @@ pub(crate) fn encode_faces(
         paths
             .par_iter()
             .zip(faces.par_iter())
-            .map(|(p, f)| io::encode_image_as(format, p, f, write))
+            .map(|(p, f)| encode_image_as(format, p, f, write))
             .collect()
     };
     paths

@@ -87,7 +87,7 @@ pub fn read_texture(path: &Path, linear: bool, limits: &Limits) -> Result<Image>
         as_stored: false,
         ..Default::default()
     };
-    match io::read(path, &opts)?.0 {
+    match crate::convert::read(path, &opts)?.0 {
         Decoded::Image(img) => Ok(img),
         Decoded::Cube(_) => Err(Error::file(
             path,

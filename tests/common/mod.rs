@@ -118,7 +118,7 @@ pub fn real_dir() -> Option<PathBuf> {
 
 /// Reads an image file (NaN, infinite and negative values replaced by 0, as the CLI does).
 pub fn read_image(path: &Path) -> Image {
-    match io::read(path, &ReadOptions::default()) {
+    match cubeforge::internals::convert::read(path, &ReadOptions::default()) {
         Ok((io::Decoded::Image(img), _)) => img,
         Ok((io::Decoded::Cube(_), _)) => panic!("{} holds a cube map", path.display()),
         Err(e) => panic!("{e}"),
@@ -127,7 +127,8 @@ pub fn read_image(path: &Path) -> Image {
 
 /// Writes an image in the format its name says (PNG 8-bit sRGB, EXR half float, ...).
 pub fn write_image(path: &Path, img: &Image) {
-    let bytes = io::encode_image(path, img, &WriteOptions::default()).expect("encodes");
+    let bytes = cubeforge::internals::output::encode_image(path, img, &WriteOptions::default())
+        .expect("encodes");
     std::fs::write(path, bytes).expect("writes");
 }
 

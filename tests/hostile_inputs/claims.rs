@@ -3,7 +3,7 @@
 
 use crate::harness::{be16, encoded, test_image};
 use cubeforge::internals::image::Image;
-use cubeforge::internals::io::{self, Decoded, Limits, ReadOptions, WriteOptions};
+use cubeforge::internals::io::{Decoded, Limits, ReadOptions, WriteOptions};
 use glam::Vec4;
 use std::path::Path;
 
@@ -23,7 +23,7 @@ fn read_with(path: &Path, bytes: &[u8], limits: Limits) -> cubeforge::Result<Ima
         limits,
         ..ReadOptions::default()
     };
-    match io::read(path, &opts)?.0 {
+    match cubeforge::internals::convert::read(path, &opts)?.0 {
         Decoded::Image(img) => Ok(img),
         Decoded::Cube(_) => panic!("{}: a cube map", path.display()),
     }

@@ -7,7 +7,8 @@ use crate::images::{png_fields, png_fix_crcs};
 use crate::mutator::Field;
 use cubeforge::internals::cube::CubeMap;
 use cubeforge::internals::filter::sh;
-use cubeforge::internals::io::babylon_env::{self, SphericalPolynomial};
+use cubeforge::internals::filter::sh_engines::SphericalPolynomial;
+use cubeforge::internals::io::babylon_env;
 use cubeforge::internals::io::ktx1::{self, Ktx1Format};
 use glam::{Vec3, Vec4};
 
@@ -103,7 +104,9 @@ fn two_d(cube: &[u8]) -> Vec<u8> {
 #[test]
 fn ktx1_mutations() {
     let cube = test_cube(8);
-    let sh_kv = ktx1::sh_key_value(&ktx1::filament_sh(&sh::project(&cube)));
+    let sh_kv = ktx1::sh_key_value(&cubeforge::internals::filter::sh_engines::filament_sh(
+        &sh::project(&cube),
+    ));
     let mut sources = Vec::new();
     let mut add = |what: &str, b: Vec<u8>| {
         let fields = ktx1_fields(&b);
@@ -191,7 +194,7 @@ fn env_mutations() {
     };
     for (n, irradiance) in [(8, true), (4, false), (1, true)] {
         let cube = bright(n);
-        let p = SphericalPolynomial::from_radiance_sh(&sh::project(&cube));
+        let p = SphericalPolynomial::from_radiance_sh(&sh::project(&cube)).coefficients();
         let b = babylon_env::encode(&cube, irradiance.then_some(&p), 0.8).unwrap();
         let what = if irradiance { "" } else { ", no irradiance" };
         sources.push((format!(".env {n}x{n}{what}"), b.clone(), env_fields(&b)));

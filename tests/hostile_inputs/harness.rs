@@ -5,7 +5,7 @@ use crate::mutator::{Field, Mutator};
 use crate::LARGEST;
 use cubeforge::internals::cube::CubeMap;
 use cubeforge::internals::image::Image;
-use cubeforge::internals::io::{self, Decoded, FileFormat, Limits, ReadOptions, WriteOptions};
+use cubeforge::internals::io::{Decoded, FileFormat, Limits, ReadOptions, WriteOptions};
 use glam::{Vec3, Vec4};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
@@ -153,7 +153,7 @@ pub fn image_door(dir: &Path, name: &str) -> impl Fn(&[u8]) -> cubeforge::Result
             as_stored: false,
             ..Default::default()
         };
-        let (decoded, _) = io::read(&path, &opts)?;
+        let (decoded, _) = cubeforge::internals::convert::read(&path, &opts)?;
         match decoded {
             Decoded::Image(img) => assert_eq!(img.pixels.len(), img.width * img.height),
             Decoded::Cube(cube) => {
@@ -188,7 +188,7 @@ pub fn test_image(w: usize, h: usize) -> Image {
 }
 
 pub fn encoded(name: &str, img: &Image, opts: &WriteOptions) -> Vec<u8> {
-    io::encode_image(Path::new(name), img, opts).unwrap()
+    cubeforge::internals::output::encode_image(Path::new(name), img, opts).unwrap()
 }
 
 pub fn test_cube(size: usize) -> CubeMap {

@@ -298,7 +298,8 @@ pub(crate) mod with_astc {
         let o = ibl(&pano, &godot, "godot", &["--gpu-format", "astc-hdr-4x4"]);
         assert!(o.status.success(), "{}", common::stderr(&o));
         let panorama = godot.join("env.ktx2");
-        let (decoded, meta) = io::read_raw(&panorama, &ReadOptions::default()).unwrap();
+        let (decoded, meta) =
+            cubeforge::internals::convert::read_raw(&panorama, &ReadOptions::default()).unwrap();
         assert_eq!(meta.pixel_format, "ASTC 4x4 HDR");
         let Decoded::Image(img) = decoded else {
             panic!("Godot's panorama is a 2D texture");

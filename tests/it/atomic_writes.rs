@@ -8,23 +8,7 @@ use std::time::{Duration, Instant};
 
 const SKY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.png");
 
-/// Every entry under `dir`, relative, sorted.
-pub(crate) fn tree(dir: &Path) -> Vec<String> {
-    fn walk(d: &Path, root: &Path, out: &mut Vec<String>) {
-        let Ok(rd) = std::fs::read_dir(d) else { return };
-        for e in rd.flatten() {
-            let p = e.path();
-            out.push(p.strip_prefix(root).unwrap().display().to_string());
-            if p.is_dir() {
-                walk(&p, root, out);
-            }
-        }
-    }
-    let mut out = Vec::new();
-    walk(dir, dir, &mut out);
-    out.sort();
-    out
-}
+pub(crate) use crate::tree::tree;
 
 fn convert(out: &Path, yaw: &str, pause_ms: u64) -> Child {
     Command::new(env!("CARGO_BIN_EXE_cubeforge"))

@@ -68,7 +68,7 @@ fn faces(n: usize) -> [Image; 6] {
 }
 
 fn encode(name: &str, img: &Image) -> Vec<u8> {
-    cubeforge::internals::io::encode_image(Path::new(name), img, &Default::default()).unwrap()
+    cubeforge::internals::output::encode_image(Path::new(name), img, &Default::default()).unwrap()
 }
 
 /// Failed cleanly: non-zero exit (not a panic's 101), and stderr is exactly one line, starting

@@ -32,7 +32,7 @@ pub(crate) fn err(o: &Output) -> String {
 }
 
 fn mean(path: &Path) -> f32 {
-    let (d, _) = cubeforge::internals::io::read(path, &Default::default()).unwrap();
+    let (d, _) = cubeforge::internals::convert::read(path, &Default::default()).unwrap();
     let cubeforge::internals::io::Decoded::Image(img) = d else {
         panic!("an image")
     };
@@ -143,7 +143,8 @@ fn convert_reads_one_level_of_a_chain() {
         t.path(),
     );
     let (d, _) =
-        cubeforge::internals::io::read(&t.path().join("l2.ktx2"), &Default::default()).unwrap();
+        cubeforge::internals::convert::read(&t.path().join("l2.ktx2"), &Default::default())
+            .unwrap();
     let cubeforge::internals::io::Decoded::Cube(c) = d else {
         panic!("a cube")
     };
@@ -343,7 +344,8 @@ fn an_oversized_control_map_names_where_its_size_came_from() {
 
 #[test]
 fn library_errors_have_kinds() {
-    use cubeforge::internals::io::{read, Limits, ReadOptions};
+    use cubeforge::internals::convert::read;
+    use cubeforge::internals::io::{Limits, ReadOptions};
     use cubeforge::Error;
     let t = tempfile::tempdir().unwrap();
     let missing = t.path().join("missing.exr");

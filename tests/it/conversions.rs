@@ -24,6 +24,7 @@ fn meta() -> Meta {
         stored_levels: 1,
         declared: None,
         part: None,
+        undo: Default::default(),
     }
 }
 

@@ -232,7 +232,7 @@ fn every_cube_output_and_chain_level_is_fixed() {
                 };
                 std::fs::write(
                     &p,
-                    cubeforge::internals::io::encode_image(&p, img, &opts).unwrap(),
+                    cubeforge::internals::output::encode_image(&p, img, &opts).unwrap(),
                 )
                 .unwrap();
             }

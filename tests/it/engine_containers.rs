@@ -7,7 +7,8 @@
 use crate::common::{self, run, stderr};
 use cubeforge::internals::cube::{face_dir, CubeMap};
 use cubeforge::internals::filter::sh;
-use cubeforge::internals::io::babylon_env::{self, SphericalPolynomial};
+use cubeforge::internals::filter::sh_engines::SphericalPolynomial;
+use cubeforge::internals::io::babylon_env;
 use cubeforge::internals::io::ktx1::{self, KeyValue, Ktx1Format};
 use cubeforge::internals::io::{self, Decoded, GpuFormat, Limits, ReadOptions};
 use glam::{Vec3, Vec4};
@@ -81,7 +82,7 @@ fn worst_ratio(a: &CubeMap, b: &CubeMap, rel: f32, abs: f32, of_max: bool) -> f3
 fn filament_sh_is_cmgen_prescaled_irradiance() {
     // cmgen's renderPreScaledSH3Bands: what Filament's shader evaluates from the "sh" key.
     let cube = analytic_cube(32);
-    let s = ktx1::filament_sh(&sh::project(&cube));
+    let s = cubeforge::internals::filter::sh_engines::filament_sh(&sh::project(&cube));
     let mut worst = 0.0f64;
     for n in directions() {
         let (x, y, z) = (n.x as f64, n.y as f64, n.z as f64);
@@ -113,7 +114,7 @@ fn ktx1_round_trips_through_cli_convert_and_info() {
     let cube = analytic_cube(16);
     std::fs::write(
         &src,
-        io::encode_cube(&src, &cube, GpuFormat::Rgba32f).unwrap(),
+        cubeforge::internals::output::encode_cube(&src, &cube, GpuFormat::Rgba32f).unwrap(),
     )
     .unwrap();
     let out = dir.path().join("out.ktx");
@@ -125,7 +126,8 @@ fn ktx1_round_trips_through_cli_convert_and_info() {
     ]);
     assert!(r.status.success(), "{}", stderr(&r));
 
-    let (decoded, meta) = io::read(&out, &ReadOptions::default()).unwrap();
+    let (decoded, meta) =
+        cubeforge::internals::convert::read(&out, &ReadOptions::default()).unwrap();
     assert_eq!(meta.file_format, io::FileFormat::Ktx1);
     assert_eq!(meta.pixel_format, "RGBA16F");
     let back = cube_of(decoded);
@@ -170,7 +172,7 @@ fn playcanvas_reads_our_ktx1() {
         Vec4::new(v.x, v.y, v.z, 1.0)
     })
     .with_box_mips(Some(3));
-    let sh_values = ktx1::filament_sh(&sh::project(&cube));
+    let sh_values = cubeforge::internals::filter::sh_engines::filament_sh(&sh::project(&cube));
     for (format, pc_name, bpt) in [
         (Ktx1Format::Rgba16f, "RGBA16F", 8),
         (Ktx1Format::Rgb16f, "RGB16F", 6),
@@ -275,7 +277,7 @@ fn babylon_reads_our_env() {
     let src = dir.path().join("in.ktx2");
     std::fs::write(
         &src,
-        io::encode_cube(&src, &cube, GpuFormat::Rgba32f).unwrap(),
+        cubeforge::internals::output::encode_cube(&src, &cube, GpuFormat::Rgba32f).unwrap(),
     )
     .unwrap();
     let file = dir.path().join("studio.env");
@@ -395,7 +397,7 @@ fn babylon_reads_our_env() {
 fn env_round_trips_through_read_and_info() {
     let dir = tempfile::tempdir().unwrap();
     let cube = analytic_cube(16).with_box_mips(None);
-    let poly = SphericalPolynomial::from_radiance_sh(&sh::project(&cube));
+    let poly = SphericalPolynomial::from_radiance_sh(&sh::project(&cube)).coefficients();
     let file = dir.path().join("x.env");
     std::fs::write(&file, babylon_env::encode(&cube, Some(&poly), 0.8).unwrap()).unwrap();
     let env = babylon_env::read(&std::fs::read(&file).unwrap(), &file, &Limits::default()).unwrap();
@@ -443,7 +445,7 @@ fn refused(dir: &Path, name: &str, bytes: &[u8]) -> String {
         },
         ..ReadOptions::default()
     };
-    match io::read(&path, &opts) {
+    match cubeforge::internals::convert::read(&path, &opts) {
         Ok(_) => panic!("{name} was read"),
         Err(e) => {
             let msg = e.to_string();
@@ -485,7 +487,7 @@ fn hostile_ktx1_and_env_are_refused_before_allocating() {
     assert!(refused(d, "cut.ktx", &good[..good.len() - 3]).contains("truncated"));
     assert!(refused(d, "head.ktx", &good[..40]).contains("truncated"));
 
-    let poly = SphericalPolynomial::default();
+    let poly = SphericalPolynomial::default().coefficients();
     let env = babylon_env::encode(&cube, Some(&poly), 0.8).unwrap();
     assert!(refused(d, "cut.env", &env[..env.len() - 10]).contains("truncated"));
     assert!(refused(d, "nonul.env", &env[..20]).contains("NUL"));

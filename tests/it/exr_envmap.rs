@@ -107,7 +107,7 @@ fn worst_cube(cube: &CubeMap) -> f32 {
 }
 
 fn read(path: &Path) -> (Decoded, io::Meta) {
-    io::read(path, &ReadOptions::default()).expect("reads")
+    cubeforge::internals::convert::read(path, &ReadOptions::default()).expect("reads")
 }
 
 /// Reads an OpenEXR latlong file and returns the worst angle (degrees) and the texel size.

@@ -339,7 +339,7 @@ fn claims_match_what_decoding_gives() {
         let p = dir.path().join(format!("i.{ext}"));
         std::fs::write(
             &p,
-            io::encode_image(&p, &img, &WriteOptions::default()).unwrap(),
+            cubeforge::internals::output::encode_image(&p, &img, &WriteOptions::default()).unwrap(),
         )
         .unwrap();
         files.push(p);
@@ -352,7 +352,11 @@ fn claims_match_what_decoding_gives() {
     let cube = CubeMap::from_faces(faces).unwrap().with_box_mips(None);
     for ext in ["ktx2", "dds", "ktx", "env"] {
         let p = dir.path().join(format!("c.{ext}"));
-        std::fs::write(&p, io::encode_cube(&p, &cube, GpuFormat::Rgba16f).unwrap()).unwrap();
+        std::fs::write(
+            &p,
+            cubeforge::internals::output::encode_cube(&p, &cube, GpuFormat::Rgba16f).unwrap(),
+        )
+        .unwrap();
         files.push(p);
     }
     // Noise does not compress: a 1024 x 1024 PNG of 4 MB.
@@ -368,7 +372,7 @@ fn claims_match_what_decoding_gives() {
     let big = dir.path().join("noise.png");
     std::fs::write(
         &big,
-        io::encode_image(&big, &noise, &WriteOptions::default()).unwrap(),
+        cubeforge::internals::output::encode_image(&big, &noise, &WriteOptions::default()).unwrap(),
     )
     .unwrap();
     assert!(std::fs::metadata(&big).unwrap().len() > 1 << 20);
@@ -388,7 +392,7 @@ fn claims_match_what_decoding_gives() {
         let c = io::claim(p, &opts)
             .unwrap_or_else(|e| panic!("{e}"))
             .expect("a file has a claim");
-        let (w, h, cube) = match io::read(p, &opts).unwrap().0 {
+        let (w, h, cube) = match cubeforge::internals::convert::read(p, &opts).unwrap().0 {
             Decoded::Image(i) => (i.width, i.height, false),
             Decoded::Cube(c) => (c.size(), c.size(), true),
         };

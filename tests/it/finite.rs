@@ -31,7 +31,7 @@ fn extreme_input(dir: &Path) -> std::path::PathBuf {
     let path = dir.join("extreme.ktx2");
     std::fs::write(
         &path,
-        io::encode_cube(&path, &cube, GpuFormat::Rgba32f).unwrap(),
+        cubeforge::internals::output::encode_cube(&path, &cube, GpuFormat::Rgba32f).unwrap(),
     )
     .unwrap();
     path
@@ -39,7 +39,7 @@ fn extreme_input(dir: &Path) -> std::path::PathBuf {
 
 /// Every value of every image in the file, as stored (no clean-up on reading).
 fn stored_values_finite(path: &Path) -> bool {
-    let (decoded, _) = io::read_raw(path, &ReadOptions::default())
+    let (decoded, _) = cubeforge::internals::convert::read_raw(path, &ReadOptions::default())
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let images: Vec<Image> = match decoded {
         Decoded::Image(img) => vec![img],
@@ -196,7 +196,7 @@ fn extreme_inputs_give_finite_outputs_with_a_counted_warning() {
 fn inputs_near_the_f32_maximum_are_clamped_and_counted_on_reading() {
     let dir = tempfile::tempdir().unwrap();
     let input = extreme_input(dir.path());
-    let (_, meta) = io::read(&input, &ReadOptions::default()).unwrap();
+    let (_, meta) = cubeforge::internals::convert::read(&input, &ReadOptions::default()).unwrap();
     // The 3e38 texel's three colour channels.
     assert_eq!(meta.replaced_values, 3);
 }
@@ -208,7 +208,8 @@ fn half_float_encoders_never_write_infinity() {
     });
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("x.exr");
-    let bytes = io::encode_image(&path, &img, &Default::default()).unwrap();
+    let bytes =
+        cubeforge::internals::output::encode_image(&path, &img, &Default::default()).unwrap();
     std::fs::write(&path, bytes).unwrap();
     assert!(stored_values_finite(&path));
     assert_eq!(io::count_out_of_range([&img], io::HALF_MAX), 48);

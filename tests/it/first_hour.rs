@@ -65,7 +65,7 @@ fn zstd_takes_its_level_after_a_space() {
 /// The largest Laplacian of the luminance over the inner disc of a sphere preview, relative:
 /// a chain's 1 x 1 faces draw the cube's box outline there as creases.
 fn crease(path: &Path) -> f32 {
-    let (d, _) = cubeforge::internals::io::read(path, &Default::default()).unwrap();
+    let (d, _) = cubeforge::internals::convert::read(path, &Default::default()).unwrap();
     let cubeforge::internals::io::Decoded::Image(img) = d else {
         panic!("an image")
     };
@@ -104,7 +104,7 @@ fn blurry_chains_stop_at_16_px_and_show_no_box_outline() {
     });
     let input = t.path().join("smooth.exr");
     let bytes =
-        cubeforge::internals::io::encode_image(&input, &smooth, &Default::default()).unwrap();
+        cubeforge::internals::output::encode_image(&input, &smooth, &Default::default()).unwrap();
     std::fs::write(&input, bytes).unwrap();
     let input = input.to_str().unwrap().to_owned();
     let mut creases = Vec::new();
@@ -183,7 +183,7 @@ fn blurry_chains_stop_at_16_px_and_show_no_box_outline() {
 }
 
 fn mean_rgb(path: &Path) -> f64 {
-    let (d, _) = cubeforge::internals::io::read(path, &Default::default()).unwrap();
+    let (d, _) = cubeforge::internals::convert::read(path, &Default::default()).unwrap();
     let images: Vec<Image> = match d {
         cubeforge::internals::io::Decoded::Image(img) => vec![img],
         cubeforge::internals::io::Decoded::Cube(c) => c.levels[0].to_vec(),
@@ -342,7 +342,7 @@ fn a_sun_beyond_half_float_is_kept_with_exr_float_f32() {
     };
     std::fs::write(
         &input,
-        cubeforge::internals::io::encode_image(&input, &sun, &write).unwrap(),
+        cubeforge::internals::output::encode_image(&input, &sun, &write).unwrap(),
     )
     .unwrap();
     let input = input.to_str().unwrap();
@@ -371,7 +371,8 @@ fn a_sun_beyond_half_float_is_kept_with_exr_float_f32() {
     );
     assert!(err(&o).is_empty(), "{}", err(&o));
     let (d, _) =
-        cubeforge::internals::io::read(&t.path().join("full.exr"), &Default::default()).unwrap();
+        cubeforge::internals::convert::read(&t.path().join("full.exr"), &Default::default())
+            .unwrap();
     let cubeforge::internals::io::Decoded::Image(img) = d else {
         panic!("an image")
     };
@@ -440,9 +441,11 @@ fn ibl_never_enlarges_without_saying_so() {
         text.contains("specular chain at 128 px, the input's face size"),
         "{text}"
     );
-    let (d, _) =
-        cubeforge::internals::io::read(&t.path().join("b/env_specular.ktx2"), &Default::default())
-            .unwrap();
+    let (d, _) = cubeforge::internals::convert::read(
+        &t.path().join("b/env_specular.ktx2"),
+        &Default::default(),
+    )
+    .unwrap();
     let cubeforge::internals::io::Decoded::Cube(c) = d else {
         panic!("a cube")
     };

@@ -81,6 +81,7 @@ fn panorama(img: Image) -> Loaded {
             stored_levels: 1,
             declared: None,
             part: None,
+            undo: Default::default(),
         },
         files: vec![],
     }

@@ -4,7 +4,7 @@
 use crate::common;
 
 use cubeforge::internals::image::{linear_to_srgb, srgb_to_linear, Image};
-use cubeforge::internals::io::{self, Decoded, ReadOptions, WriteOptions};
+use cubeforge::internals::io::{Decoded, ReadOptions, WriteOptions};
 use glam::Vec4;
 use std::process::Command;
 
@@ -25,9 +25,9 @@ fn ramp(hdr: bool) -> Image {
 fn round_trip(name: &str, img: &Image, opts: &WriteOptions, ropts: &ReadOptions) -> Image {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join(name);
-    let bytes = io::encode_image(&path, img, opts).unwrap();
+    let bytes = cubeforge::internals::output::encode_image(&path, img, opts).unwrap();
     std::fs::write(&path, bytes).unwrap();
-    match io::read(&path, ropts).unwrap().0 {
+    match cubeforge::internals::convert::read(&path, ropts).unwrap().0 {
         Decoded::Image(i) => i,
         Decoded::Cube(_) => panic!("single image expected"),
     }
@@ -142,7 +142,8 @@ fn openimageio_reads_our_float_files() {
         let path = dir.path().join(name);
         std::fs::write(
             &path,
-            io::encode_image(&path, &img, &WriteOptions::default()).unwrap(),
+            cubeforge::internals::output::encode_image(&path, &img, &WriteOptions::default())
+                .unwrap(),
         )
         .unwrap();
         let info = Command::new("oiiotool")
@@ -208,10 +209,14 @@ fn openexr_piz_files_read_exactly() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let read = |p: &std::path::Path| match io::read(p, &ReadOptions::default()).unwrap().0 {
-        Decoded::Image(img) => img,
-        _ => panic!("not an image"),
-    };
+    let read =
+        |p: &std::path::Path| match cubeforge::internals::convert::read(p, &ReadOptions::default())
+            .unwrap()
+            .0
+        {
+            Decoded::Image(img) => img,
+            _ => panic!("not an image"),
+        };
     for (w, h) in [(256, 128), (37, 19), (1, 33)] {
         for (kind, noise) in [("smooth", false), ("noisy", true)] {
             for (ty, ch) in [("half", 3), ("float", 3), ("float", 4), ("half", 4)] {
@@ -292,10 +297,12 @@ fn exr_zip_round_trip(w: usize, h: usize, oiiotool: bool) {
         let path = dir.path().join("z.exr");
         std::fs::write(
             &path,
-            io::encode_image(&path, &img, &WriteOptions::default()).unwrap(),
+            cubeforge::internals::output::encode_image(&path, &img, &WriteOptions::default())
+                .unwrap(),
         )
         .unwrap();
-        let (back, _) = io::read(&path, &ReadOptions::default()).unwrap();
+        let (back, _) =
+            cubeforge::internals::convert::read(&path, &ReadOptions::default()).unwrap();
         let Decoded::Image(back) = back else {
             panic!("not an image")
         };

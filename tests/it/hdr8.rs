@@ -20,7 +20,7 @@ fn source(dir: &Path) -> std::path::PathBuf {
         }
     }
     let path = dir.join("src.exr");
-    let bytes = io::encode_image(
+    let bytes = cubeforge::internals::output::encode_image(
         &path,
         &img,
         &io::WriteOptions {
@@ -56,7 +56,7 @@ fn read_as(path: &Path, decode: Option<io::HdrEncoding>) -> Decoded {
         hdr_encoding: decode,
         ..Default::default()
     };
-    io::read(path, &opts).unwrap().0
+    cubeforge::internals::convert::read(path, &opts).unwrap().0
 }
 
 /// Largest error relative to max(value, floor), over texels within the encoding's range.

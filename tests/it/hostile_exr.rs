@@ -4,7 +4,7 @@
 
 use crate::common::XorShift;
 use cubeforge::internals::image::Image;
-use cubeforge::internals::io::{self, Decoded, ReadOptions};
+use cubeforge::internals::io::{Decoded, ReadOptions};
 use exr::prelude::*;
 use glam::Vec4;
 use std::io::Cursor;
@@ -34,7 +34,7 @@ fn read(dir: &Path, name: &str, bytes: &[u8], what: &str) -> std::result::Result
     let path = dir.join(name);
     std::fs::write(&path, bytes).unwrap();
     match catch_unwind(AssertUnwindSafe(|| {
-        io::read(&path, &ReadOptions::default())
+        cubeforge::internals::convert::read(&path, &ReadOptions::default())
     })) {
         Ok(Ok((Decoded::Image(img), _))) => Ok(img),
         Ok(Ok((Decoded::Cube(_), _))) => panic!("{what}: read as a cube map"),
@@ -413,7 +413,10 @@ fn valid_files_decode_as_the_crate_reads_them() {
         };
         for path in files {
             let bytes = std::fs::read(&path).unwrap();
-            let Decoded::Image(img) = io::read_raw(&path, &opts).unwrap().0 else {
+            let Decoded::Image(img) = cubeforge::internals::convert::read_raw(&path, &opts)
+                .unwrap()
+                .0
+            else {
                 panic!("{}: a cube map", path.display());
             };
             assert!(img == crate_reader(&bytes), "{}", path.display());
@@ -423,7 +426,10 @@ fn valid_files_decode_as_the_crate_reads_them() {
     let bytes = two_mip_mapped_parts();
     let path = dir.path().join("parts.exr");
     std::fs::write(&path, &bytes).unwrap();
-    let Decoded::Image(img) = io::read_raw(&path, &opts).unwrap().0 else {
+    let Decoded::Image(img) = cubeforge::internals::convert::read_raw(&path, &opts)
+        .unwrap()
+        .0
+    else {
         panic!("two parts: a cube map");
     };
     assert_eq!((img.width, img.height), (40, 30));
@@ -445,7 +451,7 @@ fn valid_files_decode_as_the_crate_reads_them() {
             let what = format!("{blocks:?} {compression:?}");
             let path = dir.path().join("valid.exr");
             std::fs::write(&path, &bytes).unwrap();
-            let Decoded::Image(img) = io::read_raw(&path, &opts)
+            let Decoded::Image(img) = cubeforge::internals::convert::read_raw(&path, &opts)
                 .unwrap_or_else(|e| panic!("{what}: {e}"))
                 .0
             else {

@@ -79,7 +79,10 @@ fn every_ktx2_written_passes_the_validators_rule() {
     // A custom key is what the rule (and `ktx validate -e`) rejects.
     let with_key = std::fs::read(dir.path().join("sky.ktx2")).unwrap();
     assert!(key_problem(&with_key, false).is_none());
-    let cube = match io::read(&dir.path().join("sky.ktx2"), &ReadOptions::default()) {
+    let cube = match cubeforge::internals::convert::read(
+        &dir.path().join("sky.ktx2"),
+        &ReadOptions::default(),
+    ) {
         Ok((Decoded::Cube(c), _)) => c,
         _ => panic!("a cube map"),
     };
@@ -173,7 +176,7 @@ fn what_the_keys_said_is_still_said() {
             hdr_encoding: decode,
             ..ReadOptions::default()
         };
-        match io::read(path, &opts) {
+        match cubeforge::internals::convert::read(path, &opts) {
             Ok((Decoded::Cube(c), meta)) => (c, meta),
             _ => panic!("{} is not a cube map", path.display()),
         }

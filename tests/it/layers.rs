@@ -263,3 +263,64 @@ fn submodules_form_no_cycle() {
         );
     }
 }
+
+/// What `io` may not import (issue 46): it holds codecs and the file-system edge, and the
+/// pixel work of these modules (SH for a .env, an edge fixup undone, RGBM/RGBD decoded,
+/// UltraHDR's light measured, OpenEXR's layouts resampled) sits above it.
+const NOT_IN_IO: &[&str] = &["filter", "flux", "layout", "tonemap"];
+
+/// Files of `io` that still import one of [`NOT_IN_IO`], each with what it waits for; an
+/// entry that no longer holds fails the test, so the list only shrinks.
+const KNOWN_IN_IO: &[(&str, &str, &str)] = &[
+    (
+        "io/encode.rs",
+        "tonemap",
+        "WriteOptions::gain_map names the SDR picture's curve: to output's Target, beside the dispatch in output::encode",
+    ),
+    (
+        "io/map_kind.rs",
+        "layout",
+        "MapKind (a layout or a container) to convert, the lowest layer above both",
+    ),
+];
+
+#[test]
+fn io_is_codecs_and_the_file_edge() {
+    let known: BTreeMap<&str, u32> = RANKS.iter().copied().collect();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    walk(&src.join("io"), &mut files);
+    let mut found = BTreeSet::new();
+    for f in files {
+        let rel = f
+            .strip_prefix(&src)
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        if rel.ends_with("/tests.rs") || rel.contains("/tests/") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&f).unwrap();
+        let text = match text.find("#[cfg(test)]") {
+            Some(i) => &text[..i],
+            None => &text[..],
+        };
+        for m in named(&code(text), &known) {
+            if NOT_IN_IO.contains(&m.as_str()) {
+                found.insert((rel.clone(), m));
+            }
+        }
+    }
+    for (file, m) in &found {
+        assert!(
+            KNOWN_IN_IO.iter().any(|(f, k, _)| f == file && k == m),
+            "src/{file} imports {m}: io filters no pixel; move that work up to the layer that owns it"
+        );
+    }
+    for (file, m, why) in KNOWN_IN_IO {
+        assert!(
+            found.contains(&(file.to_string(), m.to_string())),
+            "src/{file} -> {m} ({why}) is gone: take it off KNOWN_IN_IO"
+        );
+    }
+}

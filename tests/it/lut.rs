@@ -161,7 +161,7 @@ fn quadrature_knows_the_limits() {
 /// by oiiotool (16-bit PNG, half EXR) and by ktx-parse (RGBA16F, one 2D level).
 #[test]
 fn the_command_writes_each_format() {
-    use cubeforge::internals::io::{self, Decoded, ReadOptions};
+    use cubeforge::internals::io::{Decoded, ReadOptions};
     let dir = tempfile::tempdir().unwrap();
     let size = 32;
     let opts = LutOptions {
@@ -199,7 +199,8 @@ fn the_command_writes_each_format() {
             args.extend(flags.iter().copied().chain(extra));
             let o = common::run(&args);
             assert!(o.status.success(), "{}", common::stderr(&o));
-            let Decoded::Image(back) = io::read(&out, &data).unwrap().0 else {
+            let Decoded::Image(back) = cubeforge::internals::convert::read(&out, &data).unwrap().0
+            else {
                 panic!("{}: not an image", out.display())
             };
             assert_eq!((back.width, back.height), (size, size));

@@ -27,6 +27,7 @@ fn loaded(source: Source, kind: Kind) -> Loaded {
             stored_levels: 1,
             declared: None,
             part: None,
+            undo: Default::default(),
         },
         files: vec![],
     }

@@ -14,7 +14,7 @@ use common::{clamped, max_abs_error, max_abs_error_where, psnr, psnr_where, read
 use cubeforge::internals::convert::{self, Output};
 use cubeforge::internals::cube::{FACE_LONG_NAMES, FACE_NAMES};
 use cubeforge::internals::image::{linear_to_srgb, Image};
-use cubeforge::internals::io::{self, Decoded, ReadOptions};
+use cubeforge::internals::io::{Decoded, ReadOptions};
 use cubeforge::internals::layout::{equirect, ImageEnv, Kind, Projection};
 use cubeforge::internals::resample::{Orientation, Resampler};
 use glam::{Vec3, Vec4};
@@ -47,7 +47,7 @@ fn image(out: Output) -> Image {
 
 /// An image as stored: NaN, infinite and negative values kept.
 fn read_raw_image(path: &Path) -> Image {
-    match io::read_raw(path, &ReadOptions::default()) {
+    match cubeforge::internals::convert::read_raw(path, &ReadOptions::default()) {
         Ok((Decoded::Image(img), _)) => img,
         Ok(_) => panic!("{} holds a cube map", path.display()),
         Err(e) => panic!("{e}"),

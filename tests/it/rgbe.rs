@@ -5,9 +5,7 @@
 use crate::common;
 
 use cubeforge::internals::image::Image;
-use cubeforge::internals::io::{
-    self, raster, rgbe, Decoded, FileFormat, ReadOptions, WriteOptions,
-};
+use cubeforge::internals::io::{raster, rgbe, Decoded, FileFormat, ReadOptions, WriteOptions};
 use glam::Vec4;
 use std::path::Path;
 
@@ -48,7 +46,12 @@ fn run_length_files_match_the_crate() {
         };
         Vec4::new(v, v * 0.5 + y as f32, 1e-3 * x as f32, 1.0)
     });
-    let bytes = io::encode_image(Path::new("a.hdr"), &img, &WriteOptions::default()).unwrap();
+    let bytes = cubeforge::internals::output::encode_image(
+        Path::new("a.hdr"),
+        &img,
+        &WriteOptions::default(),
+    )
+    .unwrap();
     assert!(
         bytes.windows(4).any(|t| t == [2, 2, 1, 44]),
         "the encoder wrote run-length lines (width 300)"
@@ -105,7 +108,12 @@ fn real_flat_files_match_the_crate() {
 #[test]
 fn malformed_files_are_refused_before_allocation() {
     let img = Image::filled(64, 4, Vec4::new(0.5, 2.0, 8.0, 1.0));
-    let good = io::encode_image(Path::new("a.hdr"), &img, &WriteOptions::default()).unwrap();
+    let good = cubeforge::internals::output::encode_image(
+        Path::new("a.hdr"),
+        &img,
+        &WriteOptions::default(),
+    )
+    .unwrap();
     // Truncated pixel data, a run past the end of a line, a leading repeat marker.
     let truncated = good[..good.len() - 3].to_vec();
     let mut overrun = header(4, 1);

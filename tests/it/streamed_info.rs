@@ -114,7 +114,7 @@ fn streamed_info_is_the_whole_reads_report() {
     );
     let whole = serde_json::to_value(&whole).unwrap();
     let opts = budget(below_whole(w, h));
-    let read = cubeforge::internals::io::read_raw(&path, &opts);
+    let read = cubeforge::internals::convert::read_raw(&path, &opts);
     assert!(read.is_err(), "the whole image fits the budget");
     for threads in [1, 2, 3] {
         let streamed = on(threads, || info::describe(&path, None, &opts)).unwrap();

@@ -296,7 +296,7 @@ mod with_uastc {
         assert!(o.status.success(), "{}", common::stderr(&o));
         for file in ["env_specular.ktx2", "env_diffuse.ktx2"] {
             let (_, meta) =
-                cubeforge::internals::io::read_raw(&bevy.join(file), &ReadOptions::default())
+                cubeforge::internals::convert::read_raw(&bevy.join(file), &ReadOptions::default())
                     .unwrap();
             assert_eq!(meta.pixel_format, "UASTC HDR 4x4");
             if let Some(bin) = common::bevy_ktx2() {
@@ -346,7 +346,7 @@ mod with_uastc {
         let file = out.join("env.ktx2");
         // cubeforge reads it back top row first (KTXorientation "ru" undone).
         let (decoded, _) =
-            cubeforge::internals::io::read_raw(&file, &ReadOptions::default()).unwrap();
+            cubeforge::internals::convert::read_raw(&file, &ReadOptions::default()).unwrap();
         let Decoded::Image(ours) = decoded else {
             panic!("a 2D texture")
         };

@@ -130,7 +130,7 @@ fn sunny_panorama(dir: &Path) -> PathBuf {
     let path = dir.join("sunny.exr");
     std::fs::write(
         &path,
-        cubeforge::internals::io::encode_image(&path, &img, &Default::default()).unwrap(),
+        cubeforge::internals::output::encode_image(&path, &img, &Default::default()).unwrap(),
     )
     .unwrap();
     path

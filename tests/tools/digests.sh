@@ -144,6 +144,39 @@ run preview $s -o $o/bad.ktx2
 run preview $s -o $o/bad.png --grid-roughness 0.5
 run preview $s -o $o/bad.png --size 64 --max-memory 1K
 run convert $s -o $o/bad.ktx2 --size 4096 --max-memory 10M
+# Inputs read back (issue 46, item 3: RGBM/RGBD, .env, edge fixup undone, UltraHDR moved out of io)
+# and `info --json`, on the project's fixtures and, where present, the shared real ones.
+run convert $o/rgbm6.png -o $o/rb_rgbm6.exr --to equirect --size 16
+run convert $o/rgbd.dds --decode rgbd -o $o/rb_rgbd.exr --size 8
+run convert $o/sky.env -o $o/rb_env.exr --to equirect --size 16
+run convert $o/warp.ktx2 -o $o/rb_warp.exr --size 16
+run convert $o/uhdr.jpg -o $o/rb_uhdr.exr --size 16
+run convert fixtures/passes.exr --part dim -o $o/rb_part.exr --size 16
+run convert $o/faces -o $o/rb_faces.ktx2 --size 16
+run convert $o/chain --level 1 -o $o/rb_chain.exr --size 8
+run ibl $o/ibl_babylon/*.env -o $o/rb_ibl_babylon --target gltf --size 16 --samples 4
+for f in $o/sky.env $o/warp.ktx2 $o/rgbm6.png $o/uhdr.jpg $o/sky.ktx $o/sky.dds $o/ggx.ktx2 $o/chain $o/ibl_bevy fixtures/passes.exr; do
+    run info --json "$f"; done
+r=../shared/fixtures/real
+if [ -d "$r" ]; then
+    run convert $r/zip/park.exr -o $o/real_park.ktx2 --size 32
+    run convert $r/dwab/sunset.exr -o $o/real_sunset.exr --to hcross --size 32
+    run convert $r/hdr/venice.hdr -o $o/real_venice.png --to equirect --size 32
+    run convert $r/png/city.png -o $o/real_city.dds --size 32 --gpu-format bc7-srgb
+    run convert $r/ball/studio_mirrorball.exr --from sphere -o $o/real_ball.exr --size 32
+    run convert $r/ball/park_angular.exr --from angular -o $o/real_ang.exr --size 32
+    run convert $r/faces/city -o $o/real_faces.ktx2 --size 32
+    run convert $r/ultrahdr/esplanade_iso.jpg -o $o/real_uhdr_iso.exr --size 32
+    run convert $r/ultrahdr/esplanade_xmp.jpg -o $o/real_uhdr_xmp.exr --size 32
+    run prefilter $r/zip/esplanade.exr -o $o/real_esp.ktx2 --filter ggx --size 32 --samples 8
+    run irradiance $r/hdr/studio.hdr -o $o/real_irr.ktx2 --size 8 --sh $o/real_sh.json
+    run ibl $r/zip/sky.exr -o $o/real_ibl_babylon --target babylon --size 32 --samples 4
+    run ibl $r/dwab/park.exr -o $o/real_ibl_three --target three --size 32 --samples 4
+    run ibl $r/zip/esplanade.exr -o $o/real_ibl_filament --target filament --size 32 --samples 4
+    run info --json $r/ultrahdr/esplanade_iso.jpg
+    run info --json $r/dwab/night.exr
+    run info --json $r/ball/studio_mirrorball.exr
+fi
 cd "$o"
 # UltraHDR JPEGs carry an ICC profile whose header holds the time it was made: zeroed here.
 find . -name '*.jpg' -type f -exec perl -0777 -pi -e 's/(mntrRGB XYZ ).{12}/$1 . ("\0" x 12)/se' {} +

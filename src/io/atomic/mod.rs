@@ -158,6 +158,27 @@ fn missing_top(path: &Path) -> Option<PathBuf> {
     top
 }
 
+/// A folder output behind a symbolic link is replaced where the link points: the folder and
+/// the paths under it (the files to write and the run's `known` ones) follow the link.
+fn follow_folder_links(
+    folders: &mut [PathBuf],
+    paths: &mut [PathBuf],
+    known: &mut [PathBuf],
+) -> Result<()> {
+    for f in folders {
+        if std::fs::symlink_metadata(&*f).is_ok_and(|m| m.file_type().is_symlink()) {
+            let real = std::fs::canonicalize(&*f).map_err(|e| Error::io(&*f, e))?;
+            for p in paths.iter_mut().chain(known.iter_mut()) {
+                if let Ok(rel) = p.strip_prefix(&*f) {
+                    *p = real.join(rel);
+                }
+            }
+            *f = real;
+        }
+    }
+    Ok(())
+}
+
 /// Writes every file under a temporary name (nothing is visible under the real names yet),
 /// where each of `folders` is an output in its own right (a faces folder, a chain folder):
 /// every file under it is staged in a new folder that replaces it whole on
@@ -179,21 +200,10 @@ pub(crate) fn stage_replacing(
             "`-` stands for standard output, which this output cannot go to: name a file or folder",
         ));
     }
-    // A folder output behind a symbolic link is replaced where the link points.
     let mut folders = folders.to_vec();
     let mut paths: Vec<PathBuf> = files.iter().map(|(p, _)| p.clone()).collect();
     let mut known = known.to_vec();
-    for f in &mut folders {
-        if std::fs::symlink_metadata(&*f).is_ok_and(|m| m.file_type().is_symlink()) {
-            let real = std::fs::canonicalize(&*f).map_err(|e| Error::io(&*f, e))?;
-            for p in paths.iter_mut().chain(&mut known) {
-                if let Ok(rel) = p.strip_prefix(&*f) {
-                    *p = real.join(rel);
-                }
-            }
-            *f = real;
-        }
-    }
+    follow_folder_links(&mut folders, &mut paths, &mut known)?;
     // Regular files only, each once: before anything is written.
     check_targets(&paths)?;
     // A rename onto a folder fails: find that out before anything is written.

@@ -10,23 +10,9 @@ fn stage_with(files: &[(PathBuf, Vec<u8>)], folders: &[PathBuf]) -> Result<Stage
     stage_replacing(files, folders, &[])
 }
 
-/// Every entry under `dir`, relative, sorted.
-fn tree(dir: &Path) -> Vec<String> {
-    fn walk(d: &Path, root: &Path, out: &mut Vec<String>) {
-        let Ok(rd) = std::fs::read_dir(d) else { return };
-        for e in rd.flatten() {
-            let p = e.path();
-            out.push(p.strip_prefix(root).unwrap().display().to_string());
-            if p.is_dir() {
-                walk(&p, root, out);
-            }
-        }
-    }
-    let mut out = Vec::new();
-    walk(dir, dir, &mut out);
-    out.sort();
-    out
-}
+#[path = "../../../tests/it/tree.rs"]
+mod tree;
+use tree::tree;
 
 /// Staged and committed: all or none.
 fn write_all(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {

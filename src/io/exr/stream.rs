@@ -99,6 +99,7 @@ impl Bands<'_> {
             replaced_values: replaced,
             stored_levels: 1,
             declared: None,
+            undo: Default::default(),
             part: None,
         }
     }

@@ -1,6 +1,6 @@
 //! KTX 1.1 cube maps, the container Filament's `cmgen` deploys image-based lighting in: a
 //! prefiltered mip chain and, in the key/value data, the irradiance spherical harmonics
-//! (key `sh`, see [`filament_sh`]). Written and read by hand after the Khronos KTX 1.1
+//! (key `sh`, see `filter::sh_engines::filament_sh`). Written and read by hand after the Khronos KTX 1.1
 //! specification.
 //!
 //! File layout as written: the 64-byte header (little-endian, endianness 0x04030201), the
@@ -40,11 +40,11 @@ mod sh;
 
 pub use format::Ktx1Format;
 use format::{GL_R11F_G11F_B10F, GL_RGB};
-pub use sh::{filament_sh, parse_sh, sh_key_value};
+pub use sh::{parse_sh, sh_key_value};
 
 /// Key of the writer's name, as libktx writes it.
 pub const WRITER_KEY: &str = "KTXwriter";
-/// Key of Filament's irradiance spherical harmonics (text, see [`filament_sh`]).
+/// Key of Filament's irradiance spherical harmonics (text, see `filter::sh_engines::filament_sh`).
 pub const SH_KEY: &str = "sh";
 
 /// One key/value pair. Values are bytes; text values are written NUL-terminated, as the
@@ -463,6 +463,7 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, limits: &Limits) -> Result<(Deco
         replaced_values: 0,
         stored_levels: k.levels,
         declared: None,
+        undo: Default::default(),
         part: None,
     };
     Ok((k.texture, meta))

@@ -2,8 +2,6 @@
 
 use super::{KeyValue, SH_KEY};
 
-pub use crate::filter::sh_engines::filament_sh;
-
 /// The `sh` key/value pair: nine lines of "r g b", as `cmgen` writes it (each value the
 /// shortest that reads back as the same f32, in exponent form when very small or large; NaN and
 /// infinities written as 0).

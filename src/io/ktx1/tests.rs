@@ -144,7 +144,7 @@ fn sh_text_round_trips() {
     for (i, c) in r.iter_mut().enumerate() {
         *c = [i as f64 * 0.1, -(i as f64) * 0.2, 1.0 / (i + 1) as f64];
     }
-    let sh = filament_sh(&r);
+    let sh = crate::filter::sh_engines::filament_sh(&r);
     let kv = sh_key_value(&sh);
     assert_eq!(kv.key, "sh");
     assert_eq!(kv.as_text().unwrap().lines().count(), 9);

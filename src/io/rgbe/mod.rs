@@ -85,6 +85,7 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(I
         replaced_values: 0,
         stored_levels: 1,
         declared: None,
+        undo: Default::default(),
         part: None,
     };
     Some(Ok((img, meta)))

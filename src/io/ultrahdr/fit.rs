@@ -8,7 +8,7 @@
 //! The gain map is the picture's size: three.js stretches a smaller one with the canvas's own
 //! filter, whose light came out 1-3% under a bilinear stretch's.
 
-use super::{decode_jpeg, flux_error, inner, Gains, Reader, OFFSET};
+use super::{decode_jpeg, flux_error, inner, Gains, Light, Reader, OFFSET};
 use crate::image::Image;
 use rayon::prelude::*;
 
@@ -54,13 +54,13 @@ fn window_sums(w: usize, h: usize, value: impl Fn(usize) -> [f32; 3] + Sync) -> 
 }
 
 /// Fits a gain map the size of `sdr` (the picture as a reader decodes it) that takes it to
-/// `img` as `reader` rebuilds it, keeping the best of `rounds` + 1 tries (by the light, weighed
-/// as an equirect's where `equirect`; one within [`GOOD_ENOUGH`] ends them); `encode` makes the JPEG of RGB codes.
+/// `img` as `reader` rebuilds it, keeping the best of `rounds` + 1 tries (by the light `light`
+/// measures; one within [`GOOD_ENOUGH`] ends them); `encode` makes the JPEG of RGB codes.
 pub(super) fn fit(
     img: &Image,
     sdr: &Image,
     reader: Reader,
-    equirect: bool,
+    light_of: &Light,
     rounds: usize,
     encode: impl Fn(&[u8]) -> Result<Vec<u8>, String>,
 ) -> Result<Fitted, String> {
@@ -103,7 +103,7 @@ pub(super) fn fit(
         let map = decode_jpeg(&jpeg, true, &crate::io::Limits::default()).map_err(|e| inner(&e))?;
         let back = gains.apply(sdr, &map, reader);
         drop(map);
-        let errors = flux_error(img, &back, equirect);
+        let errors = flux_error(img, &back, light_of);
         let off = errors.iter().fold(0.0, |m: f64, e| m.max(e.abs()));
         if best.as_ref().is_none_or(|b| off < b.0) {
             best = Some((off, errors, jpeg));

@@ -13,10 +13,7 @@
 use super::guard::caught;
 use super::{raster, Decoded, FileFormat, Limits, Meta, ReadOptions};
 use crate::error::{Error, Result};
-use crate::flux::Grid;
 use crate::image::{linear_to_srgb, ColorSpace, Image};
-use crate::layout::Projection;
-use crate::tonemap::Tonemap;
 use ::image::codecs::jpeg::JpegEncoder;
 use ::image::{ExtendedColorType, ImageEncoder};
 use glam::Vec4;
@@ -233,43 +230,26 @@ pub fn has_gain_map(bytes: &[u8]) -> bool {
         .unwrap_or(false)
 }
 
-/// Encodes `img` (linear radiance) as an UltraHDR JPEG whose SDR picture is `curve` of the
-/// radiance (ACES for `None`), its gain map fitted to `reader`'s arithmetic; the statistics
-/// are those of the file as that reader rebuilds it, its light weighed as an equirect's where
-/// `equirect` says the image is one.
+/// What an image's light is, per channel, as the gain-map fit weighs it: the caller's
+/// measure (an equirect's texels by their solid angle, `flux`'s), above the codec.
+pub type Light = dyn Fn(&Image) -> [f64; 3] + Sync;
+
+/// Encodes `img` (linear radiance) as an UltraHDR JPEG over `base`, its SDR picture (sRGB
+/// RGB8, made above `io` by a tone curve), its gain map fitted to `reader`'s arithmetic; the
+/// statistics are those of the file as that reader rebuilds it, its light measured by
+/// `light`.
 pub fn encode(
     img: &Image,
-    curve: Tonemap,
+    base: &[u8],
     reader: Reader,
-    equirect: bool,
+    light: &Light,
 ) -> std::result::Result<(Vec<u8>, GainStats), String> {
     let (w, h) = (img.width as u32, img.height as u32);
-    let curve = if curve == Tonemap::None {
-        Tonemap::Aces
-    } else {
-        curve
-    };
-    let base: Vec<u8> = img
-        .pixels
-        .par_iter()
-        .flat_map_iter(|p| {
-            // The curve scales each texel by what it does to its largest channel: hues kept,
-            // so the three channels' gains are alike (a grey gain map, which the JPEG keeps
-            // well: its chroma is coarse) and a sun stays yellow in the picture.
-            let top = p.x.max(p.y).max(p.z).max(0.0);
-            let k = if top > 0.0 {
-                curve.curve(top) / top
-            } else {
-                0.0
-            };
-            [p.x, p.y, p.z].map(|v| super::unorm8(linear_to_srgb(v.max(0.0) * k)))
-        })
-        .collect();
-    let mut base_jpeg = jpeg(&base, w, h, BASE_QUALITY)?;
+    let mut base_jpeg = jpeg(base, w, h, BASE_QUALITY)?;
     // The gain is taken against the SDR picture as a reader decodes it, so the base's JPEG
     // error is not carried into the radiance.
     let sdr = decode_jpeg(&base_jpeg, false, &Limits::default()).map_err(|e| inner(&e))?;
-    let fitted = fit::fit(img, &sdr, reader, equirect, ROUNDS, |codes| {
+    let fitted = fit::fit(img, &sdr, reader, light, ROUNDS, |codes| {
         jpeg(codes, w, h, GAIN_QUALITY)
     })?;
     let (lo, hi) = (fitted.gains.lo[0], fitted.gains.hi[0]);
@@ -471,24 +451,15 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<(Decoded,
         replaced_values: 0,
         stored_levels: 1,
         declared: None,
+        undo: Default::default(),
         part: None,
     };
     Ok((Decoded::Image(img), meta))
 }
 
-/// Each channel's light in `back` against `src`'s, minus 1 (0 where the source is black):
-/// texels weighed by the solid angle they stand for in an equirect (`equirect`), else alike.
-fn flux_error(src: &Image, back: &Image, equirect: bool) -> [f64; 3] {
-    let light = |img: &Image| {
-        if equirect {
-            let grid = Grid::Projection(Projection::Equirect, img.width, img.height);
-            return crate::flux::mean_radiance(grid, &[img]);
-        }
-        img.pixels
-            .par_iter()
-            .map(|p| [p.x as f64, p.y as f64, p.z as f64])
-            .reduce(|| [0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
-    };
+/// Each channel's light in `back` against `src`'s, minus 1 (0 where the source is black),
+/// measured by `light`.
+fn flux_error(src: &Image, back: &Image, light: &Light) -> [f64; 3] {
     let (a, b) = (light(src), light(back));
     [0, 1, 2].map(|c| if a[c] > 0.0 { b[c] / a[c] - 1.0 } else { 0.0 })
 }

@@ -277,7 +277,7 @@ impl Job for PreviewJob {
             self.estimate_with(&materials)?,
         )?;
         let env = preview::load_environment(&self.env, self.from, &self.read())?;
-        if let Some(w) = super::replaced_values(&self.env, env.replaced_values as u64) {
+        if let Some(w) = crate::convert::replaced_note(&self.env, env.replaced_values as u64) {
             warnings.push(w);
         }
         let mut inputs: Vec<PathBuf> = env.files.clone();
@@ -333,5 +333,5 @@ impl Job for PreviewJob {
 }
 
 fn encode(name: &std::path::Path, img: &Image) -> Result<Vec<u8>> {
-    io::encode_image(name, img, &WriteOptions::default())
+    crate::output::encode_image(name, img, &WriteOptions::default())
 }

@@ -47,9 +47,11 @@ fn round_trip_through_files_and_odd_sizes() {
     for (name, cube) in [("odd", &odd), ("single", &single)] {
         for ext in ["ktx2", "dds"] {
             let path = dir.path().join(format!("{name}.{ext}"));
-            let bytes = io::encode_cube(&path, cube, GpuFormat::Rgba32f).unwrap();
+            let bytes =
+                cubeforge::internals::output::encode_cube(&path, cube, GpuFormat::Rgba32f).unwrap();
             std::fs::write(&path, bytes).unwrap();
-            let (decoded, meta) = io::read(&path, &ReadOptions::default()).unwrap();
+            let (decoded, meta) =
+                cubeforge::internals::convert::read(&path, &ReadOptions::default()).unwrap();
             assert_eq!(meta.replaced_values, 0);
             assert_same(cube, &cube_of(decoded), GpuFormat::Rgba32f);
         }

@@ -3,7 +3,6 @@
 
 use super::*;
 use cubeforge::internals::image::{luminance, srgb_to_linear};
-use cubeforge::internals::io;
 use glam::Vec4;
 
 #[test]
@@ -84,7 +83,7 @@ fn image_channels_luminance_and_srgb_decode() {
     let exr = dir.path().join("f.exr");
     std::fs::write(
         &exr,
-        io::encode_image(&exr, &img, &Default::default()).unwrap(),
+        cubeforge::internals::output::encode_image(&exr, &img, &Default::default()).unwrap(),
     )
     .unwrap();
     let v = channel(

@@ -100,7 +100,10 @@ fn exr_output_holds_the_values() {
     let out = dir.path().join("e.exr");
     let o = cubeforge(&[&"control", &recipe, &"-o", &out], dir.path());
     assert!(o.status.success(), "{}", stderr(&o));
-    let img = match io::read(&out, &ReadOptions::default()).unwrap().0 {
+    let img = match cubeforge::internals::convert::read(&out, &ReadOptions::default())
+        .unwrap()
+        .0
+    {
         Decoded::Image(i) => i,
         _ => panic!("image expected"),
     };

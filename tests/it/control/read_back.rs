@@ -28,7 +28,7 @@ fn a_ktx2_control_map_reads_back_in_info_and_preview() {
         linear: true,
         ..ReadOptions::default()
     };
-    let Decoded::Image(want) = io::read(&png, &data).unwrap().0 else {
+    let Decoded::Image(want) = cubeforge::internals::convert::read(&png, &data).unwrap().0 else {
         panic!("the PNG read as a cube map")
     };
     for format in ["rgba8", "rgba16f", "rgba32f"] {
@@ -38,7 +38,8 @@ fn a_ktx2_control_map_reads_back_in_info_and_preview() {
             dir.path(),
         );
         assert!(o.status.success(), "{format}: {}", stderr(&o));
-        let (decoded, meta) = io::read(&map, &ReadOptions::default()).unwrap();
+        let (decoded, meta) =
+            cubeforge::internals::convert::read(&map, &ReadOptions::default()).unwrap();
         assert_eq!(meta.file_format, io::FileFormat::Ktx2);
         let Decoded::Image(got) = decoded else {
             panic!("{format}: read as a cube map")
@@ -105,7 +106,11 @@ fn two_d_ktx2_and_dds_read_as_their_level_0() {
     ] {
         let path = dir.path().join("t.ktx2");
         std::fs::write(&path, io::ktx2::encode_2d(&levels, format)).unwrap();
-        let Decoded::Image(got) = io::read(&path, &ReadOptions::default()).unwrap().0 else {
+        let Decoded::Image(got) =
+            cubeforge::internals::convert::read(&path, &ReadOptions::default())
+                .unwrap()
+                .0
+        else {
             panic!("{format:?}: read as a cube map")
         };
         assert_eq!((got.width, got.height), (5, 3));
@@ -147,7 +152,11 @@ fn two_d_ktx2_and_dds_read_as_their_level_0() {
         let mut bytes = Vec::new();
         dds.write(&mut bytes).unwrap();
         std::fs::write(&path, bytes).unwrap();
-        let Decoded::Image(got) = io::read(&path, &ReadOptions::default()).unwrap().0 else {
+        let Decoded::Image(got) =
+            cubeforge::internals::convert::read(&path, &ReadOptions::default())
+                .unwrap()
+                .0
+        else {
             panic!("{what}: read as a cube map")
         };
         assert_eq!((got.width, got.height), (6, 3), "{what}");

@@ -259,7 +259,9 @@ fn gltf_ships_the_sheen_chain_and_the_tables() {
             linear: true,
             ..ReadOptions::default()
         };
-        let Ok((Decoded::Image(img), _)) = io::read(&out.join(file), &opts) else {
+        let Ok((Decoded::Image(img), _)) =
+            cubeforge::internals::convert::read(&out.join(file), &opts)
+        else {
             panic!("{file}");
         };
         assert_eq!((img.width, img.height), (128, 128), "{file}");

@@ -60,7 +60,7 @@ fn read_cube(path: &Path) -> CubeMap {
         as_stored: true,
         ..ReadOptions::default()
     };
-    match io::read(path, &opts) {
+    match cubeforge::internals::convert::read(path, &opts) {
         Ok((Decoded::Cube(c), _)) => c,
         Ok(_) => panic!("{} holds no cube map", path.display()),
         Err(e) => panic!("{e}"),

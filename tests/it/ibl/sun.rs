@@ -124,7 +124,7 @@ fn disc_in_file(path: &Path) -> Vec3 {
         as_stored: true,
         ..ReadOptions::default()
     };
-    match io::read(path, &opts).unwrap().0 {
+    match cubeforge::internals::convert::read(path, &opts).unwrap().0 {
         Decoded::Cube(c) => {
             let n = c.size();
             let faces = &c.levels[0];

@@ -111,7 +111,8 @@ fn prefilter_folder_chains_load_level_by_level() {
             let img = Image::filled(*n, *n, Vec4::new(k as f32, 0.0, 0.0, 1.0));
             std::fs::write(
                 &p,
-                io::encode_image(&p, &img, &WriteOptions::default()).unwrap(),
+                cubeforge::internals::output::encode_image(&p, &img, &WriteOptions::default())
+                    .unwrap(),
             )
             .unwrap();
         }
@@ -136,7 +137,7 @@ fn prefilter_folder_chains_load_level_by_level() {
         let img = Image::filled(3, 3, Vec4::ONE);
         std::fs::write(
             &p,
-            io::encode_image(&p, &img, &WriteOptions::default()).unwrap(),
+            cubeforge::internals::output::encode_image(&p, &img, &WriteOptions::default()).unwrap(),
         )
         .unwrap();
     }
@@ -163,7 +164,8 @@ fn command_line_renders_png_exr_and_grids() {
         "crystal",
     ]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let (img, meta) = io::read(Path::new(&png), &ReadOptions::default()).unwrap();
+    let (img, meta) =
+        cubeforge::internals::convert::read(Path::new(&png), &ReadOptions::default()).unwrap();
     assert_eq!(meta.file_format, io::FileFormat::Png);
     let io::Decoded::Image(img) = img else {
         panic!()

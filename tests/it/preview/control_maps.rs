@@ -179,7 +179,7 @@ fn control_map_sidecar_gives_max_lod_bias() {
     let img = Image::filled(4, 2, Vec4::new(0.5, 0.25, 1.0, 1.0));
     std::fs::write(
         &map,
-        io::encode_image(
+        cubeforge::internals::output::encode_image(
             &map,
             &img,
             &WriteOptions {

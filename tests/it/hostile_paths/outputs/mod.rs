@@ -170,7 +170,9 @@ fn a_depfile_never_overwrites_an_output() {
     with_dep.extend(["--depfile", "sub/../gl/env_ggx.ktx2"]);
     refused(&run_within(d, &with_dep), &["inside the output folder gl"]);
     assert_eq!(snapshot(&d.join("faces")), faces);
-    assert!(cubeforge::internals::io::read(&d.join("faces/px.exr"), &Default::default()).is_ok());
+    assert!(
+        cubeforge::internals::convert::read(&d.join("faces/px.exr"), &Default::default()).is_ok()
+    );
     assert_eq!(std::fs::read(d.join("gl/env_ggx.ktx2")).unwrap(), gl);
     // The --sh file, which only the run names: the depfile is refused, the file whole.
     let irr = |dep: &str| {

@@ -22,7 +22,7 @@ use rayon::prelude::*;
 
 /// An OpenEXR `latlong` map as a cubeforge equirect panorama, 2k x k for a file h pixels high
 /// and w wide, k = min(h, w / 2).
-pub(super) fn latlong(img: &Image) -> Image {
+pub(crate) fn latlong(img: &Image) -> Image {
     let (w, h) = (img.width as f32, img.height as f32);
     let k = img.height.min(img.width / 2).max(1);
     let (ow, oh) = (2 * k, k);
@@ -68,7 +68,7 @@ fn pixel_in_face(face: usize, pif: Vec2, sof: f32) -> Vec2 {
 }
 
 /// An OpenEXR `cube` map as cubeforge's six faces, or why it holds none.
-pub(super) fn cube(img: &Image) -> Result<Faces, String> {
+pub(crate) fn cube(img: &Image) -> Result<Faces, String> {
     let sof = img.width.min(img.height / 6);
     if sof == 0 {
         return Err(format!(
