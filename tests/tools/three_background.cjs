@@ -9,14 +9,10 @@
 'use strict';
 const path = require('path');
 const fs = require('fs');
-const tools = path.join(process.env.CUBEFORGE_TOOLS || path.join(__dirname, '..', '..', 'target', 'tools'), 'node_modules');
-const puppeteer = require(path.join(tools, 'puppeteer-core'));
+const { ORIGIN, IMPORTS, withPage } = require('./three_page.cjs');
 
-const ORIGIN = 'http://cubeforge.test/';
 const PAGE = `<!doctype html><canvas id="c" width="64" height="64"></canvas>
-<script type="importmap">
-{"imports": {"three": "${ORIGIN}three/build/three.module.js",
-             "three/addons/": "${ORIGIN}three/examples/jsm/"}}</script>
+${IMPORTS}
 <script type="module">
 import * as THREE from 'three';
 const renderer = new THREE.WebGLRenderer({ canvas: document.getElementById('c'), preserveDrawingBuffer: true });
@@ -52,31 +48,12 @@ window.pageReady = true;
   const imports = lines.filter((l) => l.trim().startsWith('import '));
   const body = lines.filter((l) => !l.trim().startsWith('import '));
   const snippet = imports.join('\n') + '\nexport default (THREE, renderer, scene) => {\n' + body.join('\n') + '\n};\n';
-  const browser = await puppeteer.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    headless: true,
-    args: ['--no-sandbox', '--force-color-profile=srgb'],
-  });
-  try {
-    const tab = await browser.newPage();
-    tab.on('pageerror', (e) => console.error('page:', e.message));
-    await tab.setRequestInterception(true);
-    tab.on('request', (req) => {
-      const url = req.url();
-      if (!url.startsWith(ORIGIN)) return req.abort();
-      const rel = decodeURIComponent(url.slice(ORIGIN.length));
-      if (rel === 'index.html') return req.respond({ contentType: 'text/html', body: PAGE });
-      if (rel === 'snippet.js') return req.respond({ contentType: 'text/javascript', body: snippet });
-      // three's files from the tools; anything else by its name from the snippet's folder.
-      const file = rel.startsWith('three/') ? path.join(tools, rel) : path.join(folder, path.basename(rel));
-      if (!fs.existsSync(file)) return req.respond({ status: 404, body: '' });
-      req.respond({ contentType: rel.endsWith('.js') ? 'text/javascript' : 'application/octet-stream', body: fs.readFileSync(file) });
-    });
-    await tab.goto(ORIGIN + 'index.html');
-    await tab.waitForFunction('window.pageReady === true', { timeout: 60000 });
+  // The snippet as a module; anything else by its name from the snippet's folder.
+  const serve = (rel) => rel === 'snippet.js'
+    ? { contentType: 'text/javascript', body: snippet }
+    : path.join(folder, path.basename(rel));
+  await withPage(PAGE, serve, async (tab) => {
     const looks = await tab.evaluate((d) => window.look(d), dirs.map((d) => d.split(',').map(Number)));
     console.log(JSON.stringify({ looks }));
-  } finally {
-    await browser.close();
-  }
+  });
 })().catch((e) => { console.log(JSON.stringify({ error: String(e && e.message || e) })); process.exit(1); });

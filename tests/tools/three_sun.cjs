@@ -8,15 +8,10 @@
 // on the sunlit side opposite; or {"error": "..."}. Needs puppeteer-core and three
 // (target/tools) and chromium.
 'use strict';
-const path = require('path');
 const fs = require('fs');
-const tools = path.join(process.env.CUBEFORGE_TOOLS || path.join(__dirname, '..', '..', 'target', 'tools'), 'node_modules');
-const puppeteer = require(path.join(tools, 'puppeteer-core'));
+const { IMPORTS, withPage } = require('./three_page.cjs');
 
-const ORIGIN = 'http://cubeforge.test/';
-const PAGE = `<!doctype html><script type="importmap">
-{"imports": {"three": "${ORIGIN}three/build/three.module.js",
-             "three/addons/": "${ORIGIN}three/examples/jsm/"}}</script>
+const PAGE = `<!doctype html>${IMPORTS}
 <script type="module">
 import * as THREE from 'three';
 import { HDRLoader } from 'three/addons/loaders/HDRLoader.js';
@@ -98,35 +93,12 @@ window.pageReady = true;
 (async () => {
   const [full, sunless, sunJson] = process.argv.slice(2);
   const sun = JSON.parse(fs.readFileSync(sunJson, 'utf8'));
-  const browser = await puppeteer.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    headless: true,
-    args: ['--no-sandbox', '--force-color-profile=srgb'],
-  });
-  try {
-    const tab = await browser.newPage();
-    tab.on('pageerror', (e) => console.error('page:', e.message));
-    await tab.setRequestInterception(true);
-    const files = [full, sunless];
-    tab.on('request', (req) => {
-      const url = req.url();
-      if (!url.startsWith(ORIGIN)) return req.abort();
-      const rel = decodeURIComponent(url.slice(ORIGIN.length));
-      if (rel === 'index.html') return req.respond({ contentType: 'text/html', body: PAGE });
-      let file;
-      if (rel.startsWith('three/')) file = path.join(tools, rel);
-      else if (rel.startsWith('file/')) file = files[Number(rel.split('/')[1])];
-      if (!file || !fs.existsSync(file)) return req.respond({ status: 404, body: '' });
-      const type = file.endsWith('.js') ? 'text/javascript' : 'application/octet-stream';
-      req.respond({ contentType: type, body: fs.readFileSync(file) });
-    });
-    await tab.goto(ORIGIN + 'index.html');
-    await tab.waitForFunction('window.pageReady === true', { timeout: 60000 });
+  const files = [full, sunless];
+  const serve = (rel) => rel.startsWith('file/') && files[Number(rel.split('/')[1])];
+  await withPage(PAGE, serve, async (tab) => {
     await tab.evaluate((d) => { window.sunDir = d; }, sun.engine_direction);
     const a = await tab.evaluate(() => window.render(location.origin + '/file/0/x.hdr', null));
     const b = await tab.evaluate((s) => window.render(location.origin + '/file/1/x.hdr', s), sun);
     console.log(JSON.stringify({ full: a, sun: b }));
-  } finally {
-    await browser.close();
-  }
+  });
 })().catch((e) => { console.log(JSON.stringify({ error: String(e) })); process.exit(1); });

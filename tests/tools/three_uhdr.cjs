@@ -12,13 +12,9 @@
 'use strict';
 const path = require('path');
 const fs = require('fs');
-const tools = path.join(process.env.CUBEFORGE_TOOLS || path.join(__dirname, '..', '..', 'target', 'tools'), 'node_modules');
-const puppeteer = require(path.join(tools, 'puppeteer-core'));
+const { ORIGIN, IMPORTS, withPage } = require('./three_page.cjs');
 
-const ORIGIN = 'http://cubeforge.test/';
-const PAGE = `<!doctype html><script type="importmap">
-{"imports": {"three": "${ORIGIN}three/build/three.module.js",
-             "three/addons/": "${ORIGIN}three/examples/jsm/"}}</script>
+const PAGE = `<!doctype html>${IMPORTS}
 <script type="module">
 import * as THREE from 'three';
 import { UltraHDRLoader } from 'three/addons/loaders/UltraHDRLoader.js';
@@ -64,29 +60,8 @@ window.pageReady = true;
 
 (async () => {
   const [outdir, ...files] = process.argv.slice(2);
-  const browser = await puppeteer.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    headless: true,
-    args: ['--no-sandbox', '--force-color-profile=srgb'],
-  });
-  try {
-    const tab = await browser.newPage();
-    tab.on('pageerror', (e) => console.error('page:', e.message));
-    await tab.setRequestInterception(true);
-    tab.on('request', (req) => {
-      const url = req.url();
-      if (!url.startsWith(ORIGIN)) return req.abort();
-      const rel = decodeURIComponent(url.slice(ORIGIN.length));
-      if (rel === 'index.html') return req.respond({ contentType: 'text/html', body: PAGE });
-      let file;
-      if (rel.startsWith('three/')) file = path.join(tools, rel);
-      else if (rel.startsWith('file/')) file = files[Number(rel.split('/')[1])];
-      if (!file || !fs.existsSync(file)) return req.respond({ status: 404, body: '' });
-      const type = file.endsWith('.js') ? 'text/javascript' : 'application/octet-stream';
-      req.respond({ contentType: type, body: fs.readFileSync(file) });
-    });
-    await tab.goto(ORIGIN + 'index.html');
-    await tab.waitForFunction('window.pageReady === true', { timeout: 60000 });
+  const serve = (rel) => rel.startsWith('file/') && files[Number(rel.split('/')[1])];
+  await withPage(PAGE, serve, async (tab) => {
     for (const [i, file] of files.entries()) {
       const ext = path.extname(file);
       const r = await tab.evaluate((u) => window.readFile(u), `${ORIGIN}file/${i}/x${ext}`);
@@ -98,7 +73,5 @@ window.pageReady = true;
       const { data, ...rest } = r;
       console.log(JSON.stringify(rest));
     }
-  } finally {
-    await browser.close();
-  }
+  });
 })().catch((e) => { console.log(JSON.stringify({ error: String(e) })); process.exit(1); });

@@ -44,24 +44,6 @@ fn text(o: &Output) -> String {
 }
 
 /// Every file under `dir`, relative, with its bytes.
-fn tree(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap().display().to_string();
-                out.push((rel, std::fs::read(&p).unwrap()));
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
 #[test]
 fn a_second_clone_is_served_by_the_cache() {
     let t = tempfile::tempdir().unwrap();
@@ -100,14 +82,17 @@ fn a_second_clone_is_served_by_the_cache() {
     assert!(out.contains("0 ran, 10 from the cache"), "{out}");
     assert!(ran(&second).is_empty(), "{out}");
     assert_eq!(server.puts(), uploads, "the second clone uploaded\n{out}");
-    let built = tree(&d.join("a/proj/build"));
+    let built = super::contents(&d.join("a/proj/build"));
     assert_eq!(
         built.len(),
         17,
         "{:?}",
         built.iter().map(|f| &f.0).collect::<Vec<_>>()
     );
-    assert!(built == tree(&d.join("b/proj/build")), "the bytes differ");
+    assert!(
+        built == super::contents(&d.join("b/proj/build")),
+        "the bytes differ"
+    );
     println!("cache: first clone {first_s:.2} s (10 jobs ran), second clone {second_s:.2} s (10 from the cache)");
     assert!(
         second_s < first_s / 2.0,
@@ -136,7 +121,10 @@ fn a_second_clone_is_served_by_the_cache() {
     assert!(damaged.status.success(), "{out}");
     assert!(out.contains("does not match its hash"), "{out}");
     assert!(out.contains("1 ran, 9 from the cache"), "{out}");
-    assert!(built == tree(&d.join("c/proj/build")), "the bytes differ");
+    assert!(
+        built == super::contents(&d.join("c/proj/build")),
+        "the bytes differ"
+    );
     assert_eq!(
         std::fs::read(&blob).unwrap(),
         good,
@@ -164,7 +152,10 @@ fn a_second_clone_is_served_by_the_cache() {
     assert!(dead.status.success(), "{out}");
     assert_eq!(out.matches("warning").count(), 1, "{out}");
     assert!(out.contains("10 ran, 0 from the cache"), "{out}");
-    assert!(built == tree(&d.join("e/proj/build")), "the bytes differ");
+    assert!(
+        built == super::contents(&d.join("e/proj/build")),
+        "the bytes differ"
+    );
     for o in [&first, &second, &damaged, &denied, &dead] {
         assert!(!text(o).contains(TOKEN), "the token was printed");
     }

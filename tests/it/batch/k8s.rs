@@ -36,24 +36,6 @@ fn example() -> Option<Value> {
     }
 }
 
-fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap().display().to_string();
-                out.push((rel, std::fs::read(&p).unwrap()));
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
 #[test]
 fn the_kubernetes_indexed_job_is_a_job_of_shards() {
     let Some(job) = example() else { return };
@@ -139,5 +121,8 @@ fn the_kubernetes_indexed_job_is_a_job_of_shards() {
         ran += out.lines().filter(|l| l.starts_with("ran ")).count();
     }
     assert_eq!(ran, 7);
-    assert!(files(&t.path().join("one/proj/build")) == files(&t.path().join("pods/proj/build")));
+    assert!(
+        super::contents(&t.path().join("one/proj/build"))
+            == super::contents(&t.path().join("pods/proj/build"))
+    );
 }

@@ -64,6 +64,18 @@ output = "build/control.png"
 }
 
 /// The command lines (after `cubeforge`) a batch's standard output says it ran.
+/// Every file under `dir`, relative and sorted, with its bytes: two builds compared whole.
+pub(crate) fn contents(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    crate::tree::tree(dir)
+        .into_iter()
+        .filter(|rel| dir.join(rel).is_file())
+        .map(|rel| {
+            let bytes = std::fs::read(dir.join(&rel)).unwrap();
+            (rel, bytes)
+        })
+        .collect()
+}
+
 pub(crate) fn ran(o: &std::process::Output) -> Vec<String> {
     String::from_utf8_lossy(&o.stdout)
         .lines()

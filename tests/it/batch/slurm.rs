@@ -167,26 +167,6 @@ impl Drop for Cluster {
 }
 
 /// Every file under `dir`, relative, with its bytes.
-fn tree(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.push((
-                    p.strip_prefix(dir).unwrap().into(),
-                    std::fs::read(&p).unwrap(),
-                ));
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
 #[test]
 fn the_slurm_example_runs_on_a_one_node_cluster() {
     if !installed() {
@@ -209,7 +189,7 @@ fn the_slurm_example_runs_on_a_one_node_cluster() {
         .output()
         .unwrap();
     assert!(o.status.success());
-    let reference = tree(&d.join("one/proj/build"));
+    let reference = super::contents(&d.join("one/proj/build"));
     // The array, against the cache: each job once over the two shards, the same bytes.
     let url = server.url();
     let start = Instant::now();
@@ -224,7 +204,10 @@ fn the_slurm_example_runs_on_a_one_node_cluster() {
     once.sort();
     once.dedup();
     assert_eq!(once.len(), 7, "{logs}");
-    assert!(tree(&d.join("array/proj/build")) == reference, "{logs}");
+    assert!(
+        super::contents(&d.join("array/proj/build")) == reference,
+        "{logs}"
+    );
     for i in 0..2 {
         let state = d.join(format!("array/proj/m.shard-{i}-of-2.state.json"));
         assert!(state.is_file(), "{} missing", state.display());
@@ -242,6 +225,9 @@ fn the_slurm_example_runs_on_a_one_node_cluster() {
     let clone = cluster.bake(&d.join("clone/proj"), Some(&url), "clone");
     assert!(!clone.lines().any(|l| l.starts_with("ran ")), "{clone}");
     assert_eq!(clone.matches("from cache  cubeforge").count(), 7, "{clone}");
-    assert!(tree(&d.join("clone/proj/build")) == reference, "{clone}");
+    assert!(
+        super::contents(&d.join("clone/proj/build")) == reference,
+        "{clone}"
+    );
     assert_eq!(server.puts(), puts, "{clone}");
 }
