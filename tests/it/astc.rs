@@ -58,7 +58,7 @@ pub(crate) mod with_astc {
     use cubeforge::internals::convert;
     use cubeforge::internals::cube::CubeMap;
     use cubeforge::internals::flux;
-    use cubeforge::internals::io::{self, gpu, ktx2, Decoded, GpuFormat, Limits, ReadOptions};
+    use cubeforge::internals::io::{gpu, ktx2, Decoded, GpuFormat, Limits, ReadOptions};
     use cubeforge::internals::resample::Resampler;
     use std::path::{Path, PathBuf};
 
