@@ -100,6 +100,22 @@ sun.intensity = {intensity};
 const sunShadows = new BABYLON.ShadowGenerator(2048, sun);"#,
             d = v3(travel),
         ),
+        Engine::Unity | Engine::Unreal | Engine::Gltf | Engine::Generic => {
+            console_and_gltf(engine, w, &intensity, &color, diameter)
+        }
+    }
+}
+
+/// [`snippet`]'s lines for Unity, Unreal and glTF, and the generic target's for any other.
+fn console_and_gltf(
+    engine: Engine,
+    w: Vec3,
+    intensity: &str,
+    color: &str,
+    diameter: f64,
+) -> String {
+    let travel = -w;
+    match engine {
         Engine::Unity => format!(
             r#"
 // --sun: the sun, taken out of the panorama (sun.json). C#: a directional light (its
@@ -141,7 +157,7 @@ shines along its -Z):
                 ),
             )
         }
-        Engine::Generic => format!(
+        _ => format!(
             "\n--sun: the sun, taken out of the maps (sun.json): towards ({p}) in cube-map space, \
              irradiance {color} times {intensity} (the map's units), {r} degrees across.",
             p = v3(w),
