@@ -59,7 +59,13 @@ pub fn check_folder(dir: &Path, writing: &[PathBuf]) -> Result<()> {
 /// The first entry of `dir` (at `rel` below the output folder) that cubeforge would not
 /// have written there, if any.
 fn foreign_entry(dir: &Path, rel: &Path, written: &[PathBuf]) -> Result<Option<PathBuf>> {
-    let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
+    let entries = match std::fs::read_dir(dir) {
+        Ok(entries) => entries,
+        // Gone while it was read: another writer replaced the output folder whole (its
+        // level folders with it), so nothing foreign is left there; the move looks again.
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(Error::io(dir, e)),
+    };
     let mut names: Vec<_> = entries.filter_map(|e| e.ok()).collect();
     names.sort_by_key(|e| e.file_name());
     for e in names {
