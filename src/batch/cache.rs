@@ -357,17 +357,8 @@ fn sha_hex(bytes: &[u8]) -> String {
 
 /// SHA-256 of a regular file's bytes (None: not one, or unreadable).
 fn sha_file(path: &Path) -> Option<String> {
-    use std::io::Read;
-    let mut f = crate::io::atomic::open_regular(path).ok()?;
     let mut h = Sha256::new();
-    let mut buf = vec![0u8; 1 << 20];
-    loop {
-        let n = f.read(&mut buf).ok()?;
-        if n == 0 {
-            break;
-        }
-        h.update(&buf[..n]);
-    }
+    super::state::stream_file(path, |b| h.update(b))?;
     Some(hex(&h.finalize()))
 }
 

@@ -128,19 +128,25 @@ impl Hashes {
     }
 }
 
-/// The hash of a regular file's bytes (None: not one, or unreadable: the job runs).
-fn hash_file(path: &Path) -> Option<String> {
+/// Feeds a regular file's bytes to `each` a megabyte at a time (None: not one, or
+/// unreadable): what the state's hash and the cache's key read a file through.
+pub(super) fn stream_file(path: &Path, mut each: impl FnMut(&[u8])) -> Option<()> {
     use std::io::Read;
     let mut f = crate::io::atomic::open_regular(path).ok()?;
-    let mut h = Xxh3::new();
     let mut buf = vec![0u8; 1 << 20];
     loop {
         let n = f.read(&mut buf).ok()?;
         if n == 0 {
-            break;
+            return Some(());
         }
-        h.update(&buf[..n]);
+        each(&buf[..n]);
     }
+}
+
+/// The hash of a regular file's bytes (None: not one, or unreadable: the job runs).
+fn hash_file(path: &Path) -> Option<String> {
+    let mut h = Xxh3::new();
+    stream_file(path, |b| h.update(b))?;
     Some(format!("{:032x}", h.digest128()))
 }
 

@@ -83,6 +83,15 @@ fn named(text: &str, known: &BTreeMap<&str, u32>) -> BTreeSet<String> {
     out
 }
 
+/// A library file's text before its `#[cfg(test)]` module: the code the checks read.
+pub(crate) fn library_text(path: &Path) -> String {
+    let mut text = std::fs::read_to_string(path).unwrap();
+    if let Some(i) = text.find("#[cfg(test)]") {
+        text.truncate(i);
+    }
+    text
+}
+
 pub(crate) fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
     for e in std::fs::read_dir(dir).unwrap().flatten() {
         let p = e.path();
@@ -118,11 +127,8 @@ fn graph() -> BTreeMap<String, BTreeSet<String>> {
             known.contains_key(top.as_str()),
             "{top}: a new module; give it a rank in RANKS"
         );
-        let text = std::fs::read_to_string(&f).unwrap();
-        let text = match text.find("#[cfg(test)]") {
-            Some(i) => &text[..i],
-            None => &text[..],
-        };
+        let text = library_text(&f);
+        let text = text.as_str();
         let mut to = named(&code(text), &known);
         to.remove(&top);
         edges.entry(top).or_default().extend(to);
@@ -244,11 +250,8 @@ fn submodules_form_no_cycle() {
             if from == "mod" {
                 continue;
             }
-            let text = std::fs::read_to_string(f).unwrap();
-            let text = match text.find("#[cfg(test)]") {
-                Some(i) => &text[..i],
-                None => &text[..],
-            };
+            let text = library_text(f);
+            let text = text.as_str();
             let text = code(text)
                 .replace("super::", "crate::")
                 .replace(&format!("crate::{name}::"), "crate::");
@@ -300,11 +303,8 @@ fn io_is_codecs_and_the_file_edge() {
         if rel.ends_with("/tests.rs") || rel.contains("/tests/") {
             continue;
         }
-        let text = std::fs::read_to_string(&f).unwrap();
-        let text = match text.find("#[cfg(test)]") {
-            Some(i) => &text[..i],
-            None => &text[..],
-        };
+        let text = library_text(&f);
+        let text = text.as_str();
         for m in named(&code(text), &known) {
             if NOT_IN_IO.contains(&m.as_str()) {
                 found.insert((rel.clone(), m));
