@@ -5,7 +5,8 @@ array. The command line's jobs, with keyword arguments named as its flags (``--m
 ``min_size=``, ``--from`` is ``from_=``; a flag without a value takes ``True``): :func:`ibl`,
 :func:`prefilter`, :func:`irradiance`, :func:`convert`, :func:`control`, :func:`preview`,
 :func:`lut`, :func:`info`, :func:`batch`. Each job returns its report as a dict (``written``,
-``warnings``, ``summary``, ``quality``) and writes what the CLI writes, byte for byte.
+``warnings``, ``summary``, ``quality``; :func:`batch` adds each job's outcome and the
+counts) and writes what the CLI writes, byte for byte.
 
 A drop-in for py360convert: :func:`e2c` and :func:`c2e`, with its arguments, defaults, result
 shapes and face orientations (``import cubeforge as py360convert``).
@@ -209,12 +210,22 @@ def info(path: PathLike, **options: Any) -> Dict[str, Any]:
     return json.loads(_cubeforge.info(["info", os.fspath(path)] + _flags(options)))
 
 
-def batch(manifest: PathLike, **options: Any) -> None:
-    """``cubeforge batch MANIFEST``: a manifest's jobs, run as the CLI runs them (it prints
-    what the CLI prints; a failed job raises). Options: ``dry_run``, ``force``, ``shard``,
-    ``depfiles``, ``max_memory``. The working folder is restored after."""
+def batch(manifest: PathLike, *, progress: Optional[Progress] = None, **options: Any) -> Dict[str, Any]:
+    """``cubeforge batch MANIFEST``: a manifest's jobs, run as the CLI runs them (incremental
+    through its state file, a cache, shards), silently. Options: ``dry_run``, ``force``,
+    ``shard``, ``depfiles``, ``emit``, ``max_memory``, ``cache``, ``cache_read_only``.
+    ``progress(done, total, label)`` hears the jobs ended of those planned (label: the last
+    one's command line). The working folder is restored after.
+
+    Returns the report as a dict: ``jobs`` (each ``id``, ``outcome`` — 'ran', 'up to date',
+    'from cache', 'would run', 'would fetch' or 'failed' —, ``why``, ``seconds``, ``error``),
+    the counts ``ran``, ``up_to_date``, ``failed``, ``from_cache``, ``would_run``,
+    ``would_fetch``, ``other_shards``, and ``written`` (absolute paths), ``warnings``,
+    ``summary`` (the CLI's summary lines), ``failures``. A failed job raises
+    :class:`ArgumentError` ("N of M jobs failed: ..."), the dict as its ``report``.
+    """
     here = os.getcwd()
     try:
-        _cubeforge.run_line(["batch", os.fspath(manifest)] + _flags(options))
+        return _cubeforge.batch(["batch", os.fspath(manifest)] + _flags(options), progress)
     finally:
         os.chdir(here)

@@ -6,6 +6,7 @@
 // The command line, whole: its job builders are what the jobs here run. What only the
 // binary calls is dead here.
 mod arrays;
+mod batch;
 #[allow(dead_code, unused_imports)]
 #[path = "../../src/cli/mod.rs"]
 mod cli;
@@ -59,7 +60,7 @@ pub(crate) fn bad_arg(py: Python<'_>, text: impl Into<String>) -> PyErr {
 fn _cubeforge(m: &Bound<'_, PyModule>) -> PyResult<()> {
     run::quiet_cancel_panics();
     m.add_function(wrap_pyfunction!(run::run_job, m)?)?;
-    m.add_function(wrap_pyfunction!(run::run_line, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch, m)?)?;
     m.add_function(wrap_pyfunction!(run::info, m)?)?;
     m.add_function(wrap_pyfunction!(arrays::read, m)?)?;
     m.add_function(wrap_pyfunction!(arrays::write_exr, m)?)?;

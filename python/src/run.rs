@@ -11,7 +11,7 @@ use std::sync::Mutex;
 use std::time::Duration;
 
 /// The payload a stopped job unwinds with.
-struct Cancelled;
+pub(crate) struct Cancelled;
 
 /// Silences the unwinding of a stopped job; any other panic goes to the hook before.
 pub fn quiet_cancel_panics() {
@@ -28,10 +28,10 @@ pub fn quiet_cancel_panics() {
 
 /// What the job thread reports, read by the Python thread.
 #[derive(Default)]
-struct Shared {
-    total: AtomicU64,
-    done: AtomicU64,
-    label: Mutex<String>,
+pub(crate) struct Shared {
+    pub(crate) total: AtomicU64,
+    pub(crate) done: AtomicU64,
+    pub(crate) label: Mutex<String>,
     stop: AtomicBool,
 }
 
@@ -67,31 +67,28 @@ impl Shared {
 }
 
 /// How a job's thread ended.
-enum Ended {
-    Done(cubeforge::Result<cubeforge::Report>),
+enum Ended<T> {
+    Done(T),
     Stopped,
     Panicked(String),
 }
 
-/// Runs the job the command line `argv` (the words after `cubeforge`) describes; returns its
-/// report as a dict. `progress(done, total, label)` is called about ten times a second.
-#[pyfunction]
-#[pyo3(signature = (argv, progress=None))]
-pub fn run_job(
+/// Runs `work` on a thread of its own without the GIL while this thread calls `progress`
+/// about ten times a second and checks for Ctrl-C; either raising sets `shared.stop` (the
+/// work stops at its next progress step) and is what this returns once the work has ended.
+pub(crate) fn polled<T: Send>(
     py: Python<'_>,
-    argv: Vec<String>,
-    progress: Option<Py<PyAny>>,
-) -> PyResult<Py<PyDict>> {
-    let job = cli::job_of_words(&argv).map_err(|e| crate::error(py, &e))?;
-    let shared = Shared::default();
+    shared: &Shared,
+    progress: &Option<Py<PyAny>>,
+    work: impl FnOnce() -> T + Send,
+) -> PyResult<T> {
     let mut interrupt: Option<PyErr> = None;
     let ended = std::thread::scope(|s| {
         let (tx, rx) = std::sync::mpsc::channel();
         // Receivers are not Sync; the wait below hands it to the GIL-free closure by a lock.
         let rx = Mutex::new(rx);
-        let (job, shared) = (&job, &shared);
         s.spawn(move || {
-            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| job.run(shared)));
+            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(work));
             let _ = tx.send(match r {
                 Ok(r) => Ended::Done(r),
                 Err(p) if p.downcast_ref::<Cancelled>().is_some() => Ended::Stopped,
@@ -111,7 +108,7 @@ pub fn run_job(
                 Err(_) if interrupt.is_some() => continue,
                 Err(_) => {}
             }
-            let called = py.check_signals().and_then(|()| match &progress {
+            let called = py.check_signals().and_then(|()| match progress {
                 Some(cb) => call_progress(py, cb, shared).map(|_| ()),
                 None => Ok(()),
             });
@@ -125,13 +122,12 @@ pub fn run_job(
         return Err(e);
     }
     match ended {
-        Ended::Done(Ok(report)) => {
-            if let Some(cb) = &progress {
-                call_progress(py, cb, &shared)?;
+        Ended::Done(r) => {
+            if let Some(cb) = progress {
+                call_progress(py, cb, shared)?;
             }
-            report_dict(py, &report)
+            Ok(r)
         }
-        Ended::Done(Err(e)) => Err(crate::error(py, &e)),
         Ended::Stopped => Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped")),
         Ended::Panicked(msg) => Err(crate::raise_as(
             py,
@@ -139,6 +135,22 @@ pub fn run_job(
             format!("internal error: {msg}"),
         )),
     }
+}
+
+/// Runs the job the command line `argv` (the words after `cubeforge`) describes; returns its
+/// report as a dict. `progress(done, total, label)` is called about ten times a second.
+#[pyfunction]
+#[pyo3(signature = (argv, progress=None))]
+pub fn run_job(
+    py: Python<'_>,
+    argv: Vec<String>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Py<PyDict>> {
+    let job = cli::job_of_words(&argv).map_err(|e| crate::error(py, &e))?;
+    let shared = Shared::default();
+    let report = polled(py, &shared, &progress, || job.run(&shared))?;
+    let report = report.map_err(|e| crate::error(py, &e))?;
+    report_dict(py, &report)
 }
 
 fn call_progress(py: Python<'_>, cb: &Py<PyAny>, s: &Shared) -> PyResult<Py<PyAny>> {
@@ -158,7 +170,7 @@ fn panic_text(p: Box<dyn std::any::Any + Send>) -> String {
 }
 
 /// The report as Python reads it: written (paths), warnings and summary (lines), quality.
-fn report_dict(py: Python<'_>, r: &cubeforge::Report) -> PyResult<Py<PyDict>> {
+pub(crate) fn report_dict(py: Python<'_>, r: &cubeforge::Report) -> PyResult<Py<PyDict>> {
     let d = PyDict::new(py);
     let written: Vec<String> = r.written.iter().map(|p| p.display().to_string()).collect();
     d.set_item("written", PyList::new(py, written)?)?;
@@ -176,13 +188,6 @@ fn report_dict(py: Python<'_>, r: &cubeforge::Report) -> PyResult<Py<PyDict>> {
         None => d.set_item("quality", py.None())?,
     }
     Ok(d.unbind())
-}
-
-/// Runs a command line as the command does (it prints what the command prints): `batch`.
-#[pyfunction]
-pub fn run_line(py: Python<'_>, argv: Vec<String>) -> PyResult<()> {
-    py.detach(|| cli::run_words(&argv))
-        .map_err(|e| crate::error(py, &e))
 }
 
 /// `info`'s report of one file as JSON (what `cubeforge info FILE --json` prints), from the

@@ -84,15 +84,44 @@ def test_errors_are_python_errors(tmp_path):
     assert not (tmp_path / "o.ktx2").exists() and not (tmp_path / "x").exists()
 
 
-def test_batch_runs_a_manifest_and_keeps_the_working_folder(tmp_path):
+def test_batch_returns_its_report_and_keeps_the_working_folder(tmp_path):
     (tmp_path / "m.toml").write_text(
         f'[[job]]\ninputs = ["{SKY}"]\ncommand = "convert"\nargs = ["--size", "8", "--to", "hcross"]\n'
         'output = "{stem}.png"\n'
+        '[[job]]\ncommand = "lut"\nargs = ["--size", "8"]\noutput = "lut.png"\n'
     )
     here = os.getcwd()
-    cubeforge.batch(tmp_path / "m.toml")
+    seen = []
+    report = cubeforge.batch(tmp_path / "m.toml", progress=lambda *a: seen.append(a))
     assert os.getcwd() == here
-    assert (tmp_path / "sky.png").exists()
+    assert (report["ran"], report["up_to_date"], report["failed"], report["from_cache"]) == (2, 0, 0, 0)
+    assert sorted(report["written"]) == [str(tmp_path / "lut.png"), str(tmp_path / "sky.png")]
+    assert [j["outcome"] for j in report["jobs"]] == ["ran", "ran"]
+    assert report["jobs"][0]["id"].startswith("convert ") and report["jobs"][0]["why"]
+    assert report["summary"][-1].startswith("batch: 2 jobs: 2 ran, 0 up to date, 0 failed")
+    assert seen and seen[-1][:2] == (2, 2)
+    again = cubeforge.batch(tmp_path / "m.toml")
+    assert (again["ran"], again["up_to_date"], again["written"]) == (0, 2, [])
+    assert [j["outcome"] for j in again["jobs"]] == ["up to date", "up to date"]
+    dry = cubeforge.batch(tmp_path / "m.toml", dry_run=True, force=True)
+    assert dry["would_run"] == 2 and not dry["written"]
+
+
+def test_a_failed_batch_job_raises_with_the_report(tmp_path):
+    (tmp_path / "m.toml").write_text(
+        f'[[job]]\ninputs = ["{SKY}"]\ncommand = "convert"\nargs = ["--size", "8", "--to", "hcross"]\n'
+        'output = "{stem}.png"\n'
+        '[[job]]\ninputs = ["missing.exr"]\ncommand = "convert"\nargs = ["--size", "8"]\n'
+        'output = "missing.png"\n'
+    )
+    with pytest.raises(cubeforge.ArgumentError) as e:
+        cubeforge.batch(tmp_path / "m.toml")
+    assert "1 of 2 jobs failed" in str(e.value) and "missing.exr" in str(e.value)
+    report = e.value.report
+    assert (report["ran"], report["failed"]) == (1, 1)
+    assert [j["outcome"] for j in report["jobs"]] == ["ran", "failed"]
+    assert "missing.exr" in report["jobs"][1]["error"] and len(report["failures"]) == 1
+    assert not (tmp_path / "missing.png").exists()
 
 
 def test_ctrl_c_stops_a_job_and_writes_nothing(tmp_path):

@@ -20,7 +20,7 @@ mod signals;
 mod view;
 
 #[allow(unused_imports)] // the Python package's way in (python/src/run.rs)
-pub use batch::{job_of_words, run_words};
+pub use batch::{job_of_words, prepare_words, Prepared, Ran};
 use clap::{Parser, Subcommand};
 use cubeforge::internals::tonemap::Tonemap;
 pub use observer::Observer;

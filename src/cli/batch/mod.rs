@@ -126,15 +126,17 @@ pub fn job_of_words(argv: &[String]) -> Result<Box<dyn Job + Send + Sync>> {
     job_of(&mut <Cli as clap::CommandFactory>::command(), argv)
 }
 
-/// A command line (its words after `cubeforge`) parsed and run as the command runs it,
-/// printing what it prints: the Python package's `batch`.
+/// A `batch` command line (its words after `cubeforge`) parsed and planned as the command
+/// does it, silently (`warn` hears the manifest's warnings): the Python package's `batch`.
 #[allow(dead_code)]
-pub fn run_words(argv: &[String]) -> Result<()> {
+pub fn prepare_words(argv: &[String], warn: &mut dyn FnMut(String)) -> Result<Prepared> {
     let words = std::iter::once("cubeforge").chain(argv.iter().map(String::as_str));
     let cli = <Cli as clap::Parser>::try_parse_from(words)
         .map_err(|e| Error::usage(super::one_line(&e)))?;
-    super::QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
-    super::dispatch(cli)
+    match cli.command {
+        Command::Batch(a) => prepare(&a, warn),
+        _ => Err(Error::usage("not a batch command line")),
+    }
 }
 
 /// A job that cannot even be built (a bad flag) fails alone, as a job that runs and fails.
@@ -155,7 +157,42 @@ impl Job for Unbuilt {
     }
 }
 
+/// What a batch that ran did: the library's report and what its lines need.
+pub struct Ran {
+    pub report: cubeforge::internals::batch::BatchReport,
+    pub dry_run: bool,
+    /// A cache was asked.
+    pub cached: bool,
+    pub seconds: f64,
+    /// The manifest line of each job's id.
+    lines: std::collections::HashMap<String, usize>,
+}
+
+/// A batch planned: its jobs ready to run, or its build file written instead (the path, for
+/// the Python package's report, and the line that says so).
+pub enum Prepared {
+    Ready(Box<Ready>),
+    Emitted(#[allow(dead_code)] PathBuf, String),
+}
+
+/// The jobs of a manifest, built and ready to run.
+pub struct Ready {
+    batch: Batch,
+    cached: bool,
+    lines: std::collections::HashMap<String, usize>,
+}
+
 pub fn run(a: Args, verbose: bool) -> Result<()> {
+    let shown = verbose || a.dry_run;
+    match prepare(&a, &mut |w| super::warn(w))? {
+        Prepared::Emitted(_, line) => super::report(line),
+        Prepared::Ready(ready) => summarize(&ready.run(&|d: &Done| show(d, shown))?),
+    }
+}
+
+/// Plans the batch `a` describes (`warn` hears the manifest's warnings), from the manifest's
+/// folder (the working folder changes to it), or writes its build file.
+pub fn prepare(a: &Args, warn: &mut dyn FnMut(String)) -> Result<Prepared> {
     let text = std::fs::read_to_string(&a.manifest).map_err(|e| Error::io(&a.manifest, e))?;
     let name = PathBuf::from(a.manifest.file_name().unwrap_or(a.manifest.as_os_str()));
     // Paths in the manifest (its globs included) are relative to it.
@@ -164,7 +201,7 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     }
     // Depfiles and build.ninja name every file: only then do names they cannot hold matter.
     let build_files = a.depfiles || a.emit.is_some();
-    let planned = manifest::plan(&a.manifest, &text, build_files, &mut |w| super::warn(w))?;
+    let planned = manifest::plan(&a.manifest, &text, build_files, warn)?;
     if let Some(Emit::Ninja) = a.emit {
         let out = ninja::write(&name, &planned)?;
         let line = format!(
@@ -178,12 +215,12 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
                     &d.display().to_string()
                 ))
         );
-        return super::report(cubeforge::internals::error::escape_text(&line));
+        let line = cubeforge::internals::error::escape_text(&line).into_owned();
+        return Ok(Prepared::Emitted(out, line));
     }
     let jobs = jobs_of(&planned);
-    let lines: std::collections::HashMap<String, usize> =
-        planned.iter().map(|p| (p.line_text(), p.line)).collect();
-    let cache = cache_of(&a)?;
+    let lines = planned.iter().map(|p| (p.line_text(), p.line)).collect();
+    let cache = cache_of(a)?;
     let cached = cache.is_some();
     let batch = Batch {
         cache,
@@ -197,16 +234,33 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
             .unwrap_or(cubeforge::Limits::default().max_memory),
         ..Batch::new(jobs)
     };
-    let start = std::time::Instant::now();
-    let tell = |d: &Done| show(d, verbose || a.dry_run);
-    let report = batch.run(&tell)?;
-    summarize(
-        &report,
-        a.dry_run,
+    Ok(Prepared::Ready(Box::new(Ready {
+        batch,
         cached,
-        start.elapsed().as_secs_f64(),
-        &lines,
-    )
+        lines,
+    })))
+}
+
+impl Ready {
+    /// The jobs of the manifest (a shard runs a part of them).
+    #[allow(dead_code)]
+    pub fn jobs(&self) -> usize {
+        self.batch.jobs.len()
+    }
+
+    /// Runs the jobs, telling `tell` of each one's end (from any thread); prints nothing.
+    pub fn run(self, tell: &(dyn Fn(&Done) + Sync)) -> Result<Ran> {
+        let dry_run = self.batch.dry_run;
+        let start = std::time::Instant::now();
+        let report = self.batch.run(tell)?;
+        Ok(Ran {
+            report,
+            dry_run,
+            cached: self.cached,
+            seconds: start.elapsed().as_secs_f64(),
+            lines: self.lines,
+        })
+    }
 }
 
 /// The batch's jobs, one per planned command line (one that cannot be built fails alone).
@@ -250,65 +304,97 @@ fn cache_of(a: &Args) -> Result<Option<cubeforge::internals::batch::Cache>> {
     }
 }
 
-/// The summary line, then each failure in one line with its manifest line; an error when any
-/// job failed.
-fn summarize(
-    report: &cubeforge::internals::batch::BatchReport,
-    dry_run: bool,
-    cached: bool,
-    seconds: f64,
-    lines: &std::collections::HashMap<String, usize>,
-) -> Result<()> {
-    for w in &report.warnings {
+/// The warnings, the summary lines, then each failure in one line with its manifest line;
+/// an error when any job failed.
+fn summarize(ran: &Ran) -> Result<()> {
+    for w in &ran.report.warnings {
         super::warn(w.with_flags());
     }
-    if dry_run {
-        let n = report.shard_costs.len();
-        for (i, (cost, jobs)) in report.shard_costs.iter().enumerate() {
-            super::report(format!(
-                "shard {i}/{n}: {jobs} jobs, estimated {:.1} MiB",
-                *cost as f64 / (1u64 << 20) as f64
-            ))?;
-        }
+    for line in ran.summary() {
+        super::report(line)?;
     }
-    let shards = if report.other_shards > 0 {
-        format!(", {} left to other shards", report.other_shards)
-    } else {
-        String::new()
-    };
-    let n = report.jobs.len();
-    super::report(if dry_run {
-        let fetch = cached.then(|| format!(", {} from the cache", report.would_fetch()));
-        format!(
-            "batch: {n} jobs: {} would run{}, {} up to date{shards}",
-            report.would_run(),
-            fetch.unwrap_or_default(),
-            report.up_to_date()
-        )
-    } else {
-        let fetched = cached.then(|| format!(", {} from the cache", report.fetched()));
-        format!(
-            "batch: {n} jobs: {} ran{}, {} up to date, {} failed{shards} ({seconds:.2} s)",
-            report.ran(),
-            fetched.unwrap_or_default(),
-            report.up_to_date(),
-            report.failed()
-        )
-    })?;
-    for d in &report.jobs {
-        if let Outcome::Failed(e) = &d.outcome {
-            let line = format!(
-                "cubeforge: batch: failed: line {}: cubeforge {}: {}",
-                lines.get(&d.id).copied().unwrap_or(0),
-                d.id,
-                e.with_flags()
-            );
-            super::tell(cubeforge::internals::error::escape_text(&line));
-        }
+    for line in ran.failures() {
+        super::tell(format_args!("cubeforge: {line}"));
     }
-    match report.failed() {
-        0 => Ok(()),
-        failed => Err(Error::usage(format!("{failed} of {n} jobs failed"))),
+    ran.failed()
+}
+
+impl Ran {
+    /// The summary as the command prints it: with --dry-run each shard's cost, then the line
+    /// of counts.
+    pub fn summary(&self) -> Vec<String> {
+        let (report, dry_run) = (&self.report, self.dry_run);
+        let mut out = Vec::new();
+        if dry_run {
+            let n = report.shard_costs.len();
+            for (i, (cost, jobs)) in report.shard_costs.iter().enumerate() {
+                out.push(format!(
+                    "shard {i}/{n}: {jobs} jobs, estimated {:.1} MiB",
+                    *cost as f64 / (1u64 << 20) as f64
+                ));
+            }
+        }
+        let shards = if report.other_shards > 0 {
+            format!(", {} left to other shards", report.other_shards)
+        } else {
+            String::new()
+        };
+        let n = report.jobs.len();
+        out.push(if dry_run {
+            let fetch = self
+                .cached
+                .then(|| format!(", {} from the cache", report.would_fetch()));
+            format!(
+                "batch: {n} jobs: {} would run{}, {} up to date{shards}",
+                report.would_run(),
+                fetch.unwrap_or_default(),
+                report.up_to_date()
+            )
+        } else {
+            let fetched = self
+                .cached
+                .then(|| format!(", {} from the cache", report.fetched()));
+            format!(
+                "batch: {n} jobs: {} ran{}, {} up to date, {} failed{shards} ({:.2} s)",
+                report.ran(),
+                fetched.unwrap_or_default(),
+                report.up_to_date(),
+                report.failed(),
+                self.seconds
+            )
+        });
+        out
+    }
+
+    /// Each failed job in one line (control characters written out): its manifest line, its
+    /// command line and its error.
+    pub fn failures(&self) -> Vec<String> {
+        let failed = self.report.jobs.iter().filter_map(|d| match &d.outcome {
+            Outcome::Failed(e) => Some((d, e)),
+            _ => None,
+        });
+        failed
+            .map(|(d, e)| {
+                let line = format!(
+                    "batch: failed: line {}: cubeforge {}: {}",
+                    self.lines.get(&d.id).copied().unwrap_or(0),
+                    d.id,
+                    e.with_flags()
+                );
+                cubeforge::internals::error::escape_text(&line).into_owned()
+            })
+            .collect()
+    }
+
+    /// The batch's error when a job failed (as the command's exit status says).
+    pub fn failed(&self) -> Result<()> {
+        match self.report.failed() {
+            0 => Ok(()),
+            failed => Err(Error::usage(format!(
+                "{failed} of {} jobs failed",
+                self.report.jobs.len()
+            ))),
+        }
     }
 }
 
