@@ -1,10 +1,12 @@
-"""cubeforge.e2c and c2e beside py360convert's, in one process (BENCHMARKS.md's Python section).
+"""cubeforge.e2c, c2e and e2p beside py360convert's, in one process (BENCHMARKS.md's Python
+section).
 
     python python/bench/e2c_speed.py [PANORAMA] [RUNS]
 
 A 4096 x 2048 RGB float32 panorama (PANORAMA, default ../shared/fixtures/real/hdr/esplanade.hdr,
 resampled to that size by cubeforge) to six 1024 faces (dice), and those faces back to a
-4096 x 2048 panorama; best of RUNS (default 3) for each, the two libraries alternating, and
+4096 x 2048 panorama, and a 1024 x 1024 view of 90 degrees (u 40, v 10); best of RUNS
+(default 3) for each, the two libraries alternating, and
 the PSNR of cubeforge's result against py360convert's (on v/(1+v), peak 1).
 """
 
@@ -59,3 +61,7 @@ line("e2c 1024 faces", t_py, t_cf, psnr(faces_py, faces_cf))
 t_py, back_py = best(lambda: py360convert.c2e(faces_py, 2048, 4096))
 t_cf, back_cf = best(lambda: cubeforge.c2e(faces_py, 2048, 4096))
 line("c2e 4096 x 2048", t_py, t_cf, psnr(back_py, back_cf))
+view = (90, 40, 10, (1024, 1024))
+t_py, pers_py = best(lambda: py360convert.e2p(pano, *view))
+t_cf, pers_cf = best(lambda: cubeforge.e2p(pano, *view))
+line("e2p 1024 x 1024, 90 degrees", t_py, t_cf, psnr(pers_py, pers_cf))

@@ -8,8 +8,8 @@ array. The command line's jobs, with keyword arguments named as its flags (``--m
 ``warnings``, ``summary``, ``quality``; :func:`batch` adds each job's outcome and the
 counts) and writes what the CLI writes, byte for byte.
 
-A drop-in for py360convert: :func:`e2c` and :func:`c2e`, with its arguments, defaults, result
-shapes and face orientations (``import cubeforge as py360convert``).
+A drop-in for py360convert: :func:`e2c`, :func:`c2e` and :func:`e2p`, with its arguments,
+defaults, result shapes and face orientations (``import cubeforge as py360convert``).
 
 Errors are :class:`Error`: :class:`ArgumentError` (also a ``ValueError``) for bad arguments,
 :class:`FileError` (also an ``OSError``) for files, with the command line's one-line message.
@@ -26,7 +26,7 @@ import numpy as np
 
 from . import _cubeforge
 from ._errors import ArgumentError, Error, FileError
-from ._py360 import c2e, e2c
+from ._py360 import c2e, e2c, e2p
 
 __all__ = [
     "Error",
@@ -45,6 +45,7 @@ __all__ = [
     "batch",
     "e2c",
     "c2e",
+    "e2p",
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]

@@ -1,4 +1,4 @@
-"""py360convert's ``e2c`` and ``c2e``, computed by cubeforge: its arguments, defaults, result
+"""py360convert's ``e2c``, ``c2e`` and ``e2p``, computed by cubeforge: its arguments, defaults, result
 shapes, face keys (F R B L U D) and face orientations, texel for texel (its face grids run
 edge to edge, its padding and face masks are its own), in parallel and without the GIL.
 
@@ -10,7 +10,8 @@ texel grids differ by py360convert's edge-to-edge sampling (half a texel at the 
 
 from __future__ import annotations
 
-from typing import Dict, List, Union
+from numbers import Real
+from typing import Dict, List, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -30,7 +31,7 @@ def _nearest(mode: str) -> bool:
         return True
     if m in _BILINEAR:
         return False
-    raise ArgumentError(f"mode={mode!r}: cubeforge's e2c and c2e take 'bilinear' or 'nearest'")
+    raise ArgumentError(f"mode={mode!r}: cubeforge's e2c, c2e and e2p take 'bilinear' or 'nearest'")
 
 
 def _as_float(img: np.ndarray) -> np.ndarray:
@@ -128,4 +129,33 @@ def c2e(cubemap, h: int, w: int, mode: str = "bilinear", cube_format: str = "dic
         raise ValueError("Cubemap faces must be square.")
     out = _cubeforge.c2e_faces(_as_float(stack), int(h), int(w), nearest)
     out = _back(out, dtype)
+    return out[..., 0] if squeeze else out
+
+
+def e2p(e_img: np.ndarray, fov_deg: Union[float, Tuple[float, float]], u_deg: float, v_deg: float,
+        out_hw: Sequence[int], in_rot_deg: float = 0, mode: str = "bilinear") -> np.ndarray:
+    """Convert an equirectangular image to a perspective view, as ``py360convert.e2p``.
+
+    Parameters: ``e_img`` of shape [H, W] or [H, W, *]; ``fov_deg`` the field of view in
+    degrees, one for both or (horizontal, vertical); ``u_deg`` the view's longitude (- left,
+    + right), ``v_deg`` its latitude (- down, + up); ``out_hw`` the view's (height, width);
+    ``in_rot_deg`` a turn about the view axis; ``mode`` 'bilinear' or 'nearest'. Returns
+    (out_h, out_w[, *]) in the input's type.
+    """
+    e_img = np.asarray(e_img)
+    if e_img.ndim not in (2, 3):
+        raise ValueError("e_img must have 2 or 3 dimensions.")
+    squeeze = e_img.ndim == 2
+    src = e_img[..., None] if squeeze else e_img
+    # py360convert's own conversions: radians through numpy, u negated.
+    if isinstance(fov_deg, Real):
+        h_fov = v_fov = float(np.deg2rad(float(fov_deg)))
+    else:
+        h_fov, v_fov = float(np.deg2rad(fov_deg[0])), float(np.deg2rad(fov_deg[1]))
+    u = -float(np.deg2rad(u_deg))
+    v = float(np.deg2rad(v_deg))
+    in_rot = float(np.deg2rad(in_rot_deg))
+    out = _cubeforge.e2p_view(_as_float(src), h_fov, v_fov, u, v, in_rot,
+                              int(out_hw[0]), int(out_hw[1]), _nearest(mode))
+    out = _back(out, e_img.dtype)
     return out[..., 0] if squeeze else out

@@ -33,7 +33,7 @@ fn taps(y: f32, x: f32, nearest: bool, mut sum: impl FnMut(usize, usize, f32)) {
 
 /// atan2 for f32 within a few units of the last place (Cephes' atanf after its range
 /// reduction), without libm's special cases.
-fn atan2(y: f32, x: f32) -> f32 {
+pub(crate) fn atan2(y: f32, x: f32) -> f32 {
     use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
     let (ax, ay) = (x.abs(), y.abs());
     let q = if ax == 0.0 { f32::INFINITY } else { ay / ax };
@@ -76,7 +76,7 @@ fn cube_dir(f: usize, row: usize, col: usize, n: usize) -> [f32; 3] {
 }
 
 /// py360convert's e2c sampler of one panorama: its geometry computed once.
-struct E2c<'a> {
+pub(crate) struct E2c<'a> {
     src: &'a [f32],
     h: usize,
     w: usize,
@@ -92,25 +92,32 @@ struct E2c<'a> {
 }
 
 impl E2c<'_> {
-    fn to_cx(&self, u: f32) -> f32 {
+    pub(crate) fn to_cx(&self, u: f32) -> f32 {
         (u * (0.5 / std::f32::consts::PI) + 0.5) * self.w as f32 + 0.5
     }
 
-    fn to_cy(&self, v: f32) -> f32 {
+    pub(crate) fn to_cy(&self, v: f32) -> f32 {
         (-v * std::f32::consts::FRAC_1_PI + 0.5) * self.h as f32 + 0.5
     }
 
-    fn new(src: &[f32], [h, w, c]: [usize; 3], n: usize, nearest: bool) -> E2c<'_> {
-        let mut e = E2c {
+    /// The panorama alone, for [`E2c::sample`] (no faces' geometry).
+    pub(crate) fn bare(src: &[f32], [h, w, c]: [usize; 3], nearest: bool) -> E2c<'_> {
+        E2c {
             src,
             h,
             w,
             c,
-            n,
+            n: 0,
             nearest,
             side: Vec::new(),
-            up: vec![(0.0, 0.0); n * n],
-        };
+            up: Vec::new(),
+        }
+    }
+
+    fn new(src: &[f32], shape: [usize; 3], n: usize, nearest: bool) -> E2c<'_> {
+        let mut e = E2c::bare(src, shape, nearest);
+        e.n = n;
+        e.up = vec![(0.0, 0.0); n * n];
         e.side = (0..4 * n)
             .map(|i| {
                 let [x, _, z] = cube_dir(i / n, 0, i % n, n);
@@ -155,8 +162,7 @@ impl E2c<'_> {
 
     /// Row `row` of face `face` into `seg` (n texels); `side_cy` from [`E2c::side_row`].
     fn fill(&self, face: usize, row: usize, seg: &mut [f32], side_cy: &[f32]) {
-        let (n, c, w) = (self.n, self.c, self.w);
-        let (wf, hf) = (w as f32, self.h as f32);
+        let (n, c) = (self.n, self.c);
         for (col, texel) in seg.chunks_exact_mut(c).enumerate() {
             let (cx, cy) = match face {
                 0..=3 => (self.side[face * n + col].0, side_cy[col]),
@@ -169,32 +175,41 @@ impl E2c<'_> {
                     (self.to_cx(u), self.to_cy(-v))
                 }
             };
-            // cx and cy are at least 0.5: truncation is the floor.
-            let (x0, y0) = ((cx as usize) as f32, (cy as usize) as f32);
-            // Inside the image (padded texels 1..=w, 1..=h): read it directly.
-            if !self.nearest && x0 >= 1.0 && x0 < wf && y0 >= 1.0 && y0 < hf {
-                let (fx, fy) = (cx - x0, cy - y0);
-                let i = ((y0 as usize - 1) * w + x0 as usize - 1) * c;
-                let (a, b) = (
-                    &self.src[i..i + 2 * c],
-                    &self.src[i + w * c..i + w * c + 2 * c],
-                );
-                for (k, o) in texel.iter_mut().enumerate() {
-                    let top = a[k] + fx * (a[c + k] - a[k]);
-                    let bottom = b[k] + fx * (b[c + k] - b[k]);
-                    *o = top + fy * (bottom - top);
-                }
-                continue;
-            }
-            let mut tapped: [(&[f32], f32); 4] = [(&[], 0.0); 4];
-            let mut count = 0;
-            taps(cy, cx, self.nearest, |ty, tx, wt| {
-                tapped[count] = (self.at(ty.min(self.h + 1), tx.min(w + 1)), wt);
-                count += 1;
-            });
+            self.sample(cx, cy, texel);
+        }
+    }
+
+    /// The texel of py360convert's padded panorama at (cx, cy) (padded coordinates, each
+    /// from 0.5 to the padded side less 0.5) into `texel`: bilinear or nearest, as its
+    /// `map_coordinates`.
+    pub(crate) fn sample(&self, cx: f32, cy: f32, texel: &mut [f32]) {
+        let (c, w) = (self.c, self.w);
+        let (wf, hf) = (w as f32, self.h as f32);
+        // cx and cy are at least 0.5: truncation is the floor.
+        let (x0, y0) = ((cx as usize) as f32, (cy as usize) as f32);
+        // Inside the image (padded texels 1..=w, 1..=h): read it directly.
+        if !self.nearest && x0 >= 1.0 && x0 < wf && y0 >= 1.0 && y0 < hf {
+            let (fx, fy) = (cx - x0, cy - y0);
+            let i = ((y0 as usize - 1) * w + x0 as usize - 1) * c;
+            let (a, b) = (
+                &self.src[i..i + 2 * c],
+                &self.src[i + w * c..i + w * c + 2 * c],
+            );
             for (k, o) in texel.iter_mut().enumerate() {
-                *o = tapped[..count].iter().map(|(t, wt)| wt * t[k]).sum();
+                let top = a[k] + fx * (a[c + k] - a[k]);
+                let bottom = b[k] + fx * (b[c + k] - b[k]);
+                *o = top + fy * (bottom - top);
             }
+            return;
+        }
+        let mut tapped: [(&[f32], f32); 4] = [(&[], 0.0); 4];
+        let mut count = 0;
+        taps(cy, cx, self.nearest, |ty, tx, wt| {
+            tapped[count] = (self.at(ty.min(self.h + 1), tx.min(w + 1)), wt);
+            count += 1;
+        });
+        for (k, o) in texel.iter_mut().enumerate() {
+            *o = tapped[..count].iter().map(|(t, wt)| wt * t[k]).sum();
         }
     }
 }

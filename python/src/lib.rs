@@ -11,6 +11,7 @@ mod batch;
 #[path = "../../src/cli/mod.rs"]
 mod cli;
 mod compat;
+mod persp;
 mod run;
 
 use pyo3::prelude::*;
@@ -69,5 +70,6 @@ fn _cubeforge(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(arrays::convert_array, m)?)?;
     m.add_function(wrap_pyfunction!(compat::e2c_faces, m)?)?;
     m.add_function(wrap_pyfunction!(compat::c2e_faces, m)?)?;
+    m.add_function(wrap_pyfunction!(persp::e2p_view, m)?)?;
     Ok(())
 }
