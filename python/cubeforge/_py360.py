@@ -124,10 +124,11 @@ def c2e(cubemap, h: int, w: int, mode: str = "bilinear", cube_format: str = "dic
     faces = _faces_of(cubemap, cube_format)
     dtype = faces[0].dtype
     squeeze = faces[0].ndim == 2
-    stack = np.stack([f[..., None] if squeeze else f for f in faces])
-    if stack.shape[1] != stack.shape[2]:
+    if faces[0].shape[0] != faces[0].shape[1]:
         raise ValueError("Cubemap faces must be square.")
-    out = _cubeforge.c2e_faces(_as_float(stack), int(h), int(w), nearest)
+    # Each face as it lies (a dice's cell, a horizon's slice): float32 ones are not copied.
+    faces = [np.asarray(f[..., None] if squeeze else f, dtype=np.float32) for f in faces]
+    out = _cubeforge.c2e_faces(faces, int(h), int(w), nearest)
     out = _back(out, dtype)
     return out[..., 0] if squeeze else out
 

@@ -6,17 +6,26 @@ use cubeforge::internals::convert::{self, Loaded, Source};
 use cubeforge::internals::layout::{self, Kind};
 use cubeforge::{CubeMap, Image};
 use glam::Vec4;
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray3, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
 
-/// An image as a (height, width, 4) float32 array (one copy: the library keeps RGBA texels of
-/// 16-byte alignment, numpy's array owns its buffer).
-pub fn image_array<'py>(py: Python<'py>, img: &Image) -> PyResult<Bound<'py, PyAny>> {
-    let flat: Vec<f32> = bytemuck_cast(&img.pixels).to_vec();
-    let a = PyArray1::from_vec(py, flat);
-    Ok(a.reshape([img.height, img.width, 4])?.into_any())
+/// A library image's texels, owned by the numpy array made of them (its base): handed over
+/// without a copy. Vec4's 16-byte alignment is not f32's, so the Vec cannot become numpy's
+/// own buffer; numpy reads it in place and drops it with the array.
+#[pyclass(frozen)]
+struct Texels(Vec<Vec4>);
+
+/// An image as a (height, width, 4) float32 array over its own texels (no copy).
+pub fn image_array<'py>(py: Python<'py>, img: Image) -> PyResult<Bound<'py, PyAny>> {
+    let (h, w) = (img.height, img.width);
+    let owner = Bound::new(py, Texels(img.pixels))?;
+    let data = owner.get().0.as_ptr() as *const f32;
+    // SAFETY: the texels are h * w Vec4, four f32 each without padding (glam's layout), in
+    // row order; the Vec is never touched again until the owner, the array's base, drops.
+    let view = unsafe { numpy::ndarray::ArrayView3::from_shape_ptr((h, w, 4), data) };
+    Ok(unsafe { PyArray3::borrow_from_array(&view, owner.into_any()) }.into_any())
 }
 
 fn bytemuck_cast(p: &[Vec4]) -> &[f32] {
@@ -101,7 +110,8 @@ pub fn read<'py>(py: Python<'py>, argv: Vec<String>) -> PyResult<Bound<'py, PyDi
     let d = PyDict::new(py);
     d.set_item("kind", loaded.kind.name())?;
     d.set_item("layout", loaded.kind.layout().name())?;
-    match &loaded.source {
+    // The pixels move into their arrays (no copy of a single image); the metadata stays.
+    match loaded.source {
         Source::Cube(c) => {
             let levels: PyResult<Vec<_>> = c.levels.iter().map(|l| faces_array(py, l)).collect();
             d.set_item("levels", levels?)?;
@@ -167,7 +177,7 @@ pub fn read_image<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, Py
     use cubeforge::internals::io::Decoded;
     let got = py.detach(|| read(&path, &cubeforge::ReadOptions::default()));
     match got.map_err(|e| crate::error(py, &e))? {
-        (Decoded::Image(img), _) => image_array(py, &img),
+        (Decoded::Image(img), _) => image_array(py, img),
         (Decoded::Cube(c), _) => faces_array(py, &c.levels[0]),
     }
 }
@@ -227,7 +237,7 @@ pub fn convert_array<'py>(
     loaded.source = source;
     let out = py.detach(|| convert::convert(&loaded, to, size, &cubeforge::Resampler::default()));
     match out {
-        convert::Output::Image(img) => image_array(py, &img),
+        convert::Output::Image(img) => image_array(py, img),
         convert::Output::Cube(c) => faces_array(py, &c.levels[0]),
     }
 }

@@ -4,7 +4,8 @@
 //! Faces are F R B L U D in one horizontal row, as its `cube_format="horizon"`; the Python
 //! half lays them out as dice, list or dict.
 
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray3, PyReadonlyArray4, PyUntypedArrayMethods};
+use numpy::ndarray::ArrayView3;
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -318,15 +319,18 @@ fn facetype(h: usize, w: usize) -> Vec<u8> {
 
 /// py360convert's `CubeFaceSampler._pad`: each face (F R B L U D) with a ring of its
 /// neighbours' texels, assigned in its order (later assignments overwrite the corners).
-fn padded_faces(src: &[f32], n: usize, c: usize) -> Vec<f32> {
+/// The faces are read where they lie (a dice's cells, a horizon's slices: any strides).
+fn padded_faces(faces: &[ArrayView3<'_, f32>], n: usize, c: usize) -> Vec<f32> {
     let m = n + 2;
     let mut p = vec![0f32; 6 * m * m * c];
     let idx = move |f: usize, r: usize, col: usize| ((f * m + r) * m + col) * c;
-    for f in 0..6 {
-        for r in 0..n {
-            let from = ((f * n + r) * n) * c;
-            let to = idx(f, r + 1, 1);
-            p[to..to + n * c].copy_from_slice(&src[from..from + n * c]);
+    for (f, face) in faces.iter().enumerate() {
+        for (r, row) in face.outer_iter().enumerate() {
+            let to = &mut p[idx(f, r + 1, 1)..][..n * c];
+            match row.as_slice() {
+                Some(s) => to.copy_from_slice(s),
+                None => to.iter_mut().zip(row.iter()).for_each(|(o, v)| *o = *v),
+            }
         }
     }
     // A row or column of the padded faces, read or written whole (m texels).
@@ -393,29 +397,28 @@ fn padded_faces(src: &[f32], n: usize, c: usize) -> Vec<f32> {
     p
 }
 
-/// Six faces (6, n, n, c) in F R B L U D order to a panorama (h, w, c).
+/// Six faces (n, n, c) in F R B L U D order, each read where it lies (no copy of a dice or
+/// a horizon into a stack of faces), to a panorama (h, w, c).
 #[pyfunction]
 pub fn c2e_faces<'py>(
     py: Python<'py>,
-    faces: PyReadonlyArray4<'py, f32>,
+    faces: Vec<PyReadonlyArray3<'py, f32>>,
     h: usize,
     w: usize,
     nearest: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let s = faces.shape();
-    let (n, c) = (s[1], s[3]);
-    if s[0] != 6 || s[2] != n || n == 0 || h == 0 || w == 0 || !w.is_multiple_of(8) {
+    let views: Vec<ArrayView3<'_, f32>> = faces.iter().map(|f| f.as_array()).collect();
+    let (n, c) = views.first().map_or((0, 0), |v| (v.dim().0, v.dim().2));
+    let square = views.iter().all(|v| v.dim() == (n, n, c));
+    if views.len() != 6 || !square || n == 0 || h == 0 || w == 0 || !w.is_multiple_of(8) {
         return Err(crate::bad_arg(
             py,
             "c2e: six square faces, and w a multiple of 8",
         ));
     }
-    let src = faces
-        .as_slice()
-        .map_err(|e| crate::bad_arg(py, e.to_string()))?;
     let mut out = vec![0f32; h * w * c];
     py.detach(|| {
-        let p = padded_faces(src, n, c);
+        let p = padded_faces(&views, n, c);
         let tp = facetype(h, w);
         let m = n + 2;
         let half = n as f64 / 2.0;

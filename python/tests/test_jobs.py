@@ -55,6 +55,28 @@ def test_a_raising_callback_stops_the_job_and_writes_nothing(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_job_releases_the_gil(tmp_path):
+    """Another Python thread runs while a job works (it counts, the job's thread computes)."""
+    import threading
+
+    ticks, stop = [0], threading.Event()
+
+    def count():
+        while not stop.is_set():
+            ticks[0] += 1
+
+    t = threading.Thread(target=count)
+    t.start()
+    while ticks[0] == 0:
+        pass
+    before = ticks[0]
+    cubeforge.prefilter(SKY, tmp_path / "ggx.ktx2", filter="ggx", size=64, samples=64)
+    during = ticks[0] - before
+    stop.set()
+    t.join()
+    assert during > 1000
+
+
 def test_info_lut_preview_convert(tmp_path):
     d = cubeforge.info(SKY)
     assert d["kind"] == "equirect" and d["width"] == 512
