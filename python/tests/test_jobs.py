@@ -127,6 +127,9 @@ def test_batch_returns_its_report_and_keeps_the_working_folder(tmp_path):
     assert [j["outcome"] for j in again["jobs"]] == ["up to date", "up to date"]
     dry = cubeforge.batch(tmp_path / "m.toml", dry_run=True, force=True)
     assert dry["would_run"] == 2 and not dry["written"]
+    ninja = cubeforge.batch(tmp_path / "m.toml", emit="ninja")
+    assert ninja["written"] == [str(tmp_path / "build.ninja")] and ninja["jobs"] == []
+    assert ninja["summary"][0].startswith("batch: wrote build.ninja (2 jobs)")
 
 
 def test_a_failed_batch_job_raises_with_the_report(tmp_path):
