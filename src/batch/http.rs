@@ -105,4 +105,17 @@ impl Store for HttpStore {
     fn name(&self) -> String {
         self.base.clone()
     }
+
+    fn has(&self, path: &str) -> std::result::Result<bool, String> {
+        let mut req = self.agent.head(self.url(path));
+        if let Some(a) = &self.auth {
+            req = req.header("Authorization", a);
+        }
+        let resp = req.call().map_err(|e| e.to_string())?;
+        match resp.status().as_u16() {
+            200 => Ok(true),
+            404 => Ok(false),
+            _ => Err(status(resp.status())),
+        }
+    }
 }

@@ -200,6 +200,12 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let start = std::time::Instant::now();
     let tell = |d: &Done| show(d, verbose || a.dry_run);
     let report = batch.run(&tell)?;
+    if cached && verbose && !a.dry_run {
+        super::report(format!(
+            "cache: {} blobs uploaded, {} already there (not sent again)",
+            report.blobs_uploaded, report.blobs_present
+        ))?;
+    }
     summarize(
         &report,
         a.dry_run,

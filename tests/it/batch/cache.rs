@@ -9,10 +9,10 @@ use std::path::Path;
 use std::process::{Command, Output};
 use std::time::Instant;
 
-const TOKEN: &str = "s3cret-t0ken";
+pub(super) const TOKEN: &str = "s3cret-t0ken";
 
 /// The test project with one heavier job per panorama: an ibl delivery, a folder output.
-fn clone(d: &Path) {
+pub(super) fn clone(d: &Path) {
     project(d);
     let m = d.join("proj/m.toml");
     let mut text = std::fs::read_to_string(&m).unwrap();
@@ -23,7 +23,7 @@ fn clone(d: &Path) {
     std::fs::write(m, text).unwrap();
 }
 
-fn batch(dir: &Path, args: &[&str], token: &str) -> Output {
+pub(super) fn batch(dir: &Path, args: &[&str], token: &str) -> Output {
     Command::new(env!("CARGO_BIN_EXE_cubeforge"))
         .arg("batch")
         .arg("m.toml")
@@ -35,7 +35,7 @@ fn batch(dir: &Path, args: &[&str], token: &str) -> Output {
         .expect("cubeforge runs")
 }
 
-fn text(o: &Output) -> String {
+pub(super) fn text(o: &Output) -> String {
     format!(
         "{}{}",
         String::from_utf8_lossy(&o.stdout),
