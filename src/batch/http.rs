@@ -22,6 +22,12 @@ impl HttpStore {
             .or_else(|| base.strip_prefix("https://"))
             .filter(|r| !r.is_empty())
             .ok_or_else(|| format!("{url:?}: give the cache as an http:// or https:// URL"))?;
+        if cfg!(not(feature = "https")) && base.starts_with("https://") {
+            return Err(format!(
+                "{url:?}: this cubeforge speaks http:// only; https:// needs it built with the \
+                 cargo feature `https` (cargo install --locked --path . --features https)"
+            ));
+        }
         if rest
             .split('/')
             .next()

@@ -160,3 +160,26 @@ fn a_second_clone_is_served_by_the_cache() {
         assert!(!text(o).contains(TOKEN), "the token was printed");
     }
 }
+
+/// A cache URL that cannot be used is one line naming the problem and a non-zero exit before
+/// any job: credentials in it, another scheme, https:// in a build without the feature.
+#[test]
+fn unusable_cache_urls_are_refused() {
+    let t = tempfile::tempdir().unwrap();
+    clone(t.path());
+    let mut cases = vec![
+        ("http://me:pw@cache.lan:8080", "holds credentials"),
+        ("ftp://cache.lan", "http:// or https://"),
+    ];
+    if cfg!(not(feature = "https")) {
+        cases.push(("https://cache.lan", "the cargo feature `https`"));
+    }
+    for (url, says) in cases {
+        let o = batch(t.path(), &["--cache", url], "");
+        let out = text(&o);
+        assert!(!o.status.success(), "{url}: {out}");
+        assert!(out.contains(says), "{url}: {out}");
+        assert!(!out.contains("pw@"), "{url}: {out}");
+        assert!(!t.path().join("proj/build").exists(), "{url}: a job ran");
+    }
+}
