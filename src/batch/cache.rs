@@ -2,22 +2,26 @@
 //! pure function of cubeforge's build, its command line and the bytes it reads, so a result
 //! one machine computed is fetched, not computed again, by every other.
 //!
-//! Two action-cache entries per job, as ccache's direct mode keeps them: `ac/` of the build
-//! and the job's id alone lists the files the job read (paths relative to the manifest), and
-//! `ac/` of the build, the id and the SHA-256 of each of those files holds the outputs'
-//! manifest (paths and SHA-256); each output's bytes are under `cas/SHA256`. A list that is
-//! stale (another variant's) only misses: the second key covers the bytes of every file it
-//! names, and a file that decides which others are read is itself one of them. Blobs are
-//! checked against their hash, outputs only land in the job's own output (or a sidecar named
-//! after it, `OUTPUT.levels.json`), and every failure of the store is a warning: the job
-//! runs here.
+//! Two action-cache entries per job, as ccache's direct mode keeps them, each a Bazel
+//! `ActionResult` ([`super::reapi`]): `ac/` of the build and the job's id alone names one
+//! output, `inputs.json`, the list of files the job read (paths relative to the manifest), and
+//! `ac/` of the build, the id and the SHA-256 of each of those files names the job's outputs
+//! (paths relative to the folder of the job's output, and their SHA-256); every file's bytes
+//! are under `cas/SHA256`, uploaded before the entries that name them (a server that checks
+//! that an entry's blobs exist takes it) and only when a `HEAD` says the cache lacks them. A
+//! list that is stale (another variant's) only misses: the second key covers the bytes of
+//! every file it names, and a file that decides which others are read is itself one of them.
+//! Blobs are checked against their hash, outputs only land in the job's own output (or a
+//! sidecar named after it, `OUTPUT.levels.json`), and every failure of the store, or entry
+//! cubeforge cannot use, is a warning: the job runs here.
 
+use super::reapi::{self, Output};
 use crate::error::{Error, Result};
 use crate::output::{self, Destination, Files};
 use sha2::{Digest, Sha256};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::{Component, Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 /// Where the cache's entries live: `get` and `put` of `ac/KEY` and `cas/SHA256` under one
@@ -29,6 +33,12 @@ pub trait Store: Send + Sync {
     fn put(&self, path: &str, bytes: &[u8]) -> std::result::Result<(), String>;
     /// The store in one short phrase for warnings, never with credentials.
     fn name(&self) -> String;
+    /// Whether the store has `path` (HTTP `HEAD`), so a blob it has is not sent again; a
+    /// store that cannot tell says no, and every blob is sent.
+    fn has(&self, path: &str) -> std::result::Result<bool, String> {
+        let _ = path;
+        Ok(false)
+    }
 }
 
 /// A batch's use of a [`Store`]: what it may do, and what went wrong (warnings for the
@@ -40,33 +50,33 @@ pub struct Cache {
     dead: AtomicBool,
     warnings: Mutex<Vec<String>>,
     shas: Mutex<HashMap<PathBuf, Option<String>>>,
+    /// Blobs this batch sent or found in the store (not asked about again).
+    blobs: Mutex<HashSet<String>>,
+    /// Blobs refused as damaged: sent again even though the store has them.
+    damaged: Mutex<HashSet<String>>,
+    uploaded: AtomicUsize,
+    present: AtomicUsize,
 }
 
-/// The files a job read, as the first entry keeps them.
+/// The name of the one output of a job's first entry: the files it read.
+const INPUTS: &str = "inputs.json";
+
+/// The files a job read, as its first entry's `inputs.json` keeps them.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Reads {
     reads: Vec<PathBuf>,
 }
 
-/// A job's outputs, as the second entry keeps them.
-#[derive(serde::Serialize, serde::Deserialize)]
-struct Manifest {
-    /// The job's output is a folder (faces, a chain), replaced whole.
-    folder: bool,
-    outputs: Vec<Blob>,
-}
-
-#[derive(serde::Serialize, serde::Deserialize)]
+/// One output of a job's entry, where this batch writes it.
 struct Blob {
     path: PathBuf,
-    sha256: String,
-    size: u64,
+    digest: Output,
 }
 
-/// A job's entry found: the files it reads and its outputs' manifest.
+/// A job's entry found: the files it reads and its outputs.
 pub(crate) struct Entry {
     pub reads: Vec<PathBuf>,
-    manifest: Manifest,
+    outputs: Vec<Blob>,
 }
 
 /// A job's outputs fetched and checked, ready to write.
@@ -85,7 +95,19 @@ impl Cache {
             dead: AtomicBool::new(false),
             warnings: Mutex::new(Vec::new()),
             shas: Mutex::new(HashMap::new()),
+            blobs: Mutex::new(HashSet::new()),
+            damaged: Mutex::new(HashSet::new()),
+            uploaded: AtomicUsize::new(0),
+            present: AtomicUsize::new(0),
         }
+    }
+
+    /// The blobs uploaded so far, and those not sent because the store had them.
+    pub fn blob_counts(&self) -> (usize, usize) {
+        (
+            self.uploaded.load(Ordering::Relaxed),
+            self.present.load(Ordering::Relaxed),
+        )
     }
 
     /// The warnings so far, taken.
@@ -120,6 +142,14 @@ impl Cache {
         })
     }
 
+    /// A warning that the cache's entry for job `id` cannot be used (the job runs here).
+    fn refuse(&self, id: &str, why: impl std::fmt::Display) {
+        self.warn(format!(
+            "cache {}: the entry of `{id}` is refused: {why}; the job runs here",
+            self.store.name()
+        ));
+    }
+
     /// The SHA-256 of `path`'s bytes, each file hashed once per batch (None: unreadable).
     fn sha(&self, path: &Path) -> Option<String> {
         if let Some(h) = self
@@ -138,32 +168,63 @@ impl Cache {
         h
     }
 
+    /// The outputs named by the `ActionResult` under `key` (None: a miss, or an entry
+    /// cubeforge cannot use, with a warning).
+    fn entry(&self, key: &str, id: &str) -> Option<Vec<Output>> {
+        let bytes = self.get(key)?;
+        reapi::decode(&bytes)
+            .map_err(|e| self.refuse(id, format!("{key} is {e}")))
+            .ok()
+    }
+
+    /// The bytes of `blob`, checked against its hash and size (a blob that does not match is
+    /// refused with a warning).
+    fn blob(&self, blob: &Output, id: &str, name: &Path) -> Option<Vec<u8>> {
+        let bytes = self.get(&format!("cas/{}", blob.sha256))?;
+        if sha_hex(&bytes) != blob.sha256 || bytes.len() as u64 != blob.size {
+            self.damaged
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .insert(blob.sha256.clone());
+            self.warn(format!(
+                "cache {}: the blob of {} (`{id}`) does not match its hash {}; refused, \
+                 the job runs here",
+                self.store.name(),
+                name.display(),
+                blob.sha256
+            ));
+            return None;
+        }
+        Some(bytes)
+    }
+
     /// The entry of job `id` writing `output`, if the cache has one for the bytes its files
-    /// hold now (a manifest that names anything outside `output` is refused).
+    /// hold now (an entry that names anything outside `output` is refused).
     pub(crate) fn lookup(&self, id: &str, output: &Path) -> Option<Entry> {
-        let reads: Reads = serde_json::from_slice(&self.get(&reads_key(id))?).ok()?;
-        let shas: Vec<String> = reads
-            .reads
-            .iter()
-            .map(|p| self.sha(p))
-            .collect::<Option<_>>()?;
-        let bytes = self.get(&outputs_key(id, &reads.reads, &shas))?;
-        let manifest = match serde_json::from_slice::<Manifest>(&bytes) {
-            Ok(m) if m.outputs.iter().all(|b| inside(&b.path, output)) => m,
+        let list = self.entry(&reads_key(id), id)?;
+        let [inputs] = list.as_slice() else {
+            self.refuse(id, "its list of files read is not one file");
+            return None;
+        };
+        let bytes = self.blob(inputs, id, Path::new(INPUTS))?;
+        let reads = match serde_json::from_slice::<Reads>(&bytes) {
+            Ok(r) if inputs.path == INPUTS => r.reads,
             _ => {
-                self.warn(format!(
-                    "cache {}: the entry of `{id}` is not a manifest of files inside {}; \
-                     refused, the job runs here",
-                    self.store.name(),
-                    output.display()
-                ));
+                self.refuse(id, format!("its list of files read is not {INPUTS}"));
                 return None;
             }
         };
-        Some(Entry {
-            reads: reads.reads,
-            manifest,
-        })
+        let shas: Vec<String> = reads.iter().map(|p| self.sha(p)).collect::<Option<_>>()?;
+        let mut outputs = Vec::new();
+        for digest in self.entry(&outputs_key(id, &reads, &shas), id)? {
+            let Some(path) = place(&digest.path, output) else {
+                let at = output.display();
+                self.refuse(id, format!("{:?} is not inside {at}", digest.path));
+                return None;
+            };
+            outputs.push(Blob { path, digest });
+        }
+        Some(Entry { reads, outputs })
     }
 
     /// The outputs of job `id`, fetched and each checked against its hash (a blob that does
@@ -171,37 +232,62 @@ impl Cache {
     pub(crate) fn fetch(&self, id: &str, output: &Path) -> Option<Hit> {
         let entry = self.lookup(id, output)?;
         let mut files = Vec::new();
-        for b in &entry.manifest.outputs {
-            let bytes = self.get(&format!("cas/{}", b.sha256))?;
-            if sha_hex(&bytes) != b.sha256 || bytes.len() as u64 != b.size {
-                self.warn(format!(
-                    "cache {}: the blob of {} (`{id}`) does not match its hash {}; refused, \
-                     the job runs here",
-                    self.store.name(),
-                    b.path.display(),
-                    b.sha256
-                ));
-                return None;
-            }
+        for b in &entry.outputs {
+            let bytes = self.blob(&b.digest, id, &b.path)?;
             files.push((b.path.clone(), bytes));
         }
         Some(Hit {
             reads: entry.reads,
+            folder: files
+                .iter()
+                .any(|(p, _)| p != output && p.starts_with(output)),
             files,
-            folder: entry.manifest.folder,
         })
+    }
+
+    /// Sends `bytes` to `cas/SHA`, unless this batch already did or the store has it.
+    fn put_blob(&self, sha: &str, bytes: &[u8]) -> std::result::Result<(), String> {
+        let new = self
+            .blobs
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .insert(sha.to_string());
+        let path = format!("cas/{sha}");
+        let damaged = self
+            .damaged
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .contains(sha);
+        if !new || (!damaged && self.store.has(&path) == Ok(true)) {
+            self.present.fetch_add(1, Ordering::Relaxed);
+            return Ok(());
+        }
+        let sent = self.store.put(&path, bytes);
+        match &sent {
+            Ok(()) => self.uploaded.fetch_add(1, Ordering::Relaxed),
+            Err(_) => {
+                let mut blobs = self.blobs.lock().unwrap_or_else(|e| e.into_inner());
+                blobs.remove(sha);
+                0
+            }
+        };
+        sent
     }
 
     /// Uploads the outputs of job `id`, which read `reads` and wrote `written` inside
     /// `output`: blobs first, then the entries that name them. A failure is a warning.
     pub(crate) fn upload(&self, id: &str, output: &Path, reads: &[PathBuf], written: &[PathBuf]) {
-        if self.read_only || self.dead.load(Ordering::Relaxed) {
+        if self.read_only || self.dead.load(Ordering::Relaxed) || written.is_empty() {
             return;
         }
-        // A job that wrote beside its output (or nothing) is not kept: a hit could not write it.
-        if written.is_empty() || !written.iter().all(|p| inside(p, output)) {
+        // A job that wrote beside its output is not kept: a hit could not write it.
+        let Some(names) = written
+            .iter()
+            .map(|p| relative(p, output))
+            .collect::<Option<Vec<_>>>()
+        else {
             return;
-        }
+        };
         let Some(shas) = reads
             .iter()
             .map(|p| self.sha(p))
@@ -209,35 +295,37 @@ impl Cache {
         else {
             return;
         };
-        let mut blobs = Vec::new();
-        for p in written {
+        let list = Reads {
+            reads: reads.to_vec(),
+        };
+        let Ok(list) = serde_json::to_vec(&list) else {
+            return;
+        };
+        let mut outputs = Vec::new();
+        for (p, path) in written.iter().zip(names) {
             let Ok(bytes) = std::fs::read(p) else { return };
-            let sha = sha_hex(&bytes);
-            if let Err(e) = self.store.put(&format!("cas/{sha}"), &bytes) {
+            outputs.push((path, bytes));
+        }
+        outputs.push((INPUTS.to_string(), list));
+        let mut digests = Vec::new();
+        for (path, bytes) in &outputs {
+            let sha = sha_hex(bytes);
+            if let Err(e) = self.put_blob(&sha, bytes) {
                 return self.put_failed(id, e);
             }
-            blobs.push(Blob {
-                path: p.clone(),
+            digests.push(Output {
+                path: path.clone(),
                 sha256: sha,
                 size: bytes.len() as u64,
             });
         }
-        let manifest = Manifest {
-            folder: output.is_dir(),
-            outputs: blobs,
-        };
-        let list = Reads {
-            reads: reads.to_vec(),
-        };
+        let inputs = digests.split_off(written.len());
         let entries = [
-            (outputs_key(id, reads, &shas), serde_json::to_vec(&manifest)),
-            (reads_key(id), serde_json::to_vec(&list)),
+            (outputs_key(id, reads, &shas), reapi::encode(&digests)),
+            (reads_key(id), reapi::encode(&inputs)),
         ];
         for (key, bytes) in entries {
-            let put = bytes
-                .map_err(|e| e.to_string())
-                .and_then(|b| self.store.put(&key, &b));
-            if let Err(e) = put {
+            if let Err(e) = self.store.put(&key, &bytes) {
                 return self.put_failed(id, e);
             }
         }
@@ -294,6 +382,36 @@ fn inside(path: &Path, output: &Path) -> bool {
         .all(|c| matches!(c, Component::Normal(_) | Component::CurDir))
         || path.parent() == output.parent();
     plain && sidecar(path).unwrap_or(false)
+}
+
+/// `path` (one of a job's outputs) relative to the folder of the job's `output`, `/`-separated,
+/// as an entry names it (None: not inside the output, or not UTF-8).
+fn relative(path: &Path, output: &Path) -> Option<String> {
+    if !inside(path, output) {
+        return None;
+    }
+    let rest = path.strip_prefix(output.parent()?).ok()?;
+    let parts: Option<Vec<&str>> = rest
+        .components()
+        .map(|c| match c {
+            Component::Normal(n) => n.to_str(),
+            _ => None,
+        })
+        .collect();
+    Some(parts?.join("/"))
+}
+
+/// Where an entry's `name` (relative to the folder of the job's `output`) is written: only
+/// plain names, and only inside `output` or a sidecar of it.
+fn place(name: &str, output: &Path) -> Option<PathBuf> {
+    let mut path = output.parent()?.to_path_buf();
+    for part in name.split('/') {
+        if part.is_empty() || part == "." || part == ".." || part.contains('\\') {
+            return None;
+        }
+        path.push(part);
+    }
+    inside(&path, output).then_some(path)
 }
 
 /// The build, as far as outputs go: cubeforge's version and a hash of the program's bytes
@@ -385,6 +503,9 @@ mod tests {
         fn name(&self) -> String {
             "memory".into()
         }
+        fn has(&self, path: &str) -> std::result::Result<bool, String> {
+            Ok(self.0.lock().unwrap().contains_key(path))
+        }
     }
 
     /// A hit needs the bytes of every file the job read; a changed file is a miss, and a
@@ -399,8 +520,16 @@ mod tests {
         let (reads, written) = (vec![input.clone()], vec![out.clone()]);
         Cache::new(mem.clone(), true).upload("job", &out, &reads, &written);
         assert_eq!(mem.1.load(Ordering::Relaxed), 0);
-        Cache::new(mem.clone(), false).upload("job", &out, &reads, &written);
-        assert_eq!(mem.1.load(Ordering::Relaxed), 3);
+        // The output's blob and the list's, then the two entries that name them.
+        let cache = Cache::new(mem.clone(), false);
+        cache.upload("job", &out, &reads, &written);
+        assert_eq!(mem.1.load(Ordering::Relaxed), 4);
+        assert_eq!(cache.blob_counts(), (2, 0));
+        // Again (another machine): the store has both blobs, and only the entries are sent.
+        let again = Cache::new(mem.clone(), false);
+        again.upload("job", &out, &reads, &written);
+        assert_eq!(mem.1.load(Ordering::Relaxed), 6);
+        assert_eq!(again.blob_counts(), (0, 2));
         let hit = Cache::new(mem.clone(), false)
             .fetch("job", &out)
             .expect("a hit");
@@ -424,5 +553,36 @@ mod tests {
         assert!(inside(Path::new("out/sky.levels.json"), out));
         assert!(!inside(Path::new("out/sky."), out));
         assert!(!inside(Path::new("out/sky.x/../../y"), out));
+        // An entry's names are relative to the output's folder, plain names only.
+        assert_eq!(
+            relative(Path::new("out/sky/px.png"), out).unwrap(),
+            "sky/px.png"
+        );
+        assert_eq!(
+            place("sky/px.png", out).unwrap(),
+            Path::new("out/sky/px.png")
+        );
+        assert_eq!(
+            place("sky.levels.json", out).unwrap(),
+            Path::new("out/sky.levels.json")
+        );
+        for bad in [
+            "../sky/px.png",
+            "sky/../../x",
+            "/etc/passwd",
+            "skyline.png",
+            "sky//x",
+            "",
+        ] {
+            assert!(place(bad, out).is_none(), "{bad}");
+        }
+        assert_eq!(
+            relative(Path::new("a.png"), Path::new("a.png")).unwrap(),
+            "a.png"
+        );
+        assert_eq!(
+            place("a.png", Path::new("a.png")).unwrap(),
+            Path::new("a.png")
+        );
     }
 }

@@ -22,6 +22,12 @@ impl HttpStore {
             .or_else(|| base.strip_prefix("https://"))
             .filter(|r| !r.is_empty())
             .ok_or_else(|| format!("{url:?}: give the cache as an http:// or https:// URL"))?;
+        if cfg!(not(feature = "https")) && base.starts_with("https://") {
+            return Err(format!(
+                "{url:?}: this cubeforge speaks http:// only; https:// needs it built with the \
+                 cargo feature `https` (cargo install --locked --path . --features https)"
+            ));
+        }
         if rest
             .split('/')
             .next()
@@ -104,5 +110,18 @@ impl Store for HttpStore {
 
     fn name(&self) -> String {
         self.base.clone()
+    }
+
+    fn has(&self, path: &str) -> std::result::Result<bool, String> {
+        let mut req = self.agent.head(self.url(path));
+        if let Some(a) = &self.auth {
+            req = req.header("Authorization", a);
+        }
+        let resp = req.call().map_err(|e| e.to_string())?;
+        match resp.status().as_u16() {
+            200 => Ok(true),
+            404 => Ok(false),
+            _ => Err(status(resp.status())),
+        }
     }
 }

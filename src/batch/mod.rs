@@ -44,6 +44,7 @@ mod cache;
 mod conflicts;
 #[cfg(feature = "http-cache")]
 mod http;
+mod reapi;
 mod shard;
 mod state;
 
@@ -219,6 +220,11 @@ pub struct BatchReport {
     /// With a shard: each shard's estimated cost (its inputs' planned bytes) and jobs, in
     /// shard order.
     pub shard_costs: Vec<(u64, usize)>,
+    /// With a cache: the blobs this batch uploaded, and those it did not send because the
+    /// cache had them already.
+    pub blobs_uploaded: usize,
+    /// See `blobs_uploaded`.
+    pub blobs_present: usize,
     /// Things to know: a state file that could not be read, say.
     pub warnings: Vec<crate::jobs::Warning>,
 }

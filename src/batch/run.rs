@@ -93,6 +93,7 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
     };
     run.all(&todo, batch.max_memory);
     if let Some(c) = &run.cache {
+        (report.blobs_uploaded, report.blobs_present) = c.blob_counts();
         let ws = c.take_warnings();
         report
             .warnings

@@ -186,7 +186,16 @@ pub fn run(a: Args, verbose: bool) -> Result<()> {
     let shown = verbose || a.dry_run;
     match prepare(&a, &mut |w| super::warn(w))? {
         Prepared::Emitted(_, line) => super::report(line),
-        Prepared::Ready(ready) => summarize(&ready.run(&|d: &Done| show(d, shown))?),
+        Prepared::Ready(ready) => {
+            let ran = ready.run(&|d: &Done| show(d, shown))?;
+            if ran.cached && verbose && !ran.dry_run {
+                super::report(format!(
+                    "cache: {} blobs uploaded, {} already there (not sent again)",
+                    ran.report.blobs_uploaded, ran.report.blobs_present
+                ))?;
+            }
+            summarize(&ran)
+        }
     }
 }
 

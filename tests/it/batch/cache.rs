@@ -9,10 +9,10 @@ use std::path::Path;
 use std::process::{Command, Output};
 use std::time::Instant;
 
-const TOKEN: &str = "s3cret-t0ken";
+pub(super) const TOKEN: &str = "s3cret-t0ken";
 
 /// The test project with one heavier job per panorama: an ibl delivery, a folder output.
-fn clone(d: &Path) {
+pub(super) fn clone(d: &Path) {
     project(d);
     let m = d.join("proj/m.toml");
     let mut text = std::fs::read_to_string(&m).unwrap();
@@ -23,7 +23,7 @@ fn clone(d: &Path) {
     std::fs::write(m, text).unwrap();
 }
 
-fn batch(dir: &Path, args: &[&str], token: &str) -> Output {
+pub(super) fn batch(dir: &Path, args: &[&str], token: &str) -> Output {
     Command::new(env!("CARGO_BIN_EXE_cubeforge"))
         .arg("batch")
         .arg("m.toml")
@@ -35,7 +35,7 @@ fn batch(dir: &Path, args: &[&str], token: &str) -> Output {
         .expect("cubeforge runs")
 }
 
-fn text(o: &Output) -> String {
+pub(super) fn text(o: &Output) -> String {
     format!(
         "{}{}",
         String::from_utf8_lossy(&o.stdout),
@@ -158,5 +158,28 @@ fn a_second_clone_is_served_by_the_cache() {
     );
     for o in [&first, &second, &damaged, &denied, &dead] {
         assert!(!text(o).contains(TOKEN), "the token was printed");
+    }
+}
+
+/// A cache URL that cannot be used is one line naming the problem and a non-zero exit before
+/// any job: credentials in it, another scheme, https:// in a build without the feature.
+#[test]
+fn unusable_cache_urls_are_refused() {
+    let t = tempfile::tempdir().unwrap();
+    clone(t.path());
+    let mut cases = vec![
+        ("http://me:pw@cache.lan:8080", "holds credentials"),
+        ("ftp://cache.lan", "http:// or https://"),
+    ];
+    if cfg!(not(feature = "https")) {
+        cases.push(("https://cache.lan", "the cargo feature `https`"));
+    }
+    for (url, says) in cases {
+        let o = batch(t.path(), &["--cache", url], "");
+        let out = text(&o);
+        assert!(!o.status.success(), "{url}: {out}");
+        assert!(out.contains(says), "{url}: {out}");
+        assert!(!out.contains("pw@"), "{url}: {out}");
+        assert!(!t.path().join("proj/build").exists(), "{url}: a job ran");
     }
 }

@@ -8,6 +8,7 @@ mod cache;
 mod incremental;
 mod k8s;
 pub(crate) mod nginx;
+mod reapi;
 mod runners;
 mod slurm;
 
