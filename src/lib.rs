@@ -101,6 +101,7 @@ mod ibl;
 mod image;
 #[allow(missing_docs)]
 mod info;
+mod input;
 #[allow(missing_docs)]
 mod io;
 mod jobs;
@@ -154,8 +155,8 @@ pub mod internals {
         ($($m:ident),*) => { $(pub mod $m { pub use crate::$m::*; })* };
     }
     whole!(
-        batch, chain, control, convert, cube, error, filter, flux, ibl, image, info, io, jobs,
-        layout, lut, output, preview, resample, synthetic, tonemap, view
+        batch, chain, control, convert, cube, error, filter, flux, ibl, image, info, input, io,
+        jobs, layout, lut, output, preview, resample, synthetic, tonemap, view
     );
 }
 

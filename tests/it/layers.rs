@@ -7,7 +7,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// Each top-level module's rank, lowest first: image -> cube and layout -> filter and flux ->
-/// io (codecs) -> convert -> output -> chain -> ibl, info -> preview -> jobs (the commands) -> batch.
+/// io (codecs) -> convert -> output -> chain -> input, ibl, info -> preview -> jobs (the commands) -> batch.
 const RANKS: &[(&str, u32)] = &[
     ("alloc", 0),
     ("simd", 0),
@@ -27,6 +27,7 @@ const RANKS: &[(&str, u32)] = &[
     ("convert", 5),
     ("output", 6),
     ("chain", 7),
+    ("input", 8),
     ("ibl", 8),
     ("info", 8),
     ("preview", 9),

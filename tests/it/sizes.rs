@@ -9,7 +9,6 @@ const KNOWN_LONG_FUNCTIONS: &[(&str, &str)] = &[
     ("io/exr/piz.rs", "huffman"),
     ("io/exr/checks.rs", "read_chunks"),
     ("io/exr/planes.rs", "read_planes"),
-    ("jobs/prefilter.rs", "run"),
     ("info.rs", "describe"),
     ("io/exr/zstd.rs", "unpack"),
     ("resample.rs", "render_row"),
