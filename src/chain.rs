@@ -235,7 +235,7 @@ pub(crate) fn encode_dir(
     chain: &CubeMap,
     description: &LevelsFile,
     face_format: FileFormat,
-    write: &WriteOptions,
+    write: (&WriteOptions, Option<crate::tonemap::Tonemap>),
     inputs: &[PathBuf],
 ) -> Result<Vec<(PathBuf, Vec<u8>)>> {
     crate::output::refuse_folder(dir, inputs)?;
@@ -308,7 +308,14 @@ pub fn encode(
                 crate::output::encode_cube_as(format, path, chain, &opts, &[])?,
             )]
         }
-        None => encode_dir(path, chain, description, format, &opts, inputs)?,
+        None => encode_dir(
+            path,
+            chain,
+            description,
+            format,
+            (&opts, target.gain_map),
+            inputs,
+        )?,
     };
     let psnr = match &files[..] {
         [(_, bytes), ..] if container.is_some() && opts.gpu_format.is_lossy() => {

@@ -7,7 +7,7 @@ use crate::cube::{CubeMap, CubeSampler, EdgeFixup, Environment};
 use crate::error::{Error, Result};
 use crate::flux::{Grid, Peaks};
 use crate::image::Image;
-use crate::io::{self, Decoded, FileFormat, MapKind, Meta, ReadOptions};
+use crate::io::{self, Decoded, FileFormat, Meta, ReadOptions};
 use crate::layout::{self, cross, ImageEnv, Kind};
 use crate::resample::Resampler;
 use glam::Vec4;
@@ -15,11 +15,13 @@ use std::path::{Path, PathBuf};
 
 mod envmap;
 mod faces;
+mod map_kind;
 mod read;
 pub mod stream;
 pub(crate) use faces::find_faces;
 pub(crate) use faces::skybox_note;
 use faces::{load_faces, naming_of};
+pub use map_kind::MapKind;
 pub use read::{read, read_raw};
 pub use stream::Reduced;
 

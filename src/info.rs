@@ -4,12 +4,13 @@
 #![warn(missing_docs)]
 
 use crate::chain::{self, LevelsFile};
+use crate::convert::MapKind;
 use crate::convert::{self, Source};
 use crate::cube::Faces;
 use crate::error::{param, Error, Result};
 use crate::flux;
 use crate::image::Image;
-use crate::io::{self, Decoded, MapKind, ReadOptions};
+use crate::io::{self, Decoded, ReadOptions};
 use crate::layout::{self, Kind};
 use glam::Vec4;
 use serde::Serialize;

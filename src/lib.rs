@@ -125,6 +125,7 @@ mod view;
 
 pub use batch::{Batch, BatchJob, BatchReport, Done, Outcome, Shard, ShardBy, Why};
 pub use control::Size;
+pub use convert::MapKind;
 pub use cube::{CubeMap, EdgeFixup, Interp};
 pub use error::{Error, LimitKind, Result};
 pub use filter::sh_bands::ShWindow;
@@ -132,7 +133,7 @@ pub use filter::{ChainOptions, FilterKind, IrradianceMethod, LightingModel, Roug
 pub use ibl::{Engine, IblOptions};
 pub use image::Image;
 pub use io::{
-    Container, ExrFloat, FileFormat, GpuFormat, HdrEncoding, Limits, MapKind, ReadOptions, Session,
+    Container, ExrFloat, FileFormat, GpuFormat, HdrEncoding, Limits, ReadOptions, Session,
     SessionGuard,
 };
 pub use jobs::{

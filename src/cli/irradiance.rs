@@ -2,7 +2,8 @@
 
 use cubeforge::internals::filter::sh_bands::ShWindow;
 use cubeforge::internals::filter::IrradianceMethod;
-use cubeforge::internals::io::{FileFormat, GpuFormat, MapKind};
+use cubeforge::internals::io::{FileFormat, GpuFormat};
+use cubeforge::MapKind;
 use cubeforge::internals::output;
 use cubeforge::{Destination, Encoding, IrradianceJob, Result};
 use std::path::PathBuf;

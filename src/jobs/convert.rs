@@ -2,10 +2,11 @@
 
 use super::{Job, Progress, Quality, Report, Warning, Warnings};
 use crate::convert;
+use crate::convert::MapKind;
 use crate::cube::CubeMap;
 use crate::error::{param, Error, Result};
 use crate::input::Input;
-use crate::io::{Limits, MapKind, ReadOptions};
+use crate::io::{Limits, ReadOptions};
 use crate::layout::Kind;
 use crate::output::{self, Destination, Encoding, Target};
 use crate::resample::Resampler;

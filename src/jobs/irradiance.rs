@@ -1,12 +1,12 @@
 //! `irradiance` as a job: the diffuse side, an irradiance map and 9 SH coefficients.
 
 use super::{Job, Progress, Quality, Report, Warning, Warnings};
-use crate::convert::{self, Loaded};
+use crate::convert::{self, Loaded, MapKind};
 use crate::error::{param, Error, Result};
 use crate::filter::sh_bands::{self, ShSet, ShWindow};
 use crate::filter::{self, sh, IrradianceMethod};
 use crate::input::Input;
-use crate::io::{MapKind, ReadOptions};
+use crate::io::ReadOptions;
 use crate::layout::Kind;
 use crate::output::{self, Destination, Encoding, Target};
 use crate::resample::Resampler;
