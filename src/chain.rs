@@ -115,8 +115,9 @@ pub(crate) fn container_levels(
 }
 
 /// [`convert::plan_input`], where a chain folder counts all its levels: what loading `inputs`
-/// will take, checked against the memory budget before any file is decoded.
-pub fn plan(
+/// will take, checked against the memory budget before any file is decoded (jobs plan
+/// through [`crate::input::Input`]).
+pub(crate) fn plan(
     inputs: &[PathBuf],
     from: Option<crate::layout::Kind>,
     opts: &ReadOptions,
@@ -135,67 +136,6 @@ pub fn plan(
         }
         _ => convert::plan_input(inputs, from, opts),
     }
-}
-
-/// [`plan`] for [`load_level`]: a chain folder's level `level` is read alone.
-pub fn plan_level(
-    inputs: &[PathBuf],
-    from: Option<crate::layout::Kind>,
-    opts: &ReadOptions,
-    level: usize,
-) -> Result<convert::InputPlan> {
-    match inputs {
-        [dir] if is_chain_dir(dir) && level_dir(dir, level).is_dir() => {
-            convert::plan_input(&[level_dir(dir, level)], from, opts)
-        }
-        _ => plan(inputs, from, opts),
-    }
-}
-
-/// Loads the inputs ([`convert::load`]), then keeps only level `level` of a mip chain. A
-/// prefiltered chain's folder (m0, m1, ...) gives its `mN` folder.
-pub fn load_level(
-    inputs: &[PathBuf],
-    from: Option<crate::layout::Kind>,
-    read: &ReadOptions,
-    level: usize,
-) -> Result<convert::Loaded> {
-    plan_level(inputs, from, read, level)?;
-    load_level_planned(inputs, from, read, level)
-}
-
-/// [`load_level`] once the caller has planned it with [`plan_level`].
-pub fn load_level_planned(
-    inputs: &[PathBuf],
-    from: Option<crate::layout::Kind>,
-    read: &ReadOptions,
-    level: usize,
-) -> Result<convert::Loaded> {
-    if let [dir] = inputs {
-        let sub = level_dir(dir, level);
-        if is_chain_dir(dir) {
-            if !sub.is_dir() {
-                return Err(Error::file(
-                    dir,
-                    format!("no level {level}: no m{level} folder"),
-                ));
-            }
-            return convert::load_planned(&[sub], from, read);
-        }
-    }
-    // A mip-mapped OpenEXR file's level is read alone, as its decoder picks it.
-    if let [file] = inputs {
-        if level > 0 && io::is_exr(file) {
-            let read = ReadOptions {
-                exr_level: level,
-                ..*read
-            };
-            return convert::load_planned(inputs, from, &read);
-        }
-    }
-    let mut loaded = convert::load_planned(inputs, from, read)?;
-    loaded.keep_level(level)?;
-    Ok(loaded)
 }
 
 /// A chain folder as read.
@@ -295,7 +235,7 @@ pub(crate) fn encode_dir(
     chain: &CubeMap,
     description: &LevelsFile,
     face_format: FileFormat,
-    write: &WriteOptions,
+    write: (&WriteOptions, Option<crate::tonemap::Tonemap>),
     inputs: &[PathBuf],
 ) -> Result<Vec<(PathBuf, Vec<u8>)>> {
     crate::output::refuse_folder(dir, inputs)?;
@@ -368,7 +308,14 @@ pub fn encode(
                 crate::output::encode_cube_as(format, path, chain, &opts, &[])?,
             )]
         }
-        None => encode_dir(path, chain, description, format, &opts, inputs)?,
+        None => encode_dir(
+            path,
+            chain,
+            description,
+            format,
+            (&opts, target.gain_map),
+            inputs,
+        )?,
     };
     let psnr = match &files[..] {
         [(_, bytes), ..] if container.is_some() && opts.gpu_format.is_lossy() => {

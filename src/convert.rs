@@ -7,7 +7,7 @@ use crate::cube::{CubeMap, CubeSampler, EdgeFixup, Environment};
 use crate::error::{Error, Result};
 use crate::flux::{Grid, Peaks};
 use crate::image::Image;
-use crate::io::{self, Decoded, FileFormat, MapKind, Meta, ReadOptions};
+use crate::io::{self, Decoded, FileFormat, Meta, ReadOptions};
 use crate::layout::{self, cross, ImageEnv, Kind};
 use crate::resample::Resampler;
 use glam::Vec4;
@@ -15,11 +15,13 @@ use std::path::{Path, PathBuf};
 
 mod envmap;
 mod faces;
+mod map_kind;
 mod read;
 pub mod stream;
 pub(crate) use faces::find_faces;
-pub use faces::skybox_note;
+pub(crate) use faces::skybox_note;
 use faces::{load_faces, naming_of};
+pub use map_kind::MapKind;
 pub use read::{read, read_raw};
 pub use stream::Reduced;
 
@@ -262,8 +264,12 @@ impl InputPlan {
 /// Plans loading `inputs` as [`load`] would read them (one image, six faces, a folder of
 /// faces), checking the decode's peak against the memory budget before any file is decoded:
 /// six faces each within the budget are refused when together they are not. A chain
-/// folder's every level: [`crate::chain::plan`].
-pub fn plan_input(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Result<InputPlan> {
+/// folder's every level: [`crate::chain::plan`]. Jobs plan through [`crate::input::Input`].
+pub(crate) fn plan_input(
+    inputs: &[PathBuf],
+    from: Option<Kind>,
+    opts: &ReadOptions,
+) -> Result<InputPlan> {
     let files: Vec<PathBuf> = match inputs {
         [dir] if dir.is_dir() => find_faces(dir)?.0,
         files => files.to_vec(),
@@ -327,7 +333,11 @@ pub fn load(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Resul
 
 /// [`load`] once the caller has planned it ([`plan_input`], [`crate::chain::plan`]): the
 /// headers are not read and checked a second time.
-pub fn load_planned(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) -> Result<Loaded> {
+pub(crate) fn load_planned(
+    inputs: &[PathBuf],
+    from: Option<Kind>,
+    opts: &ReadOptions,
+) -> Result<Loaded> {
     match inputs {
         [] => Err(Error::usage("no input given")),
         [dir] if dir.is_dir() => {
@@ -341,45 +351,6 @@ pub fn load_planned(inputs: &[PathBuf], from: Option<Kind>, opts: &ReadOptions) 
             files.len()
         ))),
     }
-}
-
-impl Loaded {
-    /// The warnings of a load, gathered in one place for every job: how a folder's skybox
-    /// names or OpenEXR's split faces were read, which part of a multi-part OpenEXR file was,
-    /// and how many values were replaced.
-    pub fn warnings(&self, inputs: &[PathBuf], read: &ReadOptions) -> Vec<String> {
-        let replaced = self
-            .files
-            .first()
-            .and_then(|f| replaced_note(f, self.meta.replaced_values as u64));
-        [skybox_note(inputs), part_note(self, read), replaced]
-            .into_iter()
-            .flatten()
-            .collect()
-    }
-}
-
-/// The warning for `n` values of `file` replaced as it was read (None for none).
-pub fn replaced_note(file: &Path, n: u64) -> Option<String> {
-    (n > 0).then(|| {
-        format!(
-            "{}: replaced {n} NaN, infinite or negative values by 0 (and values above 1e28 by 1e28)",
-            file.display()
-        )
-    })
-}
-
-/// The warning for a multi-part OpenEXR input read without a part chosen: which was read.
-pub fn part_note(loaded: &Loaded, read: &ReadOptions) -> Option<String> {
-    let part = loaded
-        .meta
-        .part
-        .as_deref()
-        .filter(|_| read.exr_part.is_none())?;
-    Some(format!(
-        "{}: a multi-part OpenEXR file: read {part}",
-        loaded.files.first()?.display()
-    ))
 }
 
 fn load_single(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<Loaded> {

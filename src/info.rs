@@ -4,12 +4,13 @@
 #![warn(missing_docs)]
 
 use crate::chain::{self, LevelsFile};
-use crate::convert::{self, Source};
+use crate::convert::{MapKind, Source};
 use crate::cube::Faces;
 use crate::error::{param, Error, Result};
 use crate::flux;
 use crate::image::Image;
-use crate::io::{self, Decoded, MapKind, ReadOptions};
+use crate::input::Input;
+use crate::io::{self, Decoded, ReadOptions};
 use crate::layout::{self, Kind};
 use glam::Vec4;
 use serde::Serialize;
@@ -387,7 +388,7 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
         ));
     }
     let (cube, meta, levels) = if chain::is_chain_dir(dir) {
-        let c = chain::read_dir(dir, opts)?;
+        let (c, _) = Input::open(&[dir.to_path_buf()], None, opts)?.load_chain()?;
         (c.cube, c.meta, c.levels)
     } else {
         if !holds_a_face(dir) {
@@ -401,7 +402,7 @@ fn describe_folder(dir: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result
                 ),
             ));
         }
-        let loaded = convert::load(&[dir.to_path_buf()], None, opts)?;
+        let (loaded, _) = Input::open(&[dir.to_path_buf()], None, opts)?.load()?;
         let Source::Cube(mut cube) = loaded.source else {
             return Err(Error::file(dir, "a folder must hold six faces"));
         };

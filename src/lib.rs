@@ -101,6 +101,7 @@ mod ibl;
 mod image;
 #[allow(missing_docs)]
 mod info;
+mod input;
 #[allow(missing_docs)]
 mod io;
 mod jobs;
@@ -124,6 +125,7 @@ mod view;
 
 pub use batch::{Batch, BatchJob, BatchReport, Done, Outcome, Shard, ShardBy, Why};
 pub use control::Size;
+pub use convert::MapKind;
 pub use cube::{CubeMap, EdgeFixup, Interp};
 pub use error::{Error, LimitKind, Result};
 pub use filter::sh_bands::ShWindow;
@@ -131,7 +133,7 @@ pub use filter::{ChainOptions, FilterKind, IrradianceMethod, LightingModel, Roug
 pub use ibl::{Engine, IblOptions};
 pub use image::Image;
 pub use io::{
-    Container, ExrFloat, FileFormat, GpuFormat, HdrEncoding, Limits, MapKind, ReadOptions, Session,
+    Container, ExrFloat, FileFormat, GpuFormat, HdrEncoding, Limits, ReadOptions, Session,
     SessionGuard,
 };
 pub use jobs::{
@@ -154,8 +156,8 @@ pub mod internals {
         ($($m:ident),*) => { $(pub mod $m { pub use crate::$m::*; })* };
     }
     whole!(
-        batch, chain, control, convert, cube, error, filter, flux, ibl, image, info, io, jobs,
-        layout, lut, output, preview, resample, synthetic, tonemap, view
+        batch, chain, control, convert, cube, error, filter, flux, ibl, image, info, input, io,
+        jobs, layout, lut, output, preview, resample, synthetic, tonemap, view
     );
 }
 

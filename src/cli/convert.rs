@@ -1,9 +1,10 @@
 //! `cubeforge convert`: any layout to any other.
 
 use cubeforge::internals::cube::Interp;
-use cubeforge::internals::io::{FileFormat, GpuFormat, MapKind};
+use cubeforge::internals::io::{FileFormat, GpuFormat};
 use cubeforge::internals::output;
 use cubeforge::internals::resample::{Orientation, Resampler};
+use cubeforge::MapKind;
 use cubeforge::{ConvertJob, Destination, Encoding, Result};
 use std::path::PathBuf;
 

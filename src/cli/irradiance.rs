@@ -2,8 +2,9 @@
 
 use cubeforge::internals::filter::sh_bands::ShWindow;
 use cubeforge::internals::filter::IrradianceMethod;
-use cubeforge::internals::io::{FileFormat, GpuFormat, MapKind};
+use cubeforge::internals::io::{FileFormat, GpuFormat};
 use cubeforge::internals::output;
+use cubeforge::MapKind;
 use cubeforge::{Destination, Encoding, IrradianceJob, Result};
 use std::path::PathBuf;
 
@@ -76,6 +77,18 @@ pub fn job(a: Args) -> Result<IrradianceJob> {
         Destination::Stdout(_) => FileFormat::Exr,
         Destination::Path(_) => output::face_format(&a.format)?,
     };
+    let out = super::out::CubeOutput {
+        gpu_format: a.gpu_format,
+        zstd: &a.zstd,
+        exr: &a.exr,
+        fixup: &a.fixup,
+        hdr8: &a.hdr8,
+        keys: &a.keys,
+    };
+    let encoding = Encoding {
+        tonemap: a.tone.tonemap,
+        ..out.encoding(face_format, a.tone.exposure)
+    };
     let job = IrradianceJob {
         from: a.input.from,
         to: a.to,
@@ -84,18 +97,7 @@ pub fn job(a: Args) -> Result<IrradianceJob> {
         method: a.method,
         sh_bands: a.sh_bands,
         sh_window: a.sh_window,
-        encoding: Encoding {
-            gpu_format: a.gpu_format,
-            zstd: a.zstd.zstd,
-            exr_float: a.exr.exr_float,
-            edge_fixup: a.fixup.edge_fixup,
-            hdr_encoding: a.hdr8.hdr_encoding,
-            cubeforge_keys: a.keys.cubeforge_keys,
-            face_format: Some(face_format),
-            exposure: a.tone.exposure,
-            tonemap: a.tone.tonemap,
-            ..Encoding::default()
-        },
+        encoding,
         read: a.input.read_options(&a.inputs)?,
         ..IrradianceJob::new(a.inputs, output)
     };

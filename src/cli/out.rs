@@ -90,3 +90,32 @@ pub struct CubeforgeKeysArg {
     #[arg(long)]
     pub cubeforge_keys: bool,
 }
+
+/// The flag groups of a command that writes prefiltered cube maps (prefilter, irradiance),
+/// borrowed from its arguments.
+pub struct CubeOutput<'a> {
+    pub gpu_format: Option<cubeforge::GpuFormat>,
+    pub zstd: &'a super::ZstdArg,
+    pub exr: &'a super::ExrArg,
+    pub fixup: &'a EdgeFixupArg,
+    pub hdr8: &'a HdrEncodingArg,
+    pub keys: &'a CubeforgeKeysArg,
+}
+
+impl CubeOutput<'_> {
+    /// The `Encoding` these flags name, spelled once for every command that has them: faces
+    /// in a folder written as `face_format`, radiance scaled by `exposure` stops.
+    pub fn encoding(&self, face_format: FileFormat, exposure: f32) -> cubeforge::Encoding {
+        cubeforge::Encoding {
+            gpu_format: self.gpu_format,
+            zstd: self.zstd.zstd,
+            exr_float: self.exr.exr_float,
+            edge_fixup: self.fixup.edge_fixup,
+            hdr_encoding: self.hdr8.hdr_encoding,
+            cubeforge_keys: self.keys.cubeforge_keys,
+            face_format: Some(face_format),
+            exposure,
+            ..cubeforge::Encoding::default()
+        }
+    }
+}

@@ -2,7 +2,7 @@
 
 use cubeforge::internals::filter::{self, ChainOptions, FilterKind, LightingModel};
 use cubeforge::internals::io::{FileFormat, GpuFormat};
-use cubeforge::{Destination, Encoding, Error, PrefilterJob, Result};
+use cubeforge::{Destination, Error, PrefilterJob, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -91,6 +91,15 @@ pub fn job(a: Args) -> Result<PrefilterJob> {
             ))
         })?,
     };
+    let out = super::out::CubeOutput {
+        gpu_format: a.gpu_format,
+        zstd: &a.zstd,
+        exr: &a.exr,
+        fixup: &a.fixup,
+        hdr8: &a.hdr8,
+        keys: &a.keys,
+    };
+    let encoding = out.encoding(face_format, a.exposure.exposure);
     let job = PrefilterJob {
         from: a.input.from,
         size: a.size,
@@ -103,17 +112,7 @@ pub fn job(a: Args) -> Result<PrefilterJob> {
             gloss_bias: a.gloss_bias,
             lighting: a.lighting,
         },
-        encoding: Encoding {
-            gpu_format: a.gpu_format,
-            zstd: a.zstd.zstd,
-            exr_float: a.exr.exr_float,
-            edge_fixup: a.fixup.edge_fixup,
-            hdr_encoding: a.hdr8.hdr_encoding,
-            cubeforge_keys: a.keys.cubeforge_keys,
-            face_format: Some(face_format),
-            exposure: a.exposure.exposure,
-            ..Encoding::default()
-        },
+        encoding,
         read: a.input.read_options(&a.inputs)?,
         ..PrefilterJob::new(a.inputs, output)
     };

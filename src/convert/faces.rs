@@ -116,7 +116,7 @@ const OPENEXR_FACES: [&str; 6] = ["+X", "-X", "+Y", "-Y", "+Z", "-Z"];
 
 /// The warning that says how a folder's skybox names, or OpenEXR's split faces, were read
 /// (None for any other input).
-pub fn skybox_note(inputs: &[PathBuf]) -> Option<String> {
+pub(crate) fn skybox_note(inputs: &[PathBuf]) -> Option<String> {
     let [dir] = inputs else { return None };
     match find_faces(dir) {
         Ok((_, FaceNaming::OpenExr)) if dir.is_dir() => Some(format!(

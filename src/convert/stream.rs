@@ -118,7 +118,7 @@ pub fn load(path: &Path, opts: &ReadOptions, min_footprint: f32) -> Result<Optio
 }
 
 /// [`load`] as `plan` planned it; None where the file no longer fits the plan.
-pub fn load_planned(path: &Path, opts: &ReadOptions, plan: &Plan) -> Result<Option<Loaded>> {
+pub(crate) fn load_planned(path: &Path, opts: &ReadOptions, plan: &Plan) -> Result<Option<Loaded>> {
     let loaded = crate::io::exr::stream::with_bands(path, opts, |b| {
         if b.size() != (plan.shape.width, plan.shape.height) {
             return Ok(None);

@@ -4,9 +4,10 @@
 //! order, as the whole image's are, so the report is the same to the bit.
 
 use super::{Report, Tally};
+use crate::convert::MapKind;
 use crate::error::Result;
 use crate::flux::{self, Grid};
-use crate::io::{exr, MapKind, ReadOptions};
+use crate::io::{exr, ReadOptions};
 use crate::layout::{self, Kind};
 use glam::Vec4;
 use std::path::Path;

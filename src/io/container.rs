@@ -1,14 +1,54 @@
-//! What KTX2 and DDS readers check alike, in one place: a container's declared face size
+//! The cube-map containers ([`Container`]: file formats that hold six faces; `MapKind`, a
+//! layout or a container, is `convert`'s, the lowest layer that knows layouts and files), and
+//! what KTX2 and DDS readers check alike, in one place: a container's declared face size
 //! against [`Limits`] (square faces for a cube map), its level count against the full chain, and
 //! every level's byte size in its texel format, with checked arithmetic, before any texel is
 //! allocated.
 
 #![warn(missing_docs)]
 
-use super::{GpuFormat, Limits};
+use super::{FileFormat, GpuFormat, Limits};
 use crate::cube::CubeMap;
 use crate::error::{Error, Result};
 use std::path::Path;
+
+/// The cube-map containers: file formats that hold six faces and their mip levels, so a map
+/// written as one has the faces layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Container {
+    /// KTX2 cube-map container.
+    Ktx2,
+    /// DDS cube-map container.
+    Dds,
+    /// KTX 1 cube-map container (Filament).
+    Ktx,
+    /// Babylon.js .env prefiltered environment.
+    Env,
+}
+
+impl Container {
+    /// The name on the command line (`--to`) and in `info`: the extension it is written with.
+    pub fn name(self) -> &'static str {
+        match self {
+            Container::Ktx2 => "ktx2",
+            Container::Dds => "dds",
+            Container::Ktx => "ktx",
+            Container::Env => "env",
+        }
+    }
+
+    /// The file format that stores it.
+    pub fn format(self) -> FileFormat {
+        match self {
+            Container::Ktx2 => FileFormat::Ktx2,
+            Container::Dds => FileFormat::Dds,
+            Container::Ktx => FileFormat::Ktx1,
+            Container::Env => FileFormat::Env,
+        }
+    }
+}
 
 /// A container's shape as its header declares it, checked.
 #[derive(Clone, Copy, Debug)]

@@ -20,9 +20,6 @@ pub struct WriteOptions {
     pub zstd: Option<i32>,
     /// Sample type of EXR output.
     pub exr_float: ExrFloat,
-    /// JPEG outputs as UltraHDR (a gain map over an SDR picture made by this curve; `None`
-    /// means ACES there): radiance kept, not clipped.
-    pub gain_map: Option<crate::tonemap::Tonemap>,
     /// Texel centres moved for per-face samplers (cube outputs; KTX2 records it under
     /// [`ktx2::EDGE_FIXUP_KEY`] with `cubeforge_keys`).
     pub edge_fixup: crate::cube::EdgeFixup,

@@ -1,11 +1,12 @@
 //! `convert` as a job: any layout or container to any other.
 
 use super::{Job, Progress, Quality, Report, Warning, Warnings};
-use crate::chain;
 use crate::convert;
+use crate::convert::MapKind;
 use crate::cube::CubeMap;
 use crate::error::{param, Error, Result};
-use crate::io::{Limits, MapKind, ReadOptions};
+use crate::input::Input;
+use crate::io::{Limits, ReadOptions};
 use crate::layout::Kind;
 use crate::output::{self, Destination, Encoding, Target};
 use crate::resample::Resampler;
@@ -100,6 +101,11 @@ impl ConvertJob {
             .saturating_add(input)
     }
 
+    /// The input opened at the level converted.
+    fn input(&self) -> Result<Input> {
+        Input::open_level(&self.inputs, self.from, &self.read, self.level)
+    }
+
     fn check_memory(&self, to: Kind, size: usize, input: u64) -> Result<()> {
         let (w, h) = to.image_size(size);
         self.limits().check_memory(
@@ -158,10 +164,10 @@ impl Job for ConvertJob {
 
     fn memory_estimate(&self) -> Result<u64> {
         let to = self.target(None)?.kind.layout();
-        let plan = chain::plan_level(&self.inputs, self.from, &self.read, self.level)?;
-        Ok(match self.size.or(plan.face_size).filter(|&s| s > 0) {
-            Some(size) => self.plan_bytes(to, size, plan.working_bytes()),
-            None => plan.working_bytes(),
+        let input = self.input()?;
+        Ok(match self.size.or(input.face_size()).filter(|&s| s > 0) {
+            Some(size) => self.plan_bytes(to, size, input.plan_bytes()),
+            None => input.plan_bytes(),
         })
     }
 
@@ -173,13 +179,13 @@ impl Job for ConvertJob {
         let container = self.target(None)?.kind.container().is_some();
         // The whole plan against the budget before any file is decoded: the input as the
         // headers describe it, the output at the size it will have.
-        let plan = chain::plan_level(&self.inputs, self.from, &self.read, self.level)?;
-        if let Some(size) = self.size.or(plan.face_size).filter(|&s| s > 0) {
-            self.check_memory(to, size, plan.working_bytes())?;
+        let input = self.input()?;
+        if let Some(size) = self.size.or(input.face_size()).filter(|&s| s > 0) {
+            self.check_memory(to, size, input.plan_bytes())?;
         }
-        let loaded = chain::load_level_planned(&self.inputs, self.from, &self.read, self.level)?;
+        let (loaded, notes) = input.load()?;
         progress.stage("decode");
-        for w in loaded.warnings(&self.inputs, &self.read) {
+        for w in notes {
             warnings.push(w);
         }
         let size = self.size.unwrap_or_else(|| loaded.face_size());

@@ -1,10 +1,10 @@
 //! `ibl` as a job: the files an engine loads for image-based lighting.
 
 use super::{Job, Progress, Quality, Report, Warning, Warnings};
-use crate::chain;
 use crate::convert;
 use crate::error::{param, Error, Result};
 use crate::ibl::{self, Engine, IblOptions};
+use crate::input::Input;
 use crate::io::{self, GpuFormat, ReadOptions};
 use crate::output::{self, Destination, Files};
 use std::path::PathBuf;
@@ -123,40 +123,27 @@ impl IblJob {
 }
 
 impl IblJob {
-    /// A large panorama reduced as it is decoded (`convert::stream`) when every output is a
-    /// cube much coarser than it (the engines whose files all come from the specular base);
-    /// None: loaded whole. From the file's header alone.
-    fn stream_plan(&self) -> Result<Option<convert::stream::Plan>> {
+    /// The input, opened from its headers: a large panorama reduced as it is decoded
+    /// (`convert::stream`) when every output is a cube much coarser than it (the engines whose
+    /// files all come from the specular base), else whole. Its plan is what will run.
+    fn input(&self) -> Result<Input> {
         let cubes_only = matches!(
             self.engine,
             Engine::Bevy | Engine::Gltf | Engine::Babylon | Engine::Generic
         );
-        let [input] = self.inputs.as_slice() else {
-            return Ok(None);
-        };
         // --sun finds and takes out the sun on the input's own texels.
-        if !cubes_only
+        if self.inputs.len() != 1
+            || !cubes_only
             || self.options.sun
             || !matches!(self.from, None | Some(crate::layout::Kind::Equirect))
         {
-            return Ok(None);
+            return Input::open(&self.inputs, self.from, &self.read);
         }
         // The finest texel of the specular base: a face's corner, 2 sqrt(2) / 3 of its centre.
-        convert::stream::plan(input, &self.read, |face| {
+        Input::open_reduced(&self.inputs, self.from, &self.read, |face| {
             let size = self.specular_size(Some(face)) as f32;
             2.0 * std::f32::consts::SQRT_2 / 3.0 / size
         })
-    }
-
-    /// The input's face size and the bytes it takes while the job works (a streamed
-    /// panorama's bands and reduced copy, or the whole decoded input), with the streamed plan
-    /// where it is taken: the budget is checked against what will run.
-    fn input_plan(&self) -> Result<(Option<usize>, u64, Option<convert::stream::Plan>)> {
-        if let Some(p) = self.stream_plan()? {
-            return Ok((Some(p.face_size()), p.working_bytes(), Some(p)));
-        }
-        let plan = chain::plan(&self.inputs, self.from, &self.read)?;
-        Ok((plan.face_size, plan.working_bytes(), None))
     }
 
     /// Refuses a `--gpu-format` the target has no file for, before any work.
@@ -213,8 +200,8 @@ impl Job for IblJob {
     }
 
     fn memory_estimate(&self) -> Result<u64> {
-        let (face, input, _) = self.input_plan()?;
-        Ok(self.plan_bytes(face, input))
+        let input = self.input()?;
+        Ok(self.plan_bytes(input.face_size(), input.plan_bytes()))
     }
 
     fn run(&self, progress: &dyn Progress) -> Result<Report> {
@@ -222,29 +209,20 @@ impl Job for IblJob {
         warnings.extend(self.validate()?);
         // The whole plan against the budget before any file is decoded: the input, the
         // specular chain (and the sheen chain), the diffuse map.
-        let (face, input, streamed) = self.input_plan()?;
-        let (size, diffuse) = self.sizes(face);
+        let input = self.input()?;
+        let (size, diffuse) = self.sizes(input.face_size());
         self.read.limits.check_memory(
             format_args!(
                 "{} {size} and {} {diffuse}",
                 param("size"),
                 param("diffuse_size")
             ),
-            self.plan_bytes(face, input),
+            self.plan_bytes(input.face_size(), input.plan_bytes()),
         )?;
-        let reduced = match (&streamed, self.inputs.as_slice()) {
-            (Some(p), [one]) => convert::stream::load_planned(one, &self.read, p)?,
-            _ => None,
-        };
-        let mut loaded = match reduced {
-            Some(loaded) => loaded,
-            // Changed since it was planned: planned again, whole.
-            None if streamed.is_some() => convert::load(&self.inputs, self.from, &self.read)?,
-            None => convert::load_planned(&self.inputs, self.from, &self.read)?,
-        };
+        let (mut loaded, notes) = input.load()?;
         loaded.expose(self.options.encoding.exposure);
         progress.stage("decode");
-        for w in loaded.warnings(&self.inputs, &self.read) {
+        for w in notes {
             warnings.push(w);
         }
         if let Some(w) = super::display_referred(&loaded) {

@@ -1,12 +1,12 @@
 //! `irradiance` as a job: the diffuse side, an irradiance map and 9 SH coefficients.
 
 use super::{Job, Progress, Quality, Report, Warning, Warnings};
-use crate::chain;
-use crate::convert::{self, Loaded};
+use crate::convert::{self, Loaded, MapKind};
 use crate::error::{param, Error, Result};
 use crate::filter::sh_bands::{self, ShSet, ShWindow};
 use crate::filter::{self, sh, IrradianceMethod};
-use crate::io::{MapKind, ReadOptions};
+use crate::input::Input;
+use crate::io::ReadOptions;
 use crate::layout::Kind;
 use crate::output::{self, Destination, Encoding, Target};
 use crate::resample::Resampler;
@@ -130,8 +130,8 @@ impl Job for IrradianceJob {
     }
 
     fn memory_estimate(&self) -> Result<u64> {
-        let plan = chain::plan(&self.inputs, self.from, &self.read)?;
-        Ok(self.plan_bytes(plan.face_size, plan.working_bytes()))
+        let input = Input::open(&self.inputs, self.from, &self.read)?;
+        Ok(self.plan_bytes(input.face_size(), input.plan_bytes()))
     }
 
     fn run(&self, progress: &dyn Progress) -> Result<Report> {
@@ -139,13 +139,14 @@ impl Job for IrradianceJob {
         warnings.extend(self.validate()?);
         let target = self.target()?;
         // The whole plan against the budget before any file is decoded.
+        let input = Input::open(&self.inputs, self.from, &self.read)?;
         self.read.limits.check_memory(
             format_args!("{} {}", param("size"), self.size),
-            self.memory_estimate()?,
+            self.plan_bytes(input.face_size(), input.plan_bytes()),
         )?;
-        let loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
+        let (loaded, notes) = input.load()?;
         progress.stage("decode");
-        for w in loaded.warnings(&self.inputs, &self.read) {
+        for w in notes {
             warnings.push(w);
         }
         if let Some(w) = super::display_referred(&loaded) {

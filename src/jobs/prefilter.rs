@@ -6,6 +6,7 @@ use crate::convert;
 use crate::cube::CubeMap;
 use crate::error::{param, Error, Result};
 use crate::filter::{self, ChainOptions, LevelInfo};
+use crate::input::Input;
 use crate::io::{self, FileFormat, ReadOptions};
 use crate::output::{self, Destination, Encoding, Files, Target};
 use crate::resample::Resampler;
@@ -116,6 +117,85 @@ impl PrefilterJob {
         )
     }
 
+    /// Level 0's face edge (`--size`, else the input's), checked with `--min-size` and the
+    /// memory plan of the input as it was read.
+    fn base_size(&self, loaded: &convert::Loaded) -> Result<usize> {
+        let size = self.size.unwrap_or_else(|| loaded.face_size());
+        Self::check_size(size)?;
+        if let Some(min) = self.chain.min_size.filter(|&m| m > size) {
+            return Err(Error::usage(format!(
+                "{} {min} is larger than level 0, whose faces are {size} px",
+                param("min_size")
+            )));
+        }
+        self.check_memory(size, loaded.working_bytes())?;
+        Ok(size)
+    }
+
+    /// 8-bit files clip at 1, unless an HDR encoding holds more (its own range is the
+    /// encoder's clamp warning).
+    fn clip_warning(&self, target: &Target, chain: &CubeMap) -> Option<String> {
+        let eight_bit = target
+            .format()
+            .is_some_and(|f| io::largest_value(f, target.write.gpu_format).is_none());
+        if !eight_bit || target.write.hdr_encoding.is_some() {
+            return None;
+        }
+        let (n, top) = tonemap::clipped(chain.levels.iter().flatten(), Tonemap::None, 0.0);
+        let exposure = self.encoding.exposure;
+        (n > 0).then(|| output::clip_warning(&self.output.name(), n, top, exposure, false))
+    }
+
+    /// A DDS or KTX2 chain's description goes beside it: there is no beside on standard
+    /// output, so only the file is kept there, with the warning that says so.
+    fn keep_one_on_stdout(&self, target: &Target, files: &mut Files) -> Option<String> {
+        if !self.output.is_stdout() || files.files.len() <= 1 {
+            return None;
+        }
+        let warning = format!(
+            "-o -: the chain's levels description (NAME.{}.levels.json) is not written{}",
+            files.files[0]
+                .0
+                .extension()
+                .unwrap_or_default()
+                .to_string_lossy(),
+            match target.format() {
+                Some(io::FileFormat::Ktx2) =>
+                    format!(" ({} puts it in the file)", param("cubeforge_keys")),
+                _ => String::new(),
+            }
+        );
+        files.files.truncate(1);
+        Some(warning)
+    }
+
+    /// The report's line per level, and where the chain stopped short of the full one.
+    fn level_lines(
+        &self,
+        description: &LevelsFile,
+        options: &ChainOptions,
+        size: usize,
+    ) -> Vec<String> {
+        let mut lines: Vec<String> = description.levels.iter().map(level_line).collect();
+        let full = CubeMap::full_chain_len(size);
+        if let (Some(min), Some(last)) = (options.min_size, description.levels.last()) {
+            if description.levels.len() < full {
+                let default = if self.chain.min_size.is_none() {
+                    format!(", the default; {} 1 for the full chain", param("min_size"))
+                } else {
+                    String::new()
+                };
+                lines.push(format!(
+                    "stopped at {} px ({} {min}{default}): {} levels instead of {full}",
+                    last.size,
+                    param("min_size"),
+                    description.levels.len(),
+                ));
+            }
+        }
+        lines
+    }
+
     fn check_size(size: usize) -> Result<()> {
         if size == 0 || size > MOST {
             return Err(Error::usage(format!(
@@ -159,10 +239,10 @@ impl Job for PrefilterJob {
     }
 
     fn memory_estimate(&self) -> Result<u64> {
-        let plan = chain::plan(&self.inputs, self.from, &self.read)?;
-        Ok(match self.size.or(plan.face_size) {
-            Some(size) => self.plan_bytes(size, plan.working_bytes()),
-            None => plan.working_bytes(),
+        let input = Input::open(&self.inputs, self.from, &self.read)?;
+        Ok(match self.size.or(input.face_size()) {
+            Some(size) => self.plan_bytes(size, input.plan_bytes()),
+            None => input.plan_bytes(),
         })
     }
 
@@ -171,24 +251,16 @@ impl Job for PrefilterJob {
         warnings.extend(self.validate()?);
         let target = self.target()?;
         // The whole plan against the budget before any file is decoded.
-        let plan = chain::plan(&self.inputs, self.from, &self.read)?;
-        if let Some(size) = self.size.or(plan.face_size) {
-            self.check_memory(size, plan.working_bytes())?;
+        let input = Input::open(&self.inputs, self.from, &self.read)?;
+        if let Some(size) = self.size.or(input.face_size()) {
+            self.check_memory(size, input.plan_bytes())?;
         }
-        let loaded = convert::load_planned(&self.inputs, self.from, &self.read)?;
+        let (loaded, notes) = input.load()?;
         progress.stage("decode");
-        for w in loaded.warnings(&self.inputs, &self.read) {
+        for w in notes {
             warnings.push(w);
         }
-        let size = self.size.unwrap_or_else(|| loaded.face_size());
-        Self::check_size(size)?;
-        if let Some(min) = self.chain.min_size.filter(|&m| m > size) {
-            return Err(Error::usage(format!(
-                "{} {min} is larger than level 0, whose faces are {size} px",
-                param("min_size")
-            )));
-        }
-        self.check_memory(size, loaded.working_bytes())?;
+        let size = self.base_size(&loaded)?;
         let mut base = convert::to_cube(&loaded, size, &Resampler::default());
         base.levels[0]
             .iter_mut()
@@ -205,18 +277,8 @@ impl Job for PrefilterJob {
         if let Some(w) = &encoded.clamped {
             warnings.push(w);
         }
-        // 8-bit files clip at 1, unless an HDR encoding holds more (its own range is the
-        // clamp warning's above).
-        let eight_bit = target
-            .format()
-            .is_some_and(|f| io::largest_value(f, target.write.gpu_format).is_none());
-        if eight_bit && target.write.hdr_encoding.is_none() {
-            let (n, top) = tonemap::clipped(chain.levels.iter().flatten(), Tonemap::None, 0.0);
-            if n > 0 {
-                let name = self.output.name();
-                let exposure = self.encoding.exposure;
-                warnings.push(output::clip_warning(&name, n, top, exposure, false));
-            }
+        if let Some(w) = self.clip_warning(&target, &chain) {
+            warnings.push(w);
         }
         let quality = encoded.psnr.map(|psnr_db| Quality {
             format: target.write.gpu_format,
@@ -224,44 +286,13 @@ impl Job for PrefilterJob {
         });
         progress.stage("encode");
         let mut files: Files = encoded.into_files();
-        if self.output.is_stdout() && files.files.len() > 1 {
-            // A DDS or KTX2 chain's description goes beside it: there is no beside on
-            // standard output.
-            warnings.push(format!(
-                "-o -: the chain's levels description (NAME.{}.levels.json) is not written{}",
-                files.files[0]
-                    .0
-                    .extension()
-                    .unwrap_or_default()
-                    .to_string_lossy(),
-                match target.format() {
-                    Some(io::FileFormat::Ktx2) =>
-                        format!(" ({} puts it in the file)", param("cubeforge_keys")),
-                    _ => String::new(),
-                }
-            ));
-            files.files.truncate(1);
+        if let Some(w) = self.keep_one_on_stdout(&target, &mut files) {
+            warnings.push(w);
         }
         output::deliver(&files, &self.output, &loaded.files)?;
         progress.stage("write");
         let mut summary: Vec<String> = super::wrote(&files, &self.output).into_iter().collect();
-        summary.extend(description.levels.iter().map(level_line));
-        let full = CubeMap::full_chain_len(size);
-        if let (Some(min), Some(last)) = (chain_options.min_size, description.levels.last()) {
-            if description.levels.len() < full {
-                let default = if self.chain.min_size.is_none() {
-                    format!(", the default; {} 1 for the full chain", param("min_size"))
-                } else {
-                    String::new()
-                };
-                summary.push(format!(
-                    "stopped at {} px ({} {min}{default}): {} levels instead of {full}",
-                    last.size,
-                    param("min_size"),
-                    description.levels.len(),
-                ));
-            }
-        }
+        summary.extend(self.level_lines(&description, &chain_options, size));
         summary.extend(target.notes());
         Ok(Report {
             written: files.paths(),

@@ -4,6 +4,7 @@ use super::{Job, Progress, Report, Warning, Warnings};
 use crate::error::{Error, Result};
 use crate::ibl::Engine;
 use crate::image::Image;
+use crate::input::Input;
 use crate::io::{Limits, ReadOptions};
 use crate::output::{self, Destination, Files};
 use crate::preview::{self, pbr};
@@ -100,7 +101,8 @@ impl ViewJob {
             };
             return Ok((env, Some(input.to_path_buf()), true));
         }
-        let env = preview::load_environment(input, self.from, &self.read())?;
+        let opened = Input::open(&[input.to_path_buf()], self.from, &self.read())?;
+        let (env, _) = preview::load_environment(&opened)?;
         Ok((env, self.control.clone(), false))
     }
 
@@ -168,17 +170,17 @@ impl Job for ViewJob {
     }
 
     fn memory_estimate(&self) -> Result<u64> {
-        let plan = crate::chain::plan(
+        let input = Input::open(
             std::slice::from_ref(&self.shown().0),
             self.from,
             &self.read(),
         )?;
-        let face = plan.face_size.unwrap_or(512) as u64;
+        let face = input.face_size().unwrap_or(512) as u64;
         // The map, a GGX chain beside it, and their page data (half floats in base64, twice
         // over while the script is assembled).
         let levels = 64 - face.leading_zeros() as u64;
-        Ok(plan
-            .working_bytes()
+        Ok(input
+            .plan_bytes()
             .saturating_mul(3)
             .saturating_add(4 * view::data_bytes(face, levels)))
     }

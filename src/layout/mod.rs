@@ -18,7 +18,7 @@ use glam::{Vec2, Vec3, Vec4};
 
 /// The layouts: how an environment map's directions lie on images (one image, or six faces).
 /// Cube-map containers (KTX2, DDS, ...) are file formats that hold faces: `io::Container`, a
-/// layer up; `io::MapKind` names either.
+/// layer up; `convert::MapKind` names either.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]

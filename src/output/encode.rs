@@ -30,9 +30,21 @@ pub(crate) fn encode_image_as(
     img: &Image,
     opts: &WriteOptions,
 ) -> Result<Vec<u8>> {
+    encode_image_with(format, path, img, opts, None)
+}
+
+/// [`encode_image_as`] with a JPEG written as UltraHDR, its SDR picture made by `gain_map`'s
+/// curve ([`super::Target::gain_map`]).
+pub(crate) fn encode_image_with(
+    format: FileFormat,
+    path: &Path,
+    img: &Image,
+    opts: &WriteOptions,
+    gain_map: Option<Tonemap>,
+) -> Result<Vec<u8>> {
     if let Some(e) = opts.hdr_encoding {
         let plain = hdr8::check(path, format, opts)?;
-        let bytes = encode_image_as(format, path, &e.encode_image(img), &plain)?;
+        let bytes = encode_image_with(format, path, &e.encode_image(img), &plain, gain_map)?;
         return Ok(hdr8::marked(format, bytes, e));
     }
     match format {
@@ -41,7 +53,7 @@ pub(crate) fn encode_image_as(
         }
         FileFormat::Hdr => Ok(rgbe::encode(img)),
         FileFormat::UltraHdr => {
-            let curve = opts.gain_map.unwrap_or_default();
+            let curve = gain_map.unwrap_or_default();
             ultrahdr_encode(img, curve, ultrahdr::Reader::Format, false)
                 .map(|(bytes, _)| bytes)
                 .map_err(|e| Error::file(path, e))
@@ -56,8 +68,8 @@ pub(crate) fn encode_image_as(
                     c.name()
                 ),
             )),
-            None if f == FileFormat::Jpeg && opts.gain_map.is_some() => {
-                encode_image_as(FileFormat::UltraHdr, path, img, opts)
+            None if f == FileFormat::Jpeg && gain_map.is_some() => {
+                encode_image_with(FileFormat::UltraHdr, path, img, opts, gain_map)
             }
             None => raster::encode(img, f, opts).map_err(|e| Error::file(path, e)),
         },

@@ -4,9 +4,10 @@
 //! output option is a field here, an arm in `resolve` and a term in `plan_bytes`.
 
 use super::{kind_for, Target};
+use crate::convert::MapKind;
 use crate::cube::EdgeFixup;
 use crate::error::{param, Error, Result, Text};
-use crate::io::{self, ExrFloat, FileFormat, GpuFormat, HdrEncoding, MapKind, WriteOptions};
+use crate::io::{self, ExrFloat, FileFormat, GpuFormat, HdrEncoding, WriteOptions};
 use crate::layout::Kind;
 use crate::tonemap::Tonemap;
 use std::path::Path;
@@ -151,6 +152,7 @@ impl Encoding {
             kind,
             format,
             write,
+            gain_map: self.ultrahdr.then_some(self.tonemap),
             levels: None,
             tone,
             warnings,
@@ -165,7 +167,6 @@ impl Encoding {
             gpu_format: self.gpu_format.unwrap_or_default(),
             zstd: self.zstd,
             exr_float: self.exr_float,
-            gain_map: self.ultrahdr.then_some(self.tonemap),
             edge_fixup: self.edge_fixup,
             hdr_encoding: self.hdr_encoding,
             cubeforge_keys: self.cubeforge_keys,
@@ -185,7 +186,7 @@ impl Encoding {
         let scaled = (exposure != 0.0).then_some((exposure, Tonemap::None));
         match format {
             None => (None, None),
-            // The curve makes the SDR picture ([`WriteOptions::gain_map`]); the radiance is kept.
+            // The curve makes the SDR picture ([`super::Target::gain_map`]); the radiance is kept.
             Some(FileFormat::UltraHdr) => (scaled, None),
             Some(f) if io::largest_value(f, write.gpu_format).is_none() => {
                 let given = exposure != 0.0 || tonemap != Tonemap::None;

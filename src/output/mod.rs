@@ -4,11 +4,12 @@
 
 #![warn(missing_docs)]
 
+use crate::convert::MapKind;
 use crate::convert::Output;
 use crate::cube::{fixup, CubeMap, Faces, FACE_NAMES};
 use crate::error::{param, Error, Result};
 use crate::image::Image;
-use crate::io::{self, Container, FileFormat, MapKind, WriteOptions};
+use crate::io::{self, Container, FileFormat, WriteOptions};
 use crate::layout::Kind;
 use crate::tonemap::Tonemap;
 use std::path::{Path, PathBuf};
@@ -21,7 +22,7 @@ pub use deliver::{
     deliver, is_closed_pipe, stdout_open, write_stdout, write_summary, Destination, Files,
 };
 pub use encode::{encode_cube, encode_cube_with, encode_image, ultrahdr_encode};
-pub(crate) use encode::{encode_cube_as, encode_image_as};
+pub(crate) use encode::{encode_cube_as, encode_image_as, encode_image_with};
 pub use encoding::Encoding;
 
 /// An output as [`Encoding::resolve`] decided it: where, in which layout and format, with
@@ -37,6 +38,10 @@ pub struct Target {
     pub format: Option<FileFormat>,
     /// Pixel format, colour space and compression of the written files.
     pub write: WriteOptions,
+    /// JPEG outputs as UltraHDR: a gain map over an SDR picture made by this curve (`None`:
+    /// plain JPEG), radiance kept, not clipped. Here, not in `WriteOptions`: the curve is
+    /// pixel work done above the codecs.
+    pub gain_map: Option<Tonemap>,
     /// Mip levels of a KTX2 or DDS container (None: the full chain down to 1x1).
     pub levels: Option<usize>,
     /// Exposure (stops) and tone curve: both for 8-bit outputs; float outputs stay linear,
@@ -185,7 +190,13 @@ impl Target {
                 refuse_folder(&self.path, inputs)?;
                 let cube = fixup::apply_cube(cube, self.write.edge_fixup);
                 let format = self.format.ok_or_else(|| io::unknown_ext(&self.path))?;
-                encode_faces(&self.path, &cube.levels[0], format, &self.write, inputs)?
+                encode_faces(
+                    &self.path,
+                    &cube.levels[0],
+                    format,
+                    (&self.write, self.gain_map),
+                    inputs,
+                )?
             }
             Output::Cube(cube) => {
                 refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
@@ -208,7 +219,7 @@ impl Target {
             }
             Output::Image(img) if self.format() == Some(FileFormat::UltraHdr) => {
                 refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
-                let curve = self.write.gain_map.unwrap_or_default();
+                let curve = self.gain_map.unwrap_or_default();
                 let equirect = self.kind == MapKind::Layout(Kind::Equirect);
                 let (bytes, stats) =
                     ultrahdr_encode(&img, curve, io::ultrahdr::Reader::Format, equirect)
@@ -219,7 +230,8 @@ impl Target {
             Output::Image(img) => {
                 refuse_inputs(std::slice::from_ref(&self.path), inputs)?;
                 let format = self.format.ok_or_else(|| io::unknown_ext(&self.path))?;
-                let bytes = encode_image_as(format, &self.path, &img, &self.write)?;
+                let bytes =
+                    encode_image_with(format, &self.path, &img, &self.write, self.gain_map)?;
                 vec![(self.path.clone(), bytes)]
             }
         };
@@ -305,7 +317,7 @@ pub(crate) fn encode_faces(
     dir: &Path,
     faces: &Faces,
     format: FileFormat,
-    write: &WriteOptions,
+    (write, gain_map): (&WriteOptions, Option<Tonemap>),
     inputs: &[PathBuf],
 ) -> Result<Vec<(PathBuf, Vec<u8>)>> {
     let ext = format.extension();
@@ -319,7 +331,7 @@ pub(crate) fn encode_faces(
         paths
             .par_iter()
             .zip(faces.par_iter())
-            .map(|(p, f)| encode_image_as(format, p, f, write))
+            .map(|(p, f)| encode_image_with(format, p, f, write, gain_map))
             .collect()
     };
     paths

@@ -7,8 +7,8 @@ use crate::convert::{self, Source};
 use crate::cube::{CubeSampler, Environment};
 use crate::error::{Error, Result};
 use crate::image::Image;
+use crate::input::{Input, InputKind};
 use crate::io::{self, Decoded, Limits, ReadOptions};
-use crate::layout::Kind;
 use crate::resample::Resampler;
 use std::path::{Path, PathBuf};
 
@@ -35,19 +35,29 @@ impl LoadedEnv {
     }
 }
 
-/// Loads an environment for the preview. A KTX2 or DDS cube map keeps all its stored levels
-/// (they are the prefiltered chain); a directory holding `m0/`, `m1/`, ... (from
-/// `cubeforge prefilter`) is read level by level; anything else `convert` reads becomes a
-/// one-level cube map at the input's resolution.
-pub fn load_environment(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<LoadedEnv> {
-    if path.is_dir() && crate::chain::is_chain_dir(path) {
-        return load_chain_dir(path, opts);
+/// Loads an environment for the preview, with the warnings of its load. A KTX2 or DDS cube
+/// map keeps all its stored levels (they are the prefiltered chain); a directory holding `m0/`,
+/// `m1/`, ... (from `cubeforge prefilter`) is read level by level; anything else `convert`
+/// reads becomes a one-level cube map at the input's resolution.
+pub fn load_environment(input: &Input) -> Result<(LoadedEnv, Vec<String>)> {
+    if input.kind() == InputKind::Chain {
+        let (c, warnings) = input.load_chain()?;
+        let env = LoadedEnv {
+            sampler: CubeSampler::new(&c.cube),
+            files: c.files,
+            hdr: c.meta.hdr,
+            replaced_values: c.meta.replaced_values,
+            levels: c.levels,
+        };
+        return Ok((env, warnings));
     }
-    let loaded = convert::load(&[path.to_path_buf()], from, opts)?;
+    let (loaded, warnings) = input.load()?;
     let (cube, levels) = match &loaded.source {
         Source::Cube(c) => {
-            let levels = io::FileFormat::from_extension(path)
-                .and_then(|f| crate::chain::container_levels(path, f, opts.limits.session));
+            let path = &input.paths()[0];
+            let levels = io::FileFormat::from_extension(path).and_then(|f| {
+                crate::chain::container_levels(path, f, input.read_options().limits.session)
+            });
             (CubeSampler::new(c), levels)
         }
         Source::Projection(..) | Source::Reduced(_) => {
@@ -56,26 +66,14 @@ pub fn load_environment(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> 
             (CubeSampler::new(&cube), None)
         }
     };
-    Ok(LoadedEnv {
+    let env = LoadedEnv {
         sampler: cube,
         files: loaded.files.clone(),
         hdr: loaded.hdr,
         replaced_values: loaded.meta.replaced_values,
         levels,
-    })
-}
-
-/// Reads `DIR/m0`, `DIR/m1`, ... (each a folder of six faces) as one chain; each level must
-/// be half the size of the one before (down to 1).
-fn load_chain_dir(dir: &Path, opts: &ReadOptions) -> Result<LoadedEnv> {
-    let c = crate::chain::read_dir(dir, opts)?;
-    Ok(LoadedEnv {
-        sampler: CubeSampler::new(&c.cube),
-        files: c.files,
-        hdr: c.meta.hdr,
-        replaced_values: c.meta.replaced_values,
-        levels: c.levels,
-    })
+    };
+    Ok((env, warnings))
 }
 
 /// Reads a 2D texture for the sphere (decal: colour, sRGB-decoded; control map: `linear`)

@@ -550,7 +550,8 @@ fn a_bad_mip_in_a_chain_folder_is_counted_and_named() {
 /// and a layout given for a container file is refused by the file.
 #[test]
 fn a_container_is_its_own_kind_and_from_takes_layouts() {
-    use cubeforge::internals::io::{dds, Container, GpuFormat, MapKind};
+    use cubeforge::internals::io::{dds, Container, GpuFormat};
+    use cubeforge::MapKind;
     let dir = tempfile::tempdir().unwrap();
     let cube = cubeforge::internals::cube::CubeMap::from_fn(8, |_| Vec4::ONE);
     let p = dir.path().join("c.dds");

@@ -180,7 +180,7 @@ fn ibl_within_a_budget_only_the_bands_fit() {
     let (w, h) = (1024, 512);
     panorama(&path, w, h);
     let read = budget(below_whole(w, h) / 2);
-    let whole = cubeforge::internals::convert::plan_input(std::slice::from_ref(&path), None, &read);
+    let whole = cubeforge::internals::input::Input::open(std::slice::from_ref(&path), None, &read);
     assert!(whole.is_err(), "the whole image fits the budget");
     let job = IblJob {
         options: IblOptions {

@@ -107,6 +107,11 @@ pub(super) fn decompress(
     Ok(())
 }
 
+/// The error for a PIZ block's Huffman data that `what`.
+fn bad<T>(what: &str) -> Result<T, String> {
+    Err(format!("the PIZ block's Huffman data {what}"))
+}
+
 /// OpenEXR's Huffman stream into `out`, which it must fill exactly.
 fn huffman(
     data: &[u8],
@@ -115,17 +120,42 @@ fn huffman(
     lengths: &mut Vec<u8>,
     table: &mut Vec<u32>,
 ) -> Result<(), String> {
-    let bad = |what: &str| Err(format!("the PIZ block's Huffman data {what}"));
     if out.is_empty() {
         return Ok(());
     }
+    let (first_sym, last_sym, n_bits) = header(data)?;
+    let stream_bytes = data.len() - 20;
+    // The stream, padded so a 64-bit read past its end finds zeros.
+    bits.clear();
+    bits.extend_from_slice(&data[20..]);
+    bits.resize(stream_bytes + 16, 0);
+    let pos = code_lengths(bits, stream_bytes, (first_sym, last_sym), lengths)?;
+    // The codes start at the next whole byte.
+    let (start, avail) = (pos.div_ceil(8) * 8, 8 * stream_bytes as u64);
+    if start > avail {
+        return bad("is truncated in its code table");
+    }
+    if n_bits > avail - start {
+        return bad("claims more bits than it holds");
+    }
+    let code = canonical(lengths, (first_sym, last_sym), table)?;
+    decode(
+        bits,
+        start..start + n_bits,
+        table,
+        &code,
+        last_sym as u32,
+        out,
+    )
+}
+
+/// The header, every field checked against the block before use: the first and last symbol
+/// of the code table (the last is the repeat symbol), the table's length in bytes (OpenEXR's
+/// own reader ignores it; it must still fit), the coded bits, and a reserved word.
+fn header(data: &[u8]) -> Result<(usize, usize, u64), String> {
     if data.len() < 20 {
         return bad("is truncated");
     }
-    // The header, every field checked against the block before use: the first and last
-    // symbol of the code table (the last is the repeat symbol), the table's length in
-    // bytes (OpenEXR's own reader ignores it; it must still fit), the coded bits, and a
-    // reserved word.
     let word = |i: usize| u32::from_le_bytes(data[4 * i..4 * i + 4].try_into().expect("4 bytes"));
     let (first_sym, last_sym) = (word(0) as usize, word(1) as usize);
     let (table_len, n_bits) = (word(2) as usize, word(3) as u64);
@@ -146,12 +176,17 @@ fn huffman(
             "the PIZ block's Huffman data claims a {table_len}-byte code table in {stream_bytes} bytes"
         ));
     }
-    // The stream, padded so a 64-bit read past its end finds zeros.
-    bits.clear();
-    bits.extend_from_slice(&data[20..]);
-    bits.resize(stream_bytes + 16, 0);
+    Ok((first_sym, last_sym, n_bits))
+}
 
-    // Code lengths, six bits each from first_sym to last_sym, with runs of zeros.
+/// Code lengths into `lengths`, six bits each from the first symbol to the last, with runs
+/// of zeros; returns the bit position after them.
+fn code_lengths(
+    bits: &[u8],
+    stream_bytes: usize,
+    (first_sym, last_sym): (usize, usize),
+    lengths: &mut Vec<u8>,
+) -> Result<u64, String> {
     lengths.clear();
     lengths.resize(SYMBOLS, 0);
     let mut pos = 0u64;
@@ -180,18 +215,27 @@ fn huffman(
         }
         sym += zeros;
     }
-    // The codes start at the next whole byte.
-    let (start, avail) = (pos.div_ceil(8) * 8, 8 * stream_bytes as u64);
-    if start > avail {
-        return bad("is truncated in its code table");
-    }
-    if n_bits > avail - start {
-        return bad("claims more bits than it holds");
-    }
-    let end = start + n_bits;
+    Ok(pos)
+}
 
-    // The canonical code: per length, its count and first value (longer codes take the
-    // smaller values), and the symbols by length then value.
+/// The canonical code's codes longer than the direct table's bits.
+struct LongCodes {
+    /// Per length, its first code's value (longer codes take the smaller values).
+    first: [u64; MAX_LEN + 1],
+    /// Per length in use, the symbols in code order.
+    syms: Vec<Vec<u32>>,
+    /// The lengths above `TABLE_BITS` in use, shortest first.
+    lens: Vec<usize>,
+}
+
+/// The canonical code of `lengths`: per length, its count and first value, and the symbols
+/// by length then value; short codes into the direct `table` (entry = symbol << 8 | length,
+/// length 0: longer than `TABLE_BITS`), the long ones returned.
+fn canonical(
+    lengths: &[u8],
+    (first_sym, last_sym): (usize, usize),
+    table: &mut Vec<u32>,
+) -> Result<LongCodes, String> {
     let mut count = [0u64; MAX_LEN + 1];
     for &l in &lengths[first_sym..=last_sym] {
         count[l as usize] += 1;
@@ -207,11 +251,9 @@ fn huffman(
         }
     }
     let mut next = first;
-    // Direct table: entry = symbol << 8 | length (length 0: longer than TABLE_BITS).
     table.clear();
     table.resize(1 << TABLE_BITS, 0);
-    // Long codes: per length in use, the symbols in code order.
-    let mut long_syms: Vec<Vec<u32>> = vec![Vec::new(); MAX_LEN + 1];
+    let mut syms: Vec<Vec<u32>> = vec![Vec::new(); MAX_LEN + 1];
     for (s, &l) in lengths
         .iter()
         .enumerate()
@@ -228,16 +270,27 @@ fn huffman(
             let from = (code << (TABLE_BITS - l)) as usize;
             table[from..from + (1 << (TABLE_BITS - l))].fill((s as u32) << 8 | l);
         } else {
-            long_syms[l as usize].push(s as u32);
+            syms[l as usize].push(s as u32);
         }
     }
-    let long_lens: Vec<usize> = (TABLE_BITS as usize + 1..=MAX_LEN)
+    let lens: Vec<usize> = (TABLE_BITS as usize + 1..=MAX_LEN)
         .filter(|&l| count[l] > 0)
         .collect();
+    Ok(LongCodes { first, syms, lens })
+}
 
-    let repeat = last_sym as u32;
+/// The coded bits `range` of `bits` into `out`, which they must fill exactly; `repeat`, the
+/// last symbol, repeats the sample before it as many times as the next byte says.
+fn decode(
+    bits: &[u8],
+    range: std::ops::Range<u64>,
+    table: &[u32],
+    long: &LongCodes,
+    repeat: u32,
+    out: &mut [u16],
+) -> Result<(), String> {
+    let (mut pos, end) = (range.start, range.end);
     let mut o = 0usize;
-    pos = start;
     while pos < end {
         let w = peek(bits, pos);
         let e = table[(w >> (64 - TABLE_BITS)) as usize];
@@ -245,11 +298,11 @@ fn huffman(
             (e >> 8, (e & 0xff) as u64)
         } else {
             // The shortest length whose first code the bits reach is the code's length.
-            let Some(&l) = long_lens.iter().find(|&&l| w >> (64 - l) >= first[l]) else {
+            let Some(&l) = long.lens.iter().find(|&&l| w >> (64 - l) >= long.first[l]) else {
                 return bad("holds an invalid code");
             };
-            let i = (w >> (64 - l)) - first[l];
-            match long_syms[l].get(i as usize) {
+            let i = (w >> (64 - l)) - long.first[l];
+            match long.syms[l].get(i as usize) {
                 Some(&s) => (s, l as u64),
                 None => return bad("holds an invalid code"),
             }

@@ -40,6 +40,11 @@ pub(super) fn rows(header: &Header, bounds: &IntegerBounds) -> Vec<(usize, usize
     rows
 }
 
+/// The error for a corrupt chunk, saying `why`.
+fn corrupt(why: &str) -> String {
+    format!("the ZSTD chunk is corrupt ({why})")
+}
+
 /// A ZSTD chunk's bytes as an uncompressed chunk holds them, into `out` (`inner` is scratch
 /// for the inflated frame, `inflate` a reused decompressor).
 pub(super) fn unpack(
@@ -57,7 +62,43 @@ pub(super) fn unpack(
         out.extend_from_slice(data);
         return Ok(());
     }
-    let corrupt = |why: &str| format!("the ZSTD chunk is corrupt ({why})");
+    let (delta, frame) = prefix(data)?;
+    // Two length fields at most, then the samples.
+    inner.resize(expected + 16, 0);
+    let decompressor = match inflate {
+        Some(d) => d,
+        None => inflate.insert(zstd::bulk::Decompressor::new().map_err(|e| e.to_string())?),
+    };
+    let n = decompressor
+        .decompress_to_buffer(frame, &mut inner[..])
+        .map_err(|e| corrupt(&format!("zstd: {e}")))?;
+    let mut sorted = unshuffle(&inner[..n], &rows, expected)?;
+    // Where each (line, channel) row sits in the sorted layout.
+    let mut place = vec![0usize; rows.len()];
+    let mut next = 0;
+    for k in [2, 4] {
+        for (i, &(n, b)) in rows.iter().enumerate() {
+            if b == k {
+                place[i] = next;
+                next += n * b;
+            }
+        }
+    }
+    if delta {
+        for (i, &(n, b)) in rows.iter().enumerate() {
+            undo_delta(&mut sorted[place[i]..place[i] + n * b], b);
+        }
+    }
+    out.reserve(expected);
+    for (i, &(n, b)) in rows.iter().enumerate() {
+        out.extend_from_slice(&sorted[place[i]..place[i] + n * b]);
+    }
+    Ok(())
+}
+
+/// The 24-byte prefix checked: whether rows are stored as differences (format 2, flag 1),
+/// and the zstd frame it sizes.
+fn prefix(data: &[u8]) -> Result<(bool, &[u8]), String> {
     if data.len() < PREFIX || &data[..8] != MAGIC {
         return Err(corrupt("no zstd-exr prefix"));
     }
@@ -73,17 +114,12 @@ pub(super) fn unpack(
         .ok()
         .and_then(|s| data.get(PREFIX..PREFIX.checked_add(s)?))
         .ok_or_else(|| corrupt("its frame is larger than the chunk"))?;
-    // Two length fields at most, then the samples.
-    inner.resize(expected + 16, 0);
-    let decompressor = match inflate {
-        Some(d) => d,
-        None => inflate.insert(zstd::bulk::Decompressor::new().map_err(|e| e.to_string())?),
-    };
-    let n = decompressor
-        .decompress_to_buffer(frame, &mut inner[..])
-        .map_err(|e| corrupt(&format!("zstd: {e}")))?;
-    let inner = &inner[..n];
-    // The sorted layout: 16-bit rows first, then 32-bit rows, each in (line, channel) order.
+    Ok((format == 2 && flags & DELTA != 0, frame))
+}
+
+/// The inflated frame's segments (a length, then byte planes) into the sorted layout: 16-bit
+/// rows first, then 32-bit rows, each in (line, channel) order.
+fn unshuffle(inner: &[u8], rows: &[(usize, usize)], expected: usize) -> Result<Vec<u8>, String> {
     let halves: usize = rows.iter().filter(|r| r.1 == 2).map(|(n, _)| n * 2).sum();
     let mut sorted = vec![0u8; expected];
     let mut at = 0;
@@ -112,38 +148,23 @@ pub(super) fn unpack(
     if at != inner.len() {
         return Err(corrupt("bytes after its segments"));
     }
-    // Where each (line, channel) row sits in the sorted layout.
-    let mut place = vec![0usize; rows.len()];
-    let mut next = 0;
-    for k in [2, 4] {
-        for (i, &(n, b)) in rows.iter().enumerate() {
-            if b == k {
-                place[i] = next;
-                next += n * b;
-            }
+    Ok(sorted)
+}
+
+/// A row of `b`-byte samples stored as differences of consecutive samples, summed back
+/// (as integers, wrapping).
+fn undo_delta(row: &mut [u8], b: usize) {
+    if b == 2 {
+        let mut sum = 0u16;
+        for v in row.chunks_exact_mut(2) {
+            sum = sum.wrapping_add(u16::from_le_bytes([v[0], v[1]]));
+            v.copy_from_slice(&sum.to_le_bytes());
+        }
+    } else {
+        let mut sum = 0u32;
+        for v in row.chunks_exact_mut(4) {
+            sum = sum.wrapping_add(u32::from_le_bytes(v.try_into().unwrap()));
+            v.copy_from_slice(&sum.to_le_bytes());
         }
     }
-    if format == 2 && flags & DELTA != 0 {
-        for (i, &(n, b)) in rows.iter().enumerate() {
-            let row = &mut sorted[place[i]..place[i] + n * b];
-            if b == 2 {
-                let mut sum = 0u16;
-                for v in row.chunks_exact_mut(2) {
-                    sum = sum.wrapping_add(u16::from_le_bytes([v[0], v[1]]));
-                    v.copy_from_slice(&sum.to_le_bytes());
-                }
-            } else {
-                let mut sum = 0u32;
-                for v in row.chunks_exact_mut(4) {
-                    sum = sum.wrapping_add(u32::from_le_bytes(v.try_into().unwrap()));
-                    v.copy_from_slice(&sum.to_le_bytes());
-                }
-            }
-        }
-    }
-    out.reserve(expected);
-    for (i, &(n, b)) in rows.iter().enumerate() {
-        out.extend_from_slice(&sorted[place[i]..place[i] + n * b]);
-    }
-    Ok(())
 }

@@ -2,10 +2,10 @@
 //! environment map, with the programs of The Cg Tutorial, chapter 7, and split-sum PBR.
 
 use super::{Job, Progress, Report, Warning, Warnings};
-use crate::chain;
 use crate::error::{param, Error, Result};
 use crate::ibl::{self, Engine};
 use crate::image::Image;
+use crate::input::Input;
 use crate::io::{self, FileFormat, Limits, ReadOptions, WriteOptions};
 use crate::layout::Kind;
 use crate::output::{self, Destination, Files};
@@ -124,6 +124,11 @@ impl PreviewJob {
             .max(self.grid_roughness.len().max(1) * self.grid_metallic.len().max(1)) as u64
     }
 
+    /// The environment opened from its headers.
+    fn input(&self) -> Result<Input> {
+        Input::open(std::slice::from_ref(&self.env), self.from, &self.read())
+    }
+
     fn read(&self) -> ReadOptions {
         ReadOptions {
             limits: self.limits,
@@ -234,10 +239,9 @@ impl PreviewJob {
     /// Each cell's picture and its samples' buffers, RGBA f32, beside the environment as its
     /// headers describe it (its decode's peak too) and the textures on the sphere (the
     /// largest one's decode on top).
-    fn estimate_with(&self, materials: &[Material]) -> Result<u64> {
+    fn estimate_with(&self, env: &Input, materials: &[Material]) -> Result<u64> {
         let read = self.read();
-        let mut input =
-            chain::plan(std::slice::from_ref(&self.env), self.from, &read)?.working_bytes();
+        let mut input = env.plan_bytes();
         let mut textures: Vec<&PathBuf> = self.decal.iter().chain(&self.control).collect();
         if self.decal.is_none() {
             textures.extend(materials.iter().filter_map(|m| m.decal.as_ref()));
@@ -265,27 +269,26 @@ impl Job for PreviewJob {
     }
 
     fn memory_estimate(&self) -> Result<u64> {
-        self.estimate_with(&self.materials()?)
+        let materials = self.materials()?;
+        self.estimate_with(&self.input()?, &materials)
     }
 
     fn run(&self, progress: &dyn Progress) -> Result<Report> {
         let mut warnings = Warnings::new(progress);
         let (checked, materials) = self.checked()?;
         warnings.extend(checked);
+        let input = self.input()?;
         self.limits.check_memory(
             format_args!("{} {}", param("size"), self.view.size),
-            self.estimate_with(&materials)?,
+            self.estimate_with(&input, &materials)?,
         )?;
-        let env = preview::load_environment(&self.env, self.from, &self.read())?;
-        if let Some(w) = crate::convert::replaced_note(&self.env, env.replaced_values as u64) {
+        let (env, notes) = preview::load_environment(&input)?;
+        for w in notes {
             warnings.push(w);
         }
         let mut inputs: Vec<PathBuf> = env.files.clone();
         let textures = cells::load_textures(self, &materials, progress, &mut inputs)?;
         progress.stage("decode");
-        if let Some(w) = crate::convert::skybox_note(std::slice::from_ref(&self.env)) {
-            warnings.push(w);
-        }
         let split_sum = if materials.iter().any(|m| m.model == Model::Pbr) {
             let setup = pbr::prepare(&env, &self.env, self.target)?;
             if let Some(w) = &setup.warning {

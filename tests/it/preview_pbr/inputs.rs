@@ -25,7 +25,16 @@ fn run_ok(args: &[&str]) {
 }
 
 fn load(path: &Path) -> preview::LoadedEnv {
-    preview::load_environment(path, None, &ReadOptions::default()).unwrap()
+    preview::load_environment(
+        &cubeforge::internals::input::Input::open(
+            &[path.to_path_buf()],
+            None,
+            &ReadOptions::default(),
+        )
+        .unwrap(),
+    )
+    .map(|(env, _)| env)
+    .unwrap()
 }
 
 #[test]

@@ -1,49 +1,12 @@
 //! What an environment map is stored as: a layout (one image, or six faces) or a cube-map
-//! container. Layouts are geometry (`layout`, below this layer); containers are file formats,
-//! so both meet here, where `--to` and `info` name them.
+//! container. Layouts are geometry (`layout`); containers are file formats (`io`), so both
+//! meet here, in the lowest layer above both, where `--to`, an input's kind and `info` name
+//! them.
 
 #![warn(missing_docs)]
 
-use super::FileFormat;
+use crate::io::Container;
 use crate::layout::Kind;
-
-/// The cube-map containers: file formats that hold six faces and their mip levels, so a map
-/// written as one has the faces layout.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
-#[serde(rename_all = "lowercase")]
-pub enum Container {
-    /// KTX2 cube-map container.
-    Ktx2,
-    /// DDS cube-map container.
-    Dds,
-    /// KTX 1 cube-map container (Filament).
-    Ktx,
-    /// Babylon.js .env prefiltered environment.
-    Env,
-}
-
-impl Container {
-    /// The name on the command line (`--to`) and in `info`: the extension it is written with.
-    pub fn name(self) -> &'static str {
-        match self {
-            Container::Ktx2 => "ktx2",
-            Container::Dds => "dds",
-            Container::Ktx => "ktx",
-            Container::Env => "env",
-        }
-    }
-
-    /// The file format that stores it.
-    pub fn format(self) -> FileFormat {
-        match self {
-            Container::Ktx2 => FileFormat::Ktx2,
-            Container::Dds => FileFormat::Dds,
-            Container::Ktx => FileFormat::Ktx1,
-            Container::Env => FileFormat::Env,
-        }
-    }
-}
 
 /// What `--to` names and what an input was found to be: a layout or a container. Apart from
 /// [`Kind`] so a container is never passed where only a layout makes sense (`--from`, the
