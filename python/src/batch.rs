@@ -99,7 +99,8 @@ fn run_words(argv: &[String], shared: &Shared) -> cubeforge::Result<Outcomes> {
             };
             Ok((t, Ok(())))
         }
-        Prepared::Ready(ready) => {
+        Prepared::Ready(mut ready) => {
+            ready.stop_when(shared.stop.clone());
             shared.total.store(ready.jobs() as u64, Ordering::Relaxed);
             let tell = |d: &Done| {
                 shared.done.fetch_add(1, Ordering::Relaxed);

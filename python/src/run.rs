@@ -32,7 +32,8 @@ pub(crate) struct Shared {
     pub(crate) total: AtomicU64,
     pub(crate) done: AtomicU64,
     pub(crate) label: Mutex<String>,
-    stop: AtomicBool,
+    /// Set when Python asked the work to stop (a batch checks it between jobs).
+    pub(crate) stop: std::sync::Arc<AtomicBool>,
 }
 
 impl Progress for Shared {

@@ -132,6 +132,27 @@ def test_batch_returns_its_report_and_keeps_the_working_folder(tmp_path):
     assert ninja["summary"][0].startswith("batch: wrote build.ninja (2 jobs)")
 
 
+def test_a_stopped_batch_runs_no_further_job_and_keeps_what_finished(tmp_path):
+    """An exception from the progress callback (as Ctrl-C) stops the batch between jobs: the
+    running one ends whole, the rest do not start, and a rerun builds only those."""
+    jobs = "".join(
+        f'[[job]]\ninputs = ["{SKY}"]\ncommand = "prefilter"\n'
+        f'args = ["--filter", "ggx", "--size", "256", "--samples", "1024"]\noutput = "g{i}.ktx2"\n'
+        for i in range(12)
+    )
+    (tmp_path / "m.toml").write_text(jobs)
+
+    def stop(done, total, label):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        cubeforge.batch(tmp_path / "m.toml", progress=stop)
+    built = sorted(p.name for p in tmp_path.glob("g*.ktx2"))
+    assert len(built) < 12
+    again = cubeforge.batch(tmp_path / "m.toml")
+    assert (again["ran"], again["up_to_date"]) == (12 - len(built), len(built))
+
+
 def test_a_failed_batch_job_raises_with_the_report(tmp_path):
     (tmp_path / "m.toml").write_text(
         f'[[job]]\ninputs = ["{SKY}"]\ncommand = "convert"\nargs = ["--size", "8", "--to", "hcross"]\n'

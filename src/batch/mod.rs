@@ -161,6 +161,9 @@ pub struct Batch {
     /// A cache shared with other machines: a job that would run is fetched from it when it
     /// holds the job's outputs for these inputs, and a job that ran is uploaded to it.
     pub cache: Option<Cache>,
+    /// Set from another thread (a Python caller's Ctrl-C), the jobs not yet started fail as
+    /// stopped, the running ones end, and the state keeps what finished.
+    pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 impl Batch {
@@ -175,6 +178,7 @@ impl Batch {
             depfiles: false,
             max_memory: Limits::default().max_memory,
             cache: None,
+            stop: None,
         }
     }
 }

@@ -77,6 +77,7 @@ pub(super) fn run(batch: Batch, on_done: &(dyn Fn(&Done) + Sync)) -> Result<Batc
         jobs: Vec::new(),
         missed: batch.jobs.iter().map(|_| AtomicBool::new(false)).collect(),
         cache: batch.cache,
+        stop: batch.stop,
     };
     let todo: Vec<Group> = mine
         .iter()
@@ -206,6 +207,7 @@ struct Running<'a> {
     /// The cache was asked for each job and did not serve it.
     missed: Vec<AtomicBool>,
     cache: Option<Cache>,
+    stop: Option<std::sync::Arc<AtomicBool>>,
 }
 
 impl Running<'_> {
@@ -332,6 +334,15 @@ impl Running<'_> {
             else {
                 continue;
             };
+            if self
+                .stop
+                .as_ref()
+                .is_some_and(|s| s.load(Ordering::Relaxed))
+            {
+                let e = Error::usage("not run: the batch was stopped");
+                self.finish(i, Outcome::Failed(e), 0.0);
+                continue;
+            }
             share(bj.job.as_mut(), guard.session());
             let start = Instant::now();
             if self.fetched(i) {

@@ -257,6 +257,12 @@ impl Ready {
         self.batch.jobs.len()
     }
 
+    /// Stops the batch between jobs once `flag` is set (a Python caller's Ctrl-C).
+    #[allow(dead_code)]
+    pub fn stop_when(&mut self, flag: std::sync::Arc<std::sync::atomic::AtomicBool>) {
+        self.batch.stop = Some(flag);
+    }
+
     /// Runs the jobs, telling `tell` of each one's end (from any thread); prints nothing.
     pub fn run(self, tell: &(dyn Fn(&Done) + Sync)) -> Result<Ran> {
         let dry_run = self.batch.dry_run;
