@@ -320,33 +320,7 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
         Decoded::Image(img) => {
             let (w, h) = (img.width, img.height);
             let texture = from.is_none().then(|| texture_2d(&meta, &img)).flatten();
-            let (kind, note) = match from {
-                Some(Kind::Faces) => {
-                    return Err(Error::file(
-                        path,
-                        format!(
-                            "{} faces does not describe a single image (give a folder of faces, or a .ktx2, .dds, .ktx or .env file)",
-                            param("from")
-                        ),
-                    ))
-                }
-                Some(k) if !k.fits(w, h) => {
-                    return Err(Error::file(
-                        path,
-                        format!(
-                            "a {w}x{h} image cannot hold {} layout",
-                            crate::error::with_article(k.name())
-                        ),
-                    ))
-                }
-                Some(k) => (Some(k), None),
-                None if texture.is_some() => (None, None),
-                None if w == h => (None, Some(square_note(w))),
-                None => match layout::detect(w, h) {
-                    Ok(k) => (Some(k), None),
-                    Err(e) => (None, Some(e)),
-                },
-            };
+            let (kind, note) = image_kind(path, from, (w, h), texture.is_some())?;
             let (sun, lights) = sun::of_image(kind, &img);
             Report {
                 file,
@@ -371,6 +345,43 @@ pub fn describe(path: &Path, from: Option<Kind>, opts: &ReadOptions) -> Result<R
                 lights,
             }
         }
+    })
+}
+
+/// The layout of a `w` x `h` image (`from`, or what its shape says) and, where none is
+/// known, why: an error where `from` cannot describe it. A 2D texture has none.
+fn image_kind(
+    path: &Path,
+    from: Option<Kind>,
+    (w, h): (usize, usize),
+    texture: bool,
+) -> Result<(Option<Kind>, Option<String>)> {
+    Ok(match from {
+        Some(Kind::Faces) => {
+            return Err(Error::file(
+                path,
+                format!(
+                    "{} faces does not describe a single image (give a folder of faces, or a .ktx2, .dds, .ktx or .env file)",
+                    param("from")
+                ),
+            ))
+        }
+        Some(k) if !k.fits(w, h) => {
+            return Err(Error::file(
+                path,
+                format!(
+                    "a {w}x{h} image cannot hold {} layout",
+                    crate::error::with_article(k.name())
+                ),
+            ))
+        }
+        Some(k) => (Some(k), None),
+        None if texture => (None, None),
+        None if w == h => (None, Some(square_note(w))),
+        None => match layout::detect(w, h) {
+            Ok(k) => (Some(k), None),
+            Err(e) => (None, Some(e)),
+        },
     })
 }
 
@@ -456,30 +467,7 @@ impl std::fmt::Display for Report {
         // The name on one line, whatever it holds.
         writeln!(f, "{}", self.file.replace('\n', "\\n").replace('\r', "\\r"))?;
         writeln!(f, "  format:       {}", self.file_format.name())?;
-        match (&self.kind, &self.kind_note) {
-            _ if self.texture.is_some() => writeln!(
-                f,
-                "  layout:       2D texture ({})",
-                self.texture.as_deref().unwrap_or_default()
-            )?,
-            (Some(k), _) if self.declared.is_some() => writeln!(
-                f,
-                "  layout:       {} ({})",
-                k.name(),
-                self.declared.as_deref().unwrap_or_default()
-            )?,
-            (Some(MapKind::Layout(Kind::Faces)), _) if self.mip_levels > 1 => writeln!(
-                f,
-                "  layout:       faces, a prefiltered chain (folders m0 to m{})",
-                self.mip_levels - 1
-            )?,
-            (Some(MapKind::Layout(Kind::Faces)), _) => {
-                writeln!(f, "  layout:       faces (a folder of six)")?
-            }
-            (Some(k), _) => writeln!(f, "  layout:       {}", k.name())?,
-            (None, Some(n)) => writeln!(f, "  layout:       unknown: {n}")?,
-            _ => {}
-        }
+        self.layout_line(f)?;
         if let Some(p) = &self.part {
             writeln!(
                 f,
@@ -538,6 +526,42 @@ impl std::fmt::Display for Report {
             )?;
             sun::lines(f, self.sun.as_ref(), &self.lights)?;
         }
+        self.level_lines(f)
+    }
+}
+
+impl Report {
+    /// The `layout:` line: a 2D texture, the declared or detected layout, or why unknown.
+    fn layout_line(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match (&self.kind, &self.kind_note) {
+            _ if self.texture.is_some() => writeln!(
+                f,
+                "  layout:       2D texture ({})",
+                self.texture.as_deref().unwrap_or_default()
+            )?,
+            (Some(k), _) if self.declared.is_some() => writeln!(
+                f,
+                "  layout:       {} ({})",
+                k.name(),
+                self.declared.as_deref().unwrap_or_default()
+            )?,
+            (Some(MapKind::Layout(Kind::Faces)), _) if self.mip_levels > 1 => writeln!(
+                f,
+                "  layout:       faces, a prefiltered chain (folders m0 to m{})",
+                self.mip_levels - 1
+            )?,
+            (Some(MapKind::Layout(Kind::Faces)), _) => {
+                writeln!(f, "  layout:       faces (a folder of six)")?
+            }
+            (Some(k), _) => writeln!(f, "  layout:       {}", k.name())?,
+            (None, Some(n)) => writeln!(f, "  layout:       unknown: {n}")?,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// One line per level of a prefiltered chain: its size and filter.
+    fn level_lines(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         for l in self.levels.iter().flat_map(|d| &d.levels) {
             let what = match (l.roughness, l.power, l.sigma) {
                 (Some(r), _, _) => format!("roughness {r:.3}"),

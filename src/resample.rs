@@ -329,16 +329,23 @@ impl Resampler {
                 }
             }
             taps.flush(&mut acc);
-            for (((o, a), &t), &e) in out.iter_mut().zip(acc).zip(&total).zip(&empty) {
-                *o = if e {
-                    Vec4::ZERO
-                } else if t > 0.0 {
-                    a / t
-                } else {
-                    a
-                };
-            }
+            finish(out, &acc, &total, &empty);
         }
+    }
+}
+
+/// A run's texels from their taps' sums: over their weights' `total` (0: one tap of weight
+/// 1), 0 where no tap fell (`empty`).
+#[inline]
+fn finish(out: &mut [Vec4], acc: &[Vec4; RUN], total: &[f32; RUN], empty: &[bool; RUN]) {
+    for (((o, &a), &t), &e) in out.iter_mut().zip(acc).zip(total).zip(empty) {
+        *o = if e {
+            Vec4::ZERO
+        } else if t > 0.0 {
+            a / t
+        } else {
+            a
+        };
     }
 }
 

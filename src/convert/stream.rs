@@ -133,10 +133,7 @@ fn reduce(b: &Bands, path: &Path, f: usize) -> Result<Loaded> {
     let (w, h) = b.size();
     let grid = Grid::Projection(Projection::Equirect, w, h);
     let lines = b.block_lines().next_power_of_two().max(f).max(MIN_BAND);
-    // Each level's row weights: level k is (w, h) / 2^k.
-    let weights: Vec<Vec<f32>> = (0..f.trailing_zeros())
-        .map(|k| equirect::row_weights(w >> k, h >> k))
-        .collect();
+    let weights = level_weights(w, h, f);
     // Each band's reduced rows written straight into their place in the reduced image (its
     // band images freed at once and reused by the thread's next band).
     let mut image = Image::new(w / f, h / f);
@@ -200,10 +197,25 @@ fn reduce(b: &Bands, path: &Path, f: usize) -> Result<Loaded> {
     })
 }
 
+/// Each 2 x 2 step's row weights for reducing a `w` x `h` panorama by `f` (a power of two):
+/// level k is (w, h) / 2^k. [`reduce_band`] takes them.
+pub fn level_weights(w: usize, h: usize, f: usize) -> Vec<Vec<f32>> {
+    (0..f.trailing_zeros())
+        .map(|k| equirect::row_weights(w >> k, h >> k))
+        .collect()
+}
+
 /// One band (rows `y0..` of a panorama `w` wide) reduced by 2^`weights.len()` per axis: the
 /// first 2 x 2 step straight from the decoded rows, clamped to `ceiling` (the same sums as
-/// `Image::reduce_row_by_rows`), the others on the band's reduced copy.
-fn reduce_band(rows: &[Vec4], w: usize, y0: usize, weights: &[Vec<f32>], ceiling: Vec4) -> Image {
+/// `Image::reduce_row_by_rows`), the others on the band's reduced copy. `info` reduces its
+/// bands with it too, for the sun (`info::stream`).
+pub fn reduce_band(
+    rows: &[Vec4],
+    w: usize,
+    y0: usize,
+    weights: &[Vec<f32>],
+    ceiling: Vec4,
+) -> Image {
     let n = rows.len() / w;
     let mut img = Image::new(w / 2, n / 2);
     let row_weight = &weights[0];

@@ -46,9 +46,10 @@ fn panorama(path: &Path, w: usize, h: usize) {
     write_image(path, &Image::from_fn(w, h, |x, y| sky(x, y, (w, h))));
 }
 
-/// The report without its sun and lights (a streamed panorama's come from a reduced cube,
-/// see `info/stream.rs`), after checking that the streamed sun is the whole read's: the same
-/// presence, direction within 0.5 degree, irradiance within 5% of its largest channel.
+/// The report without its sun and lights (a large streamed panorama's come from a reduced
+/// copy, see `info/stream.rs`), after checking that the streamed sun is the whole read's: the
+/// same presence, direction within 0.5 degree, irradiance within 3% of its largest channel
+/// (issue 49's accuracy).
 fn without_sun(v: serde_json::Value, whole: &serde_json::Value, what: &str) -> serde_json::Value {
     let (got, want) = (&v["sun"], &whole["sun"]);
     assert_eq!(got.is_null(), want.is_null(), "{what}: {got} vs {want}");
@@ -66,7 +67,7 @@ fn without_sun(v: serde_json::Value, whole: &serde_json::Value, what: &str) -> s
         let top = y.iter().cloned().fold(0.0, f64::max);
         for c in 0..3 {
             assert!(
-                (x[c] - y[c]).abs() <= 0.05 * top,
+                (x[c] - y[c]).abs() <= 0.03 * top,
                 "{what}: irradiance {x:?} vs {y:?}"
             );
         }

@@ -219,88 +219,21 @@ pub(super) fn read_chunks<'a>(
                          is outside the pixel data)"
                     )
                 })?;
-            // The chunk's byte count, checked before the crate reads that many bytes.
-            let mut field = at + if multipart { 4 } else { 0 } + if tiled { 16 } else { 4 };
-            if multipart && u32_at(bytes, at) != Some(part as u32) {
-                return Err(format!(
-                    "part {part}'s chunk table points at offset {at}, a chunk of another part"
-                ));
-            }
-            let declared = u32_at(bytes, field).map_or(-1, |v| v as i32);
-            field += 4;
-            if declared <= 0 {
-                return Err(format!(
-                    "chunk at offset {at} claims {declared} bytes of data"
-                ));
-            }
-            if declared as usize > bytes.len() - field.min(bytes.len()) {
-                return Err(format!(
-                    "chunk at offset {at} claims {declared} bytes, more than the file holds"
-                ));
-            }
-            if declared as usize > largest {
-                return Err(format!(
-                    "chunk at offset {at} claims {declared} bytes, more than a block of part \
-                     {part} holds ({largest})"
-                ));
-            }
-            let data = &bytes[field..field + declared as usize];
-            ranges.push((at, field + declared as usize));
-            // The fields before the byte count: the tile's four coordinates or the first line.
-            let head = at + if multipart { 4 } else { 0 };
-            let int = |i: usize| u32_at(bytes, head + 4 * i).map_or(-1, |v| v as i32);
-            let block = if tiled {
-                let [x, y, lx, ly] = [0, 1, 2, 3].map(int);
-                if x < 0 || y < 0 || !(0..=31).contains(&lx) || !(0..=31).contains(&ly) {
-                    return Err(format!(
-                        "tile at offset {at} claims tile ({x}, {y}) at level ({lx}, {ly})"
-                    ));
-                }
-                CompressedBlock::Tile(CompressedTileBlock {
-                    coordinates: TileCoordinates {
-                        tile_index: Vec2(x as usize, y as usize),
-                        level_index: Vec2(lx as usize, ly as usize),
-                    },
-                    compressed_pixels_le: Vec::new(),
-                })
-            } else {
-                CompressedBlock::ScanLine(CompressedScanLineBlock {
-                    y_coordinate: int(0),
-                    compressed_pixels_le: Vec::new(),
-                })
+            let at_chunk = TableEntry {
+                bytes,
+                at,
+                part,
+                multipart,
+                tiled,
             };
+            let (data, end) = at_chunk.data(largest)?;
+            ranges.push((at, end));
+            let block = at_chunk.block(header)?;
             let (tile, bounds) = guarded(|| {
                 let tile = header.get_block_data_indices(&block)?;
                 Ok((tile, header.get_absolute_block_pixel_coordinates(tile)?))
             })?;
-            if let CompressedBlock::ScanLine(block) = &block {
-                let lines = header.compression.scan_lines_per_block() as i64;
-                let y = block.y_coordinate as i64 - header.own_attributes.layer_position.1 as i64;
-                if y % lines != 0 {
-                    return Err(format!(
-                        "scan-line block at offset {at} starts at line {}, not a block boundary",
-                        block.y_coordinate
-                    ));
-                }
-            }
-            let (i, l) = (tile.tile_index, tile.level_index);
-            match unclaimed.get_mut(&(i.0, i.1, l.0, l.1)) {
-                Some(open) if *open => *open = false,
-                Some(_) => {
-                    return Err(format!(
-                        "two chunks hold {what} ({}, {}) at level ({}, {}) of part {part}: \
-                         duplicate (overlapping) {what}s, so others are missing",
-                        i.0, i.1, l.0, l.1
-                    ))
-                }
-                None => {
-                    return Err(format!(
-                        "a chunk holds {what} ({}, {}) at level ({}, {}), which part {part} \
-                         does not have",
-                        i.0, i.1, l.0, l.1
-                    ))
-                }
-            }
+            claim(&mut unclaimed, tile, what, part)?;
             if matches!(
                 header.compression,
                 Compression::DWAA(_) | Compression::DWAB(_)
@@ -325,6 +258,111 @@ pub(super) fn read_chunks<'a>(
         ));
     }
     Ok(chunks)
+}
+
+/// Marks the block `tile` of `part` as held by a chunk: an error where another chunk holds it
+/// already or the part has no such block.
+fn claim(
+    unclaimed: &mut HashMap<(usize, usize, usize, usize), bool>,
+    tile: TileCoordinates,
+    what: &str,
+    part: usize,
+) -> std::result::Result<(), String> {
+    let (i, l) = (tile.tile_index, tile.level_index);
+    match unclaimed.get_mut(&(i.0, i.1, l.0, l.1)) {
+        Some(open) if *open => {
+            *open = false;
+            Ok(())
+        }
+        Some(_) => Err(format!(
+            "two chunks hold {what} ({}, {}) at level ({}, {}) of part {part}: \
+             duplicate (overlapping) {what}s, so others are missing",
+            i.0, i.1, l.0, l.1
+        )),
+        None => Err(format!(
+            "a chunk holds {what} ({}, {}) at level ({}, {}), which part {part} \
+             does not have",
+            i.0, i.1, l.0, l.1
+        )),
+    }
+}
+
+/// One chunk of a file's chunk table: its offset `at` in `bytes`, its part, and how the
+/// file lays chunks out (a part number first in multipart files, tiles' four coordinates).
+struct TableEntry<'a> {
+    bytes: &'a [u8],
+    at: usize,
+    part: usize,
+    multipart: bool,
+    tiled: bool,
+}
+
+impl<'a> TableEntry<'a> {
+    /// Its data and where it ends, the byte count checked before the crate reads that many
+    /// bytes: positive, within the file and no more than the part's `largest` block.
+    fn data(&self, largest: usize) -> std::result::Result<(&'a [u8], usize), String> {
+        let (bytes, at, part) = (self.bytes, self.at, self.part);
+        let mut field = at + if self.multipart { 4 } else { 0 } + if self.tiled { 16 } else { 4 };
+        if self.multipart && u32_at(bytes, at) != Some(part as u32) {
+            return Err(format!(
+                "part {part}'s chunk table points at offset {at}, a chunk of another part"
+            ));
+        }
+        let declared = u32_at(bytes, field).map_or(-1, |v| v as i32);
+        field += 4;
+        if declared <= 0 {
+            return Err(format!(
+                "chunk at offset {at} claims {declared} bytes of data"
+            ));
+        }
+        if declared as usize > bytes.len() - field.min(bytes.len()) {
+            return Err(format!(
+                "chunk at offset {at} claims {declared} bytes, more than the file holds"
+            ));
+        }
+        if declared as usize > largest {
+            return Err(format!(
+                "chunk at offset {at} claims {declared} bytes, more than a block of part \
+                 {part} holds ({largest})"
+            ));
+        }
+        let end = field + declared as usize;
+        Ok((&bytes[field..end], end))
+    }
+
+    /// The block it says it holds, from the fields before its byte count: the tile's four
+    /// coordinates, or the first line (on a block boundary of `header`'s).
+    fn block(&self, header: &Header) -> std::result::Result<CompressedBlock, String> {
+        let at = self.at;
+        let head = at + if self.multipart { 4 } else { 0 };
+        let int = |i: usize| u32_at(self.bytes, head + 4 * i).map_or(-1, |v| v as i32);
+        if !self.tiled {
+            let lines = header.compression.scan_lines_per_block() as i64;
+            let first = int(0);
+            if (first as i64 - header.own_attributes.layer_position.1 as i64) % lines != 0 {
+                return Err(format!(
+                    "scan-line block at offset {at} starts at line {first}, not a block boundary"
+                ));
+            }
+            return Ok(CompressedBlock::ScanLine(CompressedScanLineBlock {
+                y_coordinate: first,
+                compressed_pixels_le: Vec::new(),
+            }));
+        }
+        let [x, y, lx, ly] = [0, 1, 2, 3].map(int);
+        if x < 0 || y < 0 || !(0..=31).contains(&lx) || !(0..=31).contains(&ly) {
+            return Err(format!(
+                "tile at offset {at} claims tile ({x}, {y}) at level ({lx}, {ly})"
+            ));
+        }
+        Ok(CompressedBlock::Tile(CompressedTileBlock {
+            coordinates: TileCoordinates {
+                tile_index: Vec2(x as usize, y as usize),
+                level_index: Vec2(lx as usize, ly as usize),
+            },
+            compressed_pixels_le: Vec::new(),
+        }))
+    }
 }
 
 /// The 11 counters that open a DWA chunk (after OpenEXR's `DataSizesSingle`): version,

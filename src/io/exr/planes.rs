@@ -45,32 +45,8 @@ pub(super) fn read_planes(
     wanted: &[&str],
 ) -> std::result::Result<Vec<Plane>, String> {
     let header = &meta.headers[part];
-    let (lw, lh) = level_size(header, level);
-    let origin = header.own_attributes.layer_position;
     let channels = &header.channels.list;
-    let mut planes: Vec<Option<Plane>> = Vec::with_capacity(channels.len());
-    for c in channels {
-        let (sx, sy) = (c.sampling.0.max(1), c.sampling.1.max(1));
-        // OpenEXR's rule: a subsampled channel's grid divides the data window.
-        if origin.0.rem_euclid(sx as i32) != 0
-            || origin.1.rem_euclid(sy as i32) != 0
-            || lw % sx != 0
-            || lh % sy != 0
-        {
-            return Err(format!(
-                "channel {:?} is sampled every {sx} x {sy} texels, which does not divide the \
-                 data window",
-                super::select::text(&c.name)
-            ));
-        }
-        let name = super::select::text(&c.name);
-        planes.push(wanted.contains(&name.as_str()).then(|| Plane {
-            name,
-            width: lw / sx,
-            height: lh / sy,
-            samples: vec![0.0; (lw / sx) * (lh / sy)],
-        }));
-    }
+    let mut planes = empty_planes(header, level, wanted)?;
     let subsampled = channels.iter().any(|c| c.sampling != Vec2(1, 1));
     let (mut inflate, mut inner, mut bytes) = (None, Vec::new(), Vec::new());
     let mut zlib = libdeflater::Decompressor::new();
@@ -132,39 +108,88 @@ pub(super) fn read_planes(
                 b.position.1
             ));
         }
-        let mut at = 0;
-        for line in 0..bh {
-            for (i, c) in channels.iter().enumerate() {
-                let (n, bytes_per_sample) = rows[line * channels.len() + i];
-                let size = n * bytes_per_sample;
-                let row = &plain[at..at + size];
-                at += size;
-                let Some(p) = planes[i].as_mut().filter(|_| n > 0) else {
-                    continue;
-                };
-                let (sx, sy) = (c.sampling.0.max(1), c.sampling.1.max(1));
-                let py = (y0 + line) / sy;
-                let start = py * p.width + x0 / sx;
-                let dst = &mut p.samples[start..start + n];
-                match c.sample_type {
-                    SampleType::F16 => {
-                        for (d, s) in dst.iter_mut().zip(row.chunks_exact(2)) {
-                            *d = f16::from_le_bytes([s[0], s[1]]).to_f32();
-                        }
+        scatter(plain, &rows, channels, &mut planes, (x0, y0, bh));
+    }
+    Ok(planes.into_iter().flatten().collect())
+}
+
+/// A plane of zeros, at its channel's resolution, for each channel of `header` that is
+/// `wanted` (None for the others): an error where a subsampled channel's grid does not
+/// divide the level's data window.
+fn empty_planes(
+    header: &Header,
+    level: (usize, usize),
+    wanted: &[&str],
+) -> std::result::Result<Vec<Option<Plane>>, String> {
+    let (lw, lh) = level_size(header, level);
+    let origin = header.own_attributes.layer_position;
+    let channels = &header.channels.list;
+    let mut planes: Vec<Option<Plane>> = Vec::with_capacity(channels.len());
+    for c in channels {
+        let (sx, sy) = (c.sampling.0.max(1), c.sampling.1.max(1));
+        // OpenEXR's rule: a subsampled channel's grid divides the data window.
+        if origin.0.rem_euclid(sx as i32) != 0
+            || origin.1.rem_euclid(sy as i32) != 0
+            || lw % sx != 0
+            || lh % sy != 0
+        {
+            return Err(format!(
+                "channel {:?} is sampled every {sx} x {sy} texels, which does not divide the \
+                 data window",
+                super::select::text(&c.name)
+            ));
+        }
+        let name = super::select::text(&c.name);
+        planes.push(wanted.contains(&name.as_str()).then(|| Plane {
+            name,
+            width: lw / sx,
+            height: lh / sy,
+            samples: vec![0.0; (lw / sx) * (lh / sy)],
+        }));
+    }
+    Ok(planes)
+}
+
+/// Scatters one decompressed block (`plain`, its samples per line and channel as `rows`
+/// say) of `bh` lines from (`x0`, `y0`) into the planes wanted.
+fn scatter(
+    plain: &[u8],
+    rows: &[(usize, usize)],
+    channels: &[ChannelDescription],
+    planes: &mut [Option<Plane>],
+    (x0, y0, bh): (usize, usize, usize),
+) {
+    let mut at = 0;
+    for line in 0..bh {
+        for (i, c) in channels.iter().enumerate() {
+            let (n, bytes_per_sample) = rows[line * channels.len() + i];
+            let size = n * bytes_per_sample;
+            let row = &plain[at..at + size];
+            at += size;
+            let Some(p) = planes[i].as_mut().filter(|_| n > 0) else {
+                continue;
+            };
+            let (sx, sy) = (c.sampling.0.max(1), c.sampling.1.max(1));
+            let py = (y0 + line) / sy;
+            let start = py * p.width + x0 / sx;
+            let dst = &mut p.samples[start..start + n];
+            match c.sample_type {
+                SampleType::F16 => {
+                    for (d, s) in dst.iter_mut().zip(row.chunks_exact(2)) {
+                        *d = f16::from_le_bytes([s[0], s[1]]).to_f32();
                     }
-                    SampleType::F32 => {
-                        for (d, s) in dst.iter_mut().zip(row.chunks_exact(4)) {
-                            *d = f32::from_le_bytes(s.try_into().unwrap());
-                        }
+                }
+                SampleType::F32 => {
+                    for (d, s) in dst.iter_mut().zip(row.chunks_exact(4)) {
+                        *d = f32::from_le_bytes(s.try_into().unwrap());
                     }
-                    SampleType::U32 => {
-                        for (d, s) in dst.iter_mut().zip(row.chunks_exact(4)) {
-                            *d = u32::from_le_bytes(s.try_into().unwrap()) as f32;
-                        }
+                }
+                SampleType::U32 => {
+                    for (d, s) in dst.iter_mut().zip(row.chunks_exact(4)) {
+                        *d = u32::from_le_bytes(s.try_into().unwrap()) as f32;
                     }
                 }
             }
         }
     }
-    Ok(planes.into_iter().flatten().collect())
 }
