@@ -114,8 +114,9 @@ mod tests {
         assert_eq!(at(-Vec3::Y), Vec3::ZERO);
     }
 
-    /// The GGX lobe integrates to at most the light: a white metal facing the sun, summed over
-    /// the views of the hemisphere with its cosine, reflects at most E (energy kept).
+    /// The GGX lobe integrates to at most the light: a white metal lit by the sun, summed over
+    /// the views of the hemisphere with their cosine, reflects at most E n.l (energy kept), and
+    /// at least single scattering's albedo at roughness 1 (about 0.32 of it).
     #[test]
     fn the_specular_lobe_keeps_energy() {
         let s = Sun {
@@ -137,7 +138,7 @@ mod tests {
             }
             let e = s.direction.y;
             assert!(
-                sum <= e * 1.001 && sum > 0.4 * e,
+                sum <= e * 1.001 && sum > 0.28 * e,
                 "{roughness}: {sum} of {e}"
             );
         }

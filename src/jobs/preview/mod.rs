@@ -255,6 +255,11 @@ impl PreviewJob {
         let read = self.read();
         let mut input =
             chain::plan(std::slice::from_ref(&self.env), self.from, &read)?.working_bytes();
+        if self.sun {
+            // The faces the sun is taken out of and the sampler made from them: about the
+            // input's bytes again.
+            input = input.saturating_mul(2);
+        }
         let mut textures: Vec<&PathBuf> = self.decal.iter().chain(&self.control).collect();
         if self.decal.is_none() {
             textures.extend(materials.iter().filter_map(|m| m.decal.as_ref()));
