@@ -60,6 +60,10 @@ if [ -d "$real" ]; then
     cf preview "$real/hdr/studio.hdr" -o "$out/preview_pbr_roughness.png" \
         --material pbr --size 192 --grid-roughness 0,0.25,0.5,0.75,1 --grid-metallic 0,1 \
         --tonemap aces --exposure -2 --yaw 40 --pitch 10
+    # Esplanade's sun taken out and shone as a light (docs/engines.md, the sun as a light): the
+    # grey ball on a grey floor and the sun's shadow, the sun nearly overhead.
+    cf preview "$real/hdr/esplanade.hdr" -o "$out/preview_sun.png" --material pbr --sun --ground \
+        --size 256 --pitch 25 --distance 6 --tonemap aces
 else
-    echo "skipped: preview_pbr_roughness.png needs $real (not in a clone)" >&2
+    echo "skipped: preview_pbr_roughness.png and preview_sun.png need $real (not in a clone)" >&2
 fi

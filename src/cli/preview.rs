@@ -115,6 +115,14 @@ pub struct Args {
     /// prefiltered with that mapping).
     #[arg(long, value_enum)]
     pub target: Option<Engine>,
+    /// pbr materials: take ENV's sun out of the map and shine it as a directional light
+    /// (Lambert and GGX), as `ibl --sun` hands it to an engine.
+    #[arg(long)]
+    pub sun: bool,
+    /// pbr materials: a grey floor under the sphere, lit by the map and the sun (--sun), with
+    /// the sphere's shadow.
+    #[arg(long)]
+    pub ground: bool,
     /// Layout of ENV (detected from the aspect ratio; square images need sphere, angular or
     /// octahedral).
     #[arg(long, value_enum)]
@@ -223,6 +231,7 @@ pub fn job(a: Args) -> Result<PreviewJob> {
             .unwrap_or_else(|| PreviewJob::default_samples(&output)),
         background: parse_background(&a.background)?,
         refraction: a.refraction,
+        ground: a.ground,
     };
     let job = PreviewJob {
         from: a.from,
@@ -237,6 +246,7 @@ pub fn job(a: Args) -> Result<PreviewJob> {
         max_lod_bias: a.max_lod_bias,
         tone: (a.exposure, a.tonemap),
         target: a.target,
+        sun: a.sun,
         limits: a.limits.limits(),
         ..PreviewJob::new(env, output)
     };

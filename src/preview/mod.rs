@@ -15,7 +15,8 @@
 //! `dispersion` materials with the path through the solid sphere ([`glass`]), per fragment.
 //!
 //! The `pbr` material is not the texts': glTF's metallic-roughness parameters shaded with the
-//! split-sum approximation engines use ([`pbr`]), its level chosen by roughness.
+//! split-sum approximation engines use ([`pbr`]), its level chosen by roughness; with
+//! `--sun` the map's sun is taken out and shone back as a directional light ([`sun`]).
 //!
 //! Level of detail: with a prefiltered chain, each lookup picks the level a GPU would, from
 //! the derivatives of its lookup vector across neighbouring pixels projected on the selected
@@ -30,6 +31,7 @@ pub mod grid;
 pub mod material;
 pub mod pbr;
 pub mod sphere;
+pub mod sun;
 
 // The renderer in the order a frame flows: what to draw (options), the texts' programs
 // (shader), the per-vertex rasterizer (raster), the loop over pixels (render), and reading

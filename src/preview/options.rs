@@ -120,6 +120,10 @@ pub struct Options {
     /// The texts' single refraction or the solid sphere's exact path (per fragment only), for
     /// materials whose file does not say.
     pub refraction: Refraction,
+    /// A grey floor under the sphere (y = -1) where the background would show, lit by the
+    /// pbr lighting: the map's irradiance facing up and the sun (`--sun`) where the sphere
+    /// does not shadow it.
+    pub ground: bool,
 }
 
 impl Default for Options {
@@ -137,6 +141,7 @@ impl Default for Options {
             samples: 1,
             background: Background::Env,
             refraction: Refraction::Texts,
+            ground: false,
         }
     }
 }

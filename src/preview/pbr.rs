@@ -11,6 +11,9 @@
 //! - diffuse = c_diff E(N) / pi, E the irradiance from the map's 9 SH coefficients (Lambert:
 //!   radiance out = albedo E / pi), clamped at 0 where the SH rings below it.
 //!
+//! - with `preview --sun`, the sun's own terms ([`super::sun`]) added: Lambert and GGX of a
+//!   directional light.
+//!
 //! Single scattering (no multiscatter energy compensation), and the diffuse term is not
 //! weighed by 1 - F: the sum of the two lobes as UE4 shades them.
 
@@ -18,6 +21,7 @@
 
 use super::load::LoadedEnv;
 use super::material::Material;
+use super::sun::Sun;
 use crate::cube::{CubeMap, CubeSampler, Environment};
 use crate::error::{Error, Result};
 use crate::filter::RoughnessMapping;
@@ -131,6 +135,8 @@ pub struct SplitSum {
     /// Irradiance over pi, as SH coefficients per channel.
     irradiance_over_pi: [[f64; 3]; 9],
     dfg: &'static Image,
+    /// The sun taken out of the map, shone as a directional light (`preview --sun`).
+    sun: Option<Sun>,
 }
 
 impl SplitSum {
@@ -141,7 +147,19 @@ impl SplitSum {
             mapping,
             irradiance_over_pi: filter::sh::irradiance_over_pi(radiance_sh),
             dfg: dfg_table(),
+            sun: None,
         }
+    }
+
+    /// The same lighting with `sun` added as a directional light ([`Sun::shade`]): for a map
+    /// whose sun was taken out ([`super::sun::take_out`]).
+    pub fn with_sun(self, sun: Option<Sun>) -> SplitSum {
+        SplitSum { sun, ..self }
+    }
+
+    /// The directional light added to the map's, if any.
+    pub fn sun(&self) -> Option<&Sun> {
+        self.sun.as_ref()
     }
 
     /// Split-sum lighting for a chain whose level 0 is `cube`'s (its SH as the `irradiance`
@@ -215,8 +233,12 @@ impl SplitSum {
         } else {
             env.lookup(r, self.lod(m.roughness) + bias).truncate()
         };
-        let diffuse = base * (1.0 - m.metallic) * self.irradiance_over_pi(n);
-        diffuse + prefiltered * (f0 * a + Vec3::splat(b))
+        let c_diff = base * (1.0 - m.metallic);
+        let diffuse = c_diff * self.irradiance_over_pi(n);
+        let direct = self.sun.map_or(Vec3::ZERO, |s| {
+            s.shade(c_diff, f0, m.roughness, n, v.normalize_or_zero())
+        });
+        diffuse + prefiltered * (f0 * a + Vec3::splat(b)) + direct
     }
 }
 

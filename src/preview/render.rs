@@ -69,9 +69,11 @@ pub fn render_lit<E: Environment + ?Sized>(
     let inv_s = 1.0 / s as f32;
     let raster = (opts.shading == Shading::PerVertex)
         .then(|| setup_raster(&shader, &cam, opts.tessellation, &offsets));
-    let background = |d: Vec3| match opts.background {
-        Background::Env => env.lookup(d, 0.0).truncate().extend(1.0),
-        Background::Color(c) => c,
+    let floor = split_sum.filter(|_| opts.ground);
+    let background = |d: Vec3| match (floor.and_then(|s| ground(s, cam.eye, d)), opts.background) {
+        (Some(c), _) => c,
+        (None, Background::Env) => env.lookup(d, 0.0).truncate().extend(1.0),
+        (None, Background::Color(c)) => c,
     };
     let per_fragment =
         |sx: f32, sy: f32| fragment(&shader, &cam, sx, sy).unwrap_or_else(&background);
@@ -127,6 +129,13 @@ pub fn render_lit<E: Environment + ?Sized>(
 fn refuse(split_sum: Option<&SplitSum>, material: &Material, opts: &Options) -> Result<()> {
     opts.validate()?;
     material::validate(material)?;
+    if opts.ground && material.model != material::Model::Pbr {
+        return Err(Error::usage(format!(
+            "{} is lit by the pbr lighting: material \"{}\" is not pbr",
+            param("ground"),
+            material.name
+        )));
+    }
     if material.model == material::Model::Pbr && split_sum.is_none() {
         return Err(Error::usage(format!(
         "material \"{}\" is pbr: it needs split-sum lighting (preview::render_lit with a preview::pbr::SplitSum)",
@@ -147,6 +156,28 @@ fn refuse(split_sum: Option<&SplitSum>, material: &Material, opts: &Options) -> 
     )));
     }
     Ok(())
+}
+
+/// Albedo of the `--ground` floor: a grey that neither a white sphere nor a dark one hides.
+pub const GROUND_ALBEDO: f32 = 0.5;
+
+/// The floor y = -1 seen along `d` from `eye` (None: `d` does not reach it): Lambertian, lit
+/// by the map's irradiance facing up (the sphere's occlusion of the sky left out, as engines
+/// leave it to ambient occlusion) and by the sun where the sphere does not stand between.
+fn ground(split: &SplitSum, eye: Vec3, d: Vec3) -> Option<Vec4> {
+    let t = (-1.0 - eye.y) / d.y;
+    if !(d.y < 0.0 && t > 0.0) {
+        return None;
+    }
+    let p = eye + d * t;
+    let mut e = split.irradiance_over_pi(Vec3::Y);
+    if let Some(s) = split.sun() {
+        let l = s.direction;
+        if l.y > 0.0 && sphere::hit(p, l).is_none() {
+            e += s.irradiance * (l.y / std::f32::consts::PI);
+        }
+    }
+    Some((e * GROUND_ALBEDO).extend(1.0))
 }
 
 /// One sample of the per-fragment path: the vertex stage at the exact hit, and at the points

@@ -1,15 +1,18 @@
 // Renders ibl --sun's scene in three.js (npm `three`) in headless Chromium: a white diffuse
-// sphere (radius 1 at the origin) on a ground plane (y = -1), lit once by the full map alone
-// and once by the map without its sun plus the snippet's DirectionalLight (its shadow on):
+// sphere (radius 1 at the origin) on a ground plane (y = -1), seen from (0, 5, 7) looking at
+// the sphere's centre (as preview's --pitch 35.54 --distance 8.602 --fov 45 sees it), lit once
+// by the full map alone and once by the map without its sun plus the snippet's
+// DirectionalLight (its shadow on):
 //   node three_sun.cjs FULL.hdr SUNLESS.hdr SUN.json
 // SUN.json is ibl --sun's sun.json (engine_direction, engine_intensity, engine_color). Prints
 // one JSON line: for each render the sphere's mean radiance (RGB, linear, over the disc it
 // covers on screen) and the ground's luminance where the sun's shadow of the sphere falls and
-// on the sunlit side opposite; or {"error": "..."}. Needs puppeteer-core and three
+// on the sunlit side opposite; the same with a diffuse-only material (full_diffuse,
+// sun_diffuse); or {"error": "..."}. Needs puppeteer-core and three
 // (target/tools) and chromium.
 'use strict';
 const fs = require('fs');
-const { IMPORTS, withPage } = require('./three_page.cjs');
+const { ORIGIN, IMPORTS, withPage } = require('./three_page.cjs');
 
 const PAGE = `<!doctype html>${IMPORTS}
 <script type="module">
@@ -20,13 +23,17 @@ const renderer = new THREE.WebGLRenderer();
 renderer.shadowMap.enabled = true;
 renderer.shadowMap.type = THREE.PCFSoftShadowMap;
 const load = (url) => new Promise((ok, fail) => new HDRLoader().setDataType(THREE.FloatType).load(url, ok, undefined, fail));
-window.render = async (mapUrl, sun) => {
+window.render = async (mapUrl, sun, diffuseOnly) => {
   const tex = await load(mapUrl);
   tex.mapping = THREE.EquirectangularReflectionMapping;
   const pmrem = new THREE.PMREMGenerator(renderer);
   const scene = new THREE.Scene();
   scene.environment = pmrem.fromEquirectangular(tex).texture;
-  const white = new THREE.MeshStandardMaterial({ color: 0xffffff, roughness: 1, metalness: 0 });
+  // Diffuse only: specularIntensity 0 makes F0 = F90 = 0, so no specular lobe and no (1 - F)
+  // on the diffuse one: Lambert alone, the map's light through getIBLIrradiance.
+  const white = diffuseOnly
+    ? new THREE.MeshPhysicalMaterial({ color: 0xffffff, roughness: 1, metalness: 0, specularIntensity: 0 })
+    : new THREE.MeshStandardMaterial({ color: 0xffffff, roughness: 1, metalness: 0 });
   const ball = new THREE.Mesh(new THREE.SphereGeometry(1, 96, 48), white);
   ball.castShadow = true;
   scene.add(ball);
@@ -48,7 +55,7 @@ window.render = async (mapUrl, sun) => {
   }
   const camera = new THREE.PerspectiveCamera(45, W / H, 0.1, 100);
   camera.position.set(0, 5, 7);
-  camera.lookAt(0, -0.5, 0);
+  camera.lookAt(0, 0, 0);
   camera.updateMatrixWorld();
   const rt = new THREE.WebGLRenderTarget(W, H, { type: THREE.FloatType });
   renderer.setRenderTarget(rt);
@@ -97,8 +104,12 @@ window.pageReady = true;
   const serve = (rel) => rel.startsWith('file/') && files[Number(rel.split('/')[1])];
   await withPage(PAGE, serve, async (tab) => {
     await tab.evaluate((d) => { window.sunDir = d; }, sun.engine_direction);
-    const a = await tab.evaluate(() => window.render(location.origin + '/file/0/x.hdr', null));
-    const b = await tab.evaluate((s) => window.render(location.origin + '/file/1/x.hdr', s), sun);
-    console.log(JSON.stringify({ full: a, sun: b }));
+    const url = (k) => `${ORIGIN}file/${k}/x.hdr`;
+    const run = (k, s, d) => tab.evaluate((u, s, d) => window.render(u, s, d), url(k), s, d);
+    const a = await run(0, null, false);
+    const b = await run(1, sun, false);
+    const ad = await run(0, null, true);
+    const bd = await run(1, sun, true);
+    console.log(JSON.stringify({ full: a, sun: b, full_diffuse: ad, sun_diffuse: bd }));
   });
 })().catch((e) => { console.log(JSON.stringify({ error: String(e) })); process.exit(1); });

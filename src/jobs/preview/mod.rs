@@ -10,6 +10,7 @@ use crate::io::{self, FileFormat, Limits, ReadOptions, WriteOptions};
 use crate::layout::Kind;
 use crate::output::{self, Destination, Files};
 use crate::preview::material::{self, Material, Model};
+use crate::preview::sun::Sun;
 use crate::preview::{self, pbr, Options};
 use crate::tonemap::Tonemap;
 use std::path::PathBuf;
@@ -63,6 +64,9 @@ pub struct PreviewJob {
     pub tone: (f32, Tonemap),
     /// pbr materials: read the chain with this engine's roughness mapping.
     pub target: Option<Engine>,
+    /// pbr materials: the map's sun taken out and shone as a directional light
+    /// ([`crate::internals::preview::sun`]), as `ibl --sun` hands it to an engine.
+    pub sun: bool,
     /// Limits on the inputs and the memory budget.
     pub limits: Limits,
 }
@@ -89,6 +93,7 @@ impl PreviewJob {
             max_lod_bias: 4.0,
             tone: (0.0, Tonemap::None),
             target: None,
+            sun: false,
             limits: Limits::default(),
         }
     }
@@ -162,6 +167,18 @@ impl PreviewJob {
                     param(name)
                 )));
             }
+        }
+        let lit = [(self.sun, "sun"), (self.view.ground, "ground")];
+        if let (Some(m), Some((_, flag))) = (
+            materials.iter().find(|m| m.model != Model::Pbr),
+            lit.iter().find(|(on, _)| *on),
+        ) {
+            return Err(Error::usage(format!(
+                "{} needs pbr materials, which the light shades (pbr, gold, copper, plastic-glossy, plastic-rough or a file with model = \"pbr\"); \"{}\" has model \"{}\"",
+                param(flag),
+                m.name,
+                m.model.name()
+            )));
         }
         if let Some(e) = self.target {
             if !materials.iter().any(|m| m.model == Model::Pbr) {
@@ -242,6 +259,11 @@ impl PreviewJob {
     fn estimate_with(&self, env: &Input, materials: &[Material]) -> Result<u64> {
         let read = self.read();
         let mut input = env.plan_bytes();
+        if self.sun {
+            // The faces the sun is taken out of and the sampler made from them: about the
+            // input's bytes again.
+            input = input.saturating_mul(2);
+        }
         let mut textures: Vec<&PathBuf> = self.decal.iter().chain(&self.control).collect();
         if self.decal.is_none() {
             textures.extend(materials.iter().filter_map(|m| m.decal.as_ref()));
@@ -283,6 +305,7 @@ impl Job for PreviewJob {
             self.estimate_with(&input, &materials)?,
         )?;
         let (env, notes) = preview::load_environment(&input)?;
+        let (env, sun) = self.take_sun(env, progress, &mut warnings);
         for w in notes {
             warnings.push(w);
         }
@@ -290,7 +313,8 @@ impl Job for PreviewJob {
         let textures = cells::load_textures(self, &materials, progress, &mut inputs)?;
         progress.stage("decode");
         let split_sum = if materials.iter().any(|m| m.model == Model::Pbr) {
-            let setup = pbr::prepare(&env, &self.env, self.target)?;
+            let mut setup = pbr::prepare(&env, &self.env, self.target)?;
+            setup.split_sum = setup.split_sum.with_sun(sun.as_ref().map(Sun::from));
             if let Some(w) = &setup.warning {
                 warnings.push(w);
             }
@@ -332,6 +356,41 @@ impl Job for PreviewJob {
 
     fn limits_mut(&mut self) -> &mut crate::io::Limits {
         &mut self.limits
+    }
+}
+
+impl PreviewJob {
+    /// With `sun`, the map's sun taken out of `env` and returned as a light (a warning when
+    /// the map has none); else `env` as it is.
+    fn take_sun(
+        &self,
+        env: preview::LoadedEnv,
+        progress: &dyn Progress,
+        warnings: &mut Warnings<'_>,
+    ) -> (preview::LoadedEnv, Option<crate::flux::sun::Light>) {
+        if !self.sun {
+            return (env, None);
+        }
+        let (env, light) = preview::sun::take_out(env);
+        progress.stage("sun");
+        match &light {
+            Some(l) => progress.note(&format!(
+                "{}: the sun towards ({:.4}, {:.4}, {:.4}), irradiance ({:.4}, {:.4}, {:.4}), taken out of the map and shone as a directional light",
+                self.env.display(),
+                l.direction.x,
+                l.direction.y,
+                l.direction.z,
+                l.irradiance[0],
+                l.irradiance[1],
+                l.irradiance[2]
+            )),
+            None => warnings.push(format!(
+                "{}: --sun: the map has no sun (no compact light holds {:.0}% of the light facing it): rendered with the map alone",
+                self.env.display(),
+                crate::flux::sun::MIN_SHARE * 100.0
+            )),
+        }
+        (env, light)
     }
 }
 

@@ -9,7 +9,7 @@ mod engines;
 mod one_target;
 mod readers;
 mod snippets;
-mod sun;
+pub(crate) mod sun;
 
 use crate::common::{self, run, stderr};
 use cubeforge::internals::chain::LevelsFile;

@@ -5,6 +5,7 @@
 
 mod brute;
 mod inputs;
+mod sun;
 
 use brute::{
     brute_irradiance_over_pi, brute_specular, exact_prefiltered, hit_sphere, pixel_of, pixel_ray,
