@@ -1,7 +1,7 @@
 //! One input: the paths a job reads, opened from their headers into one value that knows what
 //! they are, what loading them takes (planned against the memory budget before any file is
 //! decoded) and how they load: whole, one level of a chain, a chain folder's every level, or a
-//! large OpenEXR panorama reduced as it is decoded. Every job reads through it, so planning
+//! large OpenEXR or .hdr panorama reduced as it is decoded. Every job reads through it, so planning
 //! and loading are never paired by hand and a load's warnings are gathered in one place.
 
 #![warn(missing_docs)]
@@ -31,7 +31,7 @@ enum Load {
     Whole,
     /// Level `n` of a chain folder, container or mip-mapped OpenEXR file, alone.
     Level(usize),
-    /// An OpenEXR panorama box-reduced band by band as it is decoded ([`stream`]).
+    /// An OpenEXR or .hdr panorama box-reduced band by band as it is decoded ([`stream`]).
     Reduced(stream::Plan),
 }
 
@@ -72,7 +72,7 @@ impl Input {
         Ok(Input::planned(paths, from, read, Load::Level(level), plan))
     }
 
-    /// Opens one OpenEXR panorama to be reduced as it is decoded, for outputs whose finest
+    /// Opens one OpenEXR or .hdr panorama to be reduced as it is decoded, for outputs whose finest
     /// texel spans `min_footprint(face size)` radians; anything else is opened whole.
     pub fn open_reduced(
         paths: &[PathBuf],

@@ -18,7 +18,7 @@ use super::{Loaded, Source};
 use crate::error::Result;
 use crate::flux::{Grid, PeakRow, Peaks, RowStats};
 use crate::image::Image;
-use crate::io::exr::stream::{Bands, Shape};
+use crate::io::bands::{self, BandSource, Shape};
 use crate::io::ReadOptions;
 use crate::layout::{equirect, Kind, Projection};
 use glam::Vec4;
@@ -88,15 +88,15 @@ impl Plan {
     }
 }
 
-/// How `path` would be loaded reduced, when it is an OpenEXR equirect of the common layout
-/// that reduces for outputs whose finest texel spans `min_footprint(face size)` radians; None
-/// where it is not (the caller loads it whole). The size limits are checked, not the memory.
+/// How `path` would be loaded reduced, when it is an equirect `io::bands` decodes in bands
+/// (OpenEXR of the common layout, Radiance .hdr) that reduces for outputs whose finest texel
+/// spans `min_footprint(face size)` radians; None where it is not (the caller loads it whole). The size limits are checked, not the memory.
 pub fn plan(
     path: &Path,
     opts: &ReadOptions,
     min_footprint: impl FnOnce(usize) -> f32,
 ) -> Result<Option<Plan>> {
-    let Some(shape) = crate::io::exr::stream::shape(path, opts)? else {
+    let Some(shape) = bands::shape(path, opts)? else {
         return Ok(None);
     };
     let (w, h) = (shape.width, shape.height);
@@ -107,7 +107,7 @@ pub fn plan(
     Ok((factor >= 2).then_some(Plan { shape, factor }))
 }
 
-/// Loads `path` as a reduced panorama when it is an OpenEXR equirect of the common layout
+/// Loads `path` as a reduced panorama when it is an equirect `io::bands` decodes in bands
 /// that reduces by `factor` for outputs whose finest texel spans `min_footprint` radians;
 /// None where it is not (the caller loads it whole).
 pub fn load(path: &Path, opts: &ReadOptions, min_footprint: f32) -> Result<Option<Loaded>> {
@@ -119,7 +119,7 @@ pub fn load(path: &Path, opts: &ReadOptions, min_footprint: f32) -> Result<Optio
 
 /// [`load`] as `plan` planned it; None where the file no longer fits the plan.
 pub(crate) fn load_planned(path: &Path, opts: &ReadOptions, plan: &Plan) -> Result<Option<Loaded>> {
-    let loaded = crate::io::exr::stream::with_bands(path, opts, |b| {
+    let loaded = bands::with_bands(path, opts, |b| {
         if b.size() != (plan.shape.width, plan.shape.height) {
             return Ok(None);
         }
@@ -129,7 +129,7 @@ pub(crate) fn load_planned(path: &Path, opts: &ReadOptions, plan: &Plan) -> Resu
 }
 
 /// The two passes over the bands (see the module's text).
-fn reduce(b: &Bands, path: &Path, f: usize) -> Result<Loaded> {
+fn reduce(b: &BandSource, path: &Path, f: usize) -> Result<Loaded> {
     let (w, h) = b.size();
     let grid = Grid::Projection(Projection::Equirect, w, h);
     let lines = b.block_lines().next_power_of_two().max(f).max(MIN_BAND);

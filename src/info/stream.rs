@@ -1,4 +1,4 @@
-//! `info` of a large OpenEXR panorama in one streamed pass (issue 47): its bands decoded as
+//! `info` of a large OpenEXR or Radiance .hdr panorama in one streamed pass (issue 47): its bands decoded as
 //! stored on every thread and folded into each row's statistics and flux sums as they come,
 //! the whole float image (16 bytes a texel, 2 GB at 16K) never held. The rows are added in
 //! order, as the whole image's are, so the report is the same to the bit. The same pass keeps
@@ -11,7 +11,7 @@ use crate::convert::{stream, MapKind};
 use crate::error::Result;
 use crate::flux::{self, Grid};
 use crate::image::Image;
-use crate::io::{exr, ReadOptions};
+use crate::io::{bands, ReadOptions};
 use crate::layout::{self, Kind, Projection};
 use glam::Vec4;
 use std::path::Path;
@@ -32,15 +32,15 @@ const MIN_BAND: usize = 32;
 /// One row's statistics and flux sums.
 type Row = (Tally, ([f64; 3], f64));
 
-/// The report of `path` read in bands, when it is an OpenEXR panorama, ball, angular or
-/// octahedral map of the common layout (`from`, or a shape that says which) that is large or
-/// does not fit the memory budget whole; None otherwise (the caller reads it whole).
+/// The report of `path` read in bands, when it is a panorama, ball, angular or octahedral
+/// map (`from`, or a shape that says which) that `io::bands` decodes in bands (OpenEXR of the
+/// common layout, Radiance .hdr) and that is large or does not fit the memory budget whole; None otherwise (the caller reads it whole).
 pub(super) fn describe(
     path: &Path,
     from: Option<Kind>,
     opts: &ReadOptions,
 ) -> Result<Option<Report>> {
-    let Some(shape) = exr::stream::shape(path, opts)? else {
+    let Some(shape) = bands::shape(path, opts)? else {
         return Ok(None);
     };
     let (w, h) = (shape.width, shape.height);
@@ -85,7 +85,7 @@ pub(super) fn describe(
             copy.as_ref().map_or(Vec::new(), |c| c.band(y0, rows)),
         )
     };
-    let read = exr::stream::with_bands(path, opts, |b| {
+    let read = bands::with_bands(path, opts, |b| {
         if b.size() != (w, h) {
             return Ok(None); // changed since its header was read: read whole
         }

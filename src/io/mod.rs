@@ -5,6 +5,8 @@
 
 pub mod atomic;
 pub mod babylon_env;
+mod band_shape;
+pub mod bands;
 mod container;
 pub mod dds;
 pub mod exr;

@@ -51,6 +51,7 @@ mod sh_bands;
 mod simd;
 mod sizes;
 mod streamed;
+mod streamed_hdr;
 mod streamed_info;
 mod sun;
 mod surface;

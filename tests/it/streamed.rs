@@ -1,6 +1,6 @@
 //! Issue 47: a panorama reduced as it is decoded (`convert::stream`) gives the cube the whole
 //! image gives: the same flux, the same texels within the antialiasing's difference, the
-//! same bytes on any thread count. On the real ZIP and DWAB panoramas (skipped when
+//! same bytes on any thread count. On the real ZIP, DWAB and Radiance .hdr panoramas (skipped when
 //! ../shared/fixtures/real is absent).
 
 use crate::common;
@@ -29,6 +29,8 @@ fn panoramas() -> Vec<PathBuf> {
         "zip/park.exr",
         "zip/city.exr",
         "dwab/venice.exr",
+        "hdr/esplanade.hdr",
+        "hdr/park.hdr",
     ]
     .iter()
     .map(|f| real.join(f))

@@ -1,4 +1,4 @@
-//! Issue 47, items 2 and 4: a large OpenEXR panorama read in bands by `info` (its report the
+//! Issue 47, items 2 and 4: a large OpenEXR (or .hdr) panorama read in bands by `info` (its report the
 //! whole read's, to the bit) and by `ibl` (planned, and let through, by what the bands and
 //! the reduced copy take, not the whole image). A budget the whole image does not fit forces
 //! the streamed path on small files.
@@ -140,6 +140,8 @@ fn real_panoramas_streamed_give_the_same_info() {
         ("zip/night.exr", None),
         ("dwab/venice.exr", None),
         ("dwab/sunrise.exr", None),
+        ("hdr/esplanade.hdr", None),
+        ("hdr/venice.hdr", None),
         ("ball/park_angular.exr", Some("angular")),
         ("ball/studio_mirrorball.exr", Some("sphere")),
     ];

@@ -6,6 +6,7 @@ use super::checks::{read_chunks, read_meta, RawChunk};
 use super::{blocks, fast_layout, select, Layout};
 use crate::error::{Error, Result};
 use crate::image::ColorSpace;
+use crate::io::band_shape::Shape;
 use crate::io::{FileFormat, Meta, ReadOptions};
 use exr::meta::MetaData;
 use glam::Vec4;
@@ -20,37 +21,6 @@ pub struct Bands<'a> {
     zstd: bool,
     sanitize: bool,
     pixel_format: String,
-}
-
-/// What decoding a file in bands takes, from its header alone: jobs plan their memory with it
-/// before the file is read.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Shape {
-    /// Width and height in texels.
-    pub width: usize,
-    /// Height in texels.
-    pub height: usize,
-    /// The most lines one block holds: bands are a multiple of it.
-    pub block_lines: usize,
-    /// The file's size: it is read whole before its bands are decoded.
-    pub file_bytes: u64,
-}
-
-impl Shape {
-    /// The band of rows for folds that want at least `lines` rows: a power of two, a
-    /// multiple of the blocks.
-    pub fn band_lines(&self, lines: usize) -> usize {
-        self.block_lines.next_power_of_two().max(lines)
-    }
-
-    /// Bytes in use while its bands of `lines` rows are decoded on every thread: the file,
-    /// and for each thread a band's texels and its decompressed samples (at most as many
-    /// bytes again).
-    pub fn decode_bytes(&self, lines: usize) -> u64 {
-        let band = (lines * self.width) as u64 * 32;
-        let threads = rayon::current_num_threads() as u64;
-        self.file_bytes.saturating_add(threads.saturating_mul(band))
-    }
 }
 
 impl Bands<'_> {

@@ -14,6 +14,7 @@
 
 mod lines;
 mod runs;
+pub mod stream;
 mod texels;
 mod write;
 
@@ -29,6 +30,7 @@ use crate::error::{Error, Result};
 use crate::image::{ColorSpace, Image};
 use ::image::codecs::hdr::HdrDecoder;
 use ::image::ImageDecoder;
+use glam::Vec4;
 use lines::{line_starts, scanline};
 use rayon::prelude::*;
 use std::io::Cursor;
@@ -38,29 +40,15 @@ use texels::texels;
 /// The image, or None when the image crate should read this file instead (a header it
 /// rejects, with its error message, or an empty image).
 pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(Image, Meta)>> {
-    let mut cursor = Cursor::new(bytes);
-    // A header that panics the crate's reader (caught) goes to the image crate's path too,
-    // which says why, caught likewise.
-    let (w, h) = super::guard::caught(|| HdrDecoder::new(&mut cursor).ok().map(|d| d.dimensions()))
-        .ok()??;
-    let (w, h) = (w as usize, h as usize);
+    let (w, h, first) = header(bytes)?;
     if let Err(e) = opts.limits.check(path, w as u64, h as u64) {
         return Some(Err(e));
     }
-    // The header reader stops right after the dimensions line: the pixels start there.
-    let starts = match line_starts(bytes, cursor.position() as usize, w, h) {
+    // Said here, before any pixel memory: the crate's reader would allocate the whole
+    // image first.
+    let starts = match starts(bytes, first, (w, h), path) {
         Ok(starts) => starts,
-        // Said here, before any pixel memory: the crate's reader would allocate the whole
-        // image first.
-        Err(y) => {
-            return Some(Err(Error::file(
-                path,
-                format!(
-                    "cannot decode Radiance HDR: scanline {} of {h} is truncated or malformed",
-                    y + 1
-                ),
-            )))
-        }
+        Err(e) => return Some(Err(e)),
     };
     let mut img = Image::new(w, h);
     img.pixels
@@ -68,16 +56,50 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(I
         .zip(starts.par_iter())
         .for_each_init(
             || vec![0u8; 4 * w],
-            |planes, (row, &start)| {
-                let done = scanline(bytes, start, w, Some(planes));
-                debug_assert!(done.is_some(), "a scanned line decodes");
-                let (r, rest) = planes.split_at(w);
-                let (g, rest) = rest.split_at(w);
-                let (b, e) = rest.split_at(w);
-                texels(r, g, b, e, row);
-            },
+            |planes, (row, &start)| decode_row(bytes, start, planes, row),
         );
-    let meta = Meta {
+    Some(Ok((img, meta())))
+}
+
+/// Width, height and where the pixels start, from the header as the image crate reads it;
+/// None where it rejects it (any orientation but -Y +X among them), or panics (caught), or the
+/// image is empty: the image crate's path then says why.
+fn header(bytes: &[u8]) -> Option<(usize, usize, usize)> {
+    let mut cursor = Cursor::new(bytes);
+    let (w, h) = super::guard::caught(|| HdrDecoder::new(&mut cursor).ok().map(|d| d.dimensions()))
+        .ok()??;
+    // The header reader stops right after the dimensions line: the pixels start there.
+    Some((w as usize, h as usize, cursor.position() as usize))
+}
+
+/// Where each scanline starts, or the error line naming the first bad one.
+fn starts(bytes: &[u8], first: usize, (w, h): (usize, usize), path: &Path) -> Result<Vec<usize>> {
+    line_starts(bytes, first, w, h).map_err(|y| {
+        Error::file(
+            path,
+            format!(
+                "cannot decode Radiance HDR: scanline {} of {h} is truncated or malformed",
+                y + 1
+            ),
+        )
+    })
+}
+
+/// The texels of the scanline at `start` (found by `line_starts`) into `row`, through
+/// `planes` (4 bytes a texel).
+fn decode_row(bytes: &[u8], start: usize, planes: &mut [u8], row: &mut [Vec4]) {
+    let w = row.len();
+    let done = scanline(bytes, start, w, Some(planes));
+    debug_assert!(done.is_some(), "a scanned line decodes");
+    let (r, rest) = planes.split_at(w);
+    let (g, rest) = rest.split_at(w);
+    let (b, e) = rest.split_at(w);
+    texels(r, g, b, e, row);
+}
+
+/// What `io::read` says of a .hdr file.
+pub(crate) fn meta() -> Meta {
+    Meta {
         file_format: FileFormat::Hdr,
         pixel_format: super::raster::pixel_format_name(::image::ColorType::Rgb32F, FileFormat::Hdr),
         color_space: ColorSpace::Linear,
@@ -87,6 +109,5 @@ pub fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Option<Result<(I
         declared: None,
         undo: Default::default(),
         part: None,
-    };
-    Some(Ok((img, meta)))
+    }
 }
