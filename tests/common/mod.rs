@@ -116,6 +116,17 @@ pub fn real_dir() -> Option<PathBuf> {
     }
 }
 
+/// The preview's environment of `path`, opened as the `preview` job opens it (default
+/// reading), its load notes left out.
+pub fn preview_env(path: &Path) -> cubeforge::Result<cubeforge::internals::preview::LoadedEnv> {
+    let input = cubeforge::internals::input::Input::open(
+        &[path.to_path_buf()],
+        None,
+        &ReadOptions::default(),
+    )?;
+    cubeforge::internals::preview::load_environment(&input).map(|(env, _)| env)
+}
+
 /// Reads an image file (NaN, infinite and negative values replaced by 0, as the CLI does).
 pub fn read_image(path: &Path) -> Image {
     match cubeforge::internals::convert::read(path, &ReadOptions::default()) {

@@ -122,16 +122,7 @@ fn prefilter_folder_chains_load_level_by_level() {
         r#"{"levels": [{"size": 8}, {"size": 4}, {"size": 2}, {"size": 1}]}"#,
     )
     .unwrap();
-    let env = preview::load_environment(
-        &cubeforge::internals::input::Input::open(
-            &[dir.path().to_path_buf()],
-            None,
-            &ReadOptions::default(),
-        )
-        .unwrap(),
-    )
-    .map(|(env, _)| env)
-    .unwrap();
+    let env = common::preview_env(dir.path()).unwrap();
     assert_eq!(env.levels(), 4);
     use cubeforge::internals::cube::Environment;
     assert_eq!(env.sampler.lookup(Vec3::X, 2.0).x, 2.0);
@@ -150,18 +141,7 @@ fn prefilter_folder_chains_load_level_by_level() {
         )
         .unwrap();
     }
-    let e = preview::load_environment(
-        &cubeforge::internals::input::Input::open(
-            &[dir.path().to_path_buf()],
-            None,
-            &ReadOptions::default(),
-        )
-        .unwrap(),
-    )
-    .map(|(env, _)| env)
-    .err()
-    .unwrap()
-    .to_string();
+    let e = common::preview_env(dir.path()).err().unwrap().to_string();
     assert!(e.contains("m2") && e.contains("2x2"), "{e}");
 }
 
@@ -202,15 +182,10 @@ fn command_line_renders_png_exr_and_grids() {
     ]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let got = common::read_image(Path::new(&exr));
-    let env = preview::load_environment(
-        &cubeforge::internals::input::Input::open(
-            &[Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sky.exr")).to_path_buf()],
-            None,
-            &ReadOptions::default(),
-        )
-        .unwrap(),
-    )
-    .map(|(env, _)| env)
+    let env = common::preview_env(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fixtures/sky.exr"
+    )))
     .unwrap();
     let want = preview::render(
         &env.sampler,

@@ -254,16 +254,7 @@ fn the_flag_runs_through_the_job_and_the_command_line() {
     job.view.size = 32;
     job.view.refraction = Refraction::Exact;
     job.run(&()).unwrap();
-    let env = preview::load_environment(
-        &cubeforge::internals::input::Input::open(
-            &[Path::new(sky).to_path_buf()],
-            None,
-            &Default::default(),
-        )
-        .unwrap(),
-    )
-    .map(|(env, _)| env)
-    .unwrap();
+    let env = common::preview_env(Path::new(sky)).unwrap();
     let want = preview::render(
         &env.sampler,
         &material::preset("glass").unwrap(),

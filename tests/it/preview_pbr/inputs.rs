@@ -5,7 +5,6 @@ use super::{pbr, render};
 use crate::common;
 use cubeforge::internals::cube::{CubeMap, CubeSampler, Environment};
 use cubeforge::internals::ibl::Engine;
-use cubeforge::internals::io::ReadOptions;
 use cubeforge::internals::preview::material::{self, Model};
 use cubeforge::internals::preview::pbr::LevelMapping;
 use cubeforge::internals::preview::{self, Options, Surface};
@@ -25,16 +24,7 @@ fn run_ok(args: &[&str]) {
 }
 
 fn load(path: &Path) -> preview::LoadedEnv {
-    preview::load_environment(
-        &cubeforge::internals::input::Input::open(
-            &[path.to_path_buf()],
-            None,
-            &ReadOptions::default(),
-        )
-        .unwrap(),
-    )
-    .map(|(env, _)| env)
-    .unwrap()
+    common::preview_env(path).unwrap()
 }
 
 #[test]
