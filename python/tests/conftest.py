@@ -46,3 +46,28 @@ def psnr(a, b) -> float:
     a, b = a / (1 + np.abs(a)), b / (1 + np.abs(b))
     mse = float(np.mean((a - b) ** 2))
     return float("inf") if mse == 0 else 10 * np.log10(1.0 / mse)
+
+
+def ticks_during(call) -> int:
+    """How many times another Python thread counted while `call()` ran: more than none only
+    when the call let go of the GIL."""
+    import threading
+
+    ticks, stop = [0], threading.Event()
+
+    def count():
+        while not stop.is_set():
+            ticks[0] += 1
+
+    t = threading.Thread(target=count)
+    t.start()
+    while ticks[0] == 0:
+        pass
+    before = ticks[0]
+    try:
+        call()
+    finally:
+        during = ticks[0] - before
+        stop.set()
+        t.join()
+    return during

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import cubeforge
-from conftest import REPO, run_cli
+from conftest import REPO, run_cli, ticks_during
 
 SKY = str(REPO / "fixtures" / "sky.exr")
 
@@ -57,23 +57,9 @@ def test_a_raising_callback_stops_the_job_and_writes_nothing(tmp_path):
 
 def test_a_job_releases_the_gil(tmp_path):
     """Another Python thread runs while a job works (it counts, the job's thread computes)."""
-    import threading
-
-    ticks, stop = [0], threading.Event()
-
-    def count():
-        while not stop.is_set():
-            ticks[0] += 1
-
-    t = threading.Thread(target=count)
-    t.start()
-    while ticks[0] == 0:
-        pass
-    before = ticks[0]
-    cubeforge.prefilter(SKY, tmp_path / "ggx.ktx2", filter="ggx", size=64, samples=64)
-    during = ticks[0] - before
-    stop.set()
-    t.join()
+    during = ticks_during(
+        lambda: cubeforge.prefilter(SKY, tmp_path / "ggx.ktx2", filter="ggx", size=64, samples=64)
+    )
     assert during > 1000
 
 
