@@ -19,11 +19,7 @@ fn sources() -> Vec<(String, String)> {
     files
         .into_iter()
         .map(|f| {
-            let rel = f
-                .strip_prefix(&src)
-                .unwrap()
-                .to_string_lossy()
-                .replace('\\', "/");
+            let rel = super::layers::rel_path(&src, &f);
             (rel, std::fs::read_to_string(&f).unwrap())
         })
         .collect()
