@@ -29,6 +29,21 @@ def test_huge_outputs_are_refused_not_aborted():
             call()
 
 
+def test_negative_and_enormous_sizes_are_argument_errors():
+    """They were OverflowErrors of the conversion to an unsigned size, naming nothing."""
+    pano = np.zeros((8, 16, 3), np.float32)
+    for call, name in (
+        (lambda: cubeforge.e2c(pano, face_w=-5), "face_w"),
+        (lambda: cubeforge.e2c(pano, face_w=2**64), "face_w"),
+        (lambda: cubeforge.e2p(pano, 90, 0, 0, (-1, 4)), "out_hw"),
+        (lambda: cubeforge.c2e(np.zeros((4, 24, 3), np.float32), h=-8, w=16, cube_format="horizon"), "h="),
+        (lambda: cubeforge.convert(pano, to="faces", size=-1), "size"),
+        (lambda: cubeforge.convert(pano, to="faces", size=2**64), "size"),
+    ):
+        with pytest.raises(cubeforge.ArgumentError, match=name):
+            call()
+
+
 def test_non_finite_view_angles_are_refused():
     pano = np.ones((8, 16, 3), np.float32)
     for fov, u, v in ((90, float("inf"), 0), (float("nan"), 0, 0), (90, 0, float("-inf"))):
