@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The hostile-input sweep's command-line half (the library's is tests/hostile_inputs/):
 seeded mutations of a batch manifest (TOML) run with `cubeforge batch --dry-run` and
-`--emit ninja`, and of small OpenEXR and .hdr panoramas run with `cubeforge ibl --target
+`--emit ninja`, and of small OpenEXR, .hdr and UltraHDR panoramas run with `cubeforge ibl --target
 bevy`, `info` and `prefilter` under an address-space cap (`ulimit -v`) and a timeout. A
 defect is a signal or abort, a hang past the timeout, a message of several lines or one that
 does not name the file, or a refused job that left an output behind. Not run in CI (a few
@@ -159,10 +159,10 @@ def manifests(rounds, dir_):
 
 def panoramas(rounds, dir_):
     ok = True
-    for ext, extra in (("exr", []), ("hdr", [])):
+    for ext, extra in (("exr", []), ("hdr", []), ("jpg", ["--ultrahdr"])):
         src = os.path.join(dir_, f"src.{ext}")
         p = run(["convert", os.path.join(REPO, "fixtures", "sky.exr"), "-o", src, "--to", "equirect",
-                 "--size", "64"], dir_)
+                 "--size", "64", *extra], dir_)
         assert p and p.returncode == 0, p and p.stderr
         body = open(src, "rb").read()
         rng = random.Random(hash(ext) & 0xFFFF)
