@@ -8,7 +8,10 @@
 //!
 //! The machinery (the mutator, the campaign loop, the front door) is in `hostile_inputs/`
 //! beside the campaigns: images (PNG, JPEG, TGA, HDR, EXR, KTX2, DDS), engine containers
-//! (KTX 1, Babylon .env), text, and tiny files claiming huge sizes.
+//! (KTX 1, Babylon .env), text, tiny files claiming huge sizes, the streamed paths (`info`,
+//! `ibl` and `prefilter` of OpenEXR and .hdr panoramas folded in bands, and UltraHDR) and,
+//! `#[ignore]`d, 16K panoramas in a megabyte (`big.rs`). The command line's half (batch
+//! manifests, the jobs under `ulimit -v`) is `tests/tools/hostile_sweep.py`.
 //!
 //! The same seeds give the same files on every run. `HOSTILE_ROUNDS=n` runs n times as many
 //! mutations (a long campaign), `HOSTILE_EXTRA=DIR` adds the files in DIR to it (say, progressive
@@ -16,6 +19,8 @@
 //! slowest mutation there, `HOSTILE_VERBOSE=1` prints every refusal, and every source prints
 //! its slowest mutation (for finding slow inputs by hand; no test here depends on time).
 
+#[path = "hostile_inputs/big.rs"]
+mod big;
 #[path = "hostile_inputs/claims.rs"]
 mod claims;
 #[path = "common/mod.rs"]
@@ -28,6 +33,8 @@ mod harness;
 mod images;
 #[path = "hostile_inputs/mutator.rs"]
 mod mutator;
+#[path = "hostile_inputs/streamed.rs"]
+mod streamed;
 #[path = "hostile_inputs/text.rs"]
 mod text;
 

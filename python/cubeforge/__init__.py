@@ -145,6 +145,8 @@ def convert(input: Any, output: Optional[PathLike] = None, *, to: Optional[str] 
         array = np.ascontiguousarray(input, dtype=np.float32)
         if size is None:
             size = array.shape[1] if array.ndim == 4 else max(1, array.shape[1] // 4)
+        if not 1 <= int(size) <= 16384:
+            raise ArgumentError(f"size={size}: 1 to 16384")
         return _cubeforge.convert_array(array, to or "equirect", int(size), options.get("from_"))
     if output is None:
         raise ArgumentError("convert: give output= (the CLI's -o)")

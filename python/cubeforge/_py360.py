@@ -34,6 +34,15 @@ def _nearest(mode: str) -> bool:
     raise ArgumentError(f"mode={mode!r}: cubeforge's e2c, c2e and e2p take 'bilinear' or 'nearest'")
 
 
+def _texels(name: str, value) -> int:
+    """A size in texels: a positive integer that fits 63 bits (a negative or enormous one
+    is an ArgumentError naming it, not an OverflowError from the conversion)."""
+    n = int(value)
+    if not 1 <= n < 2**63:
+        raise ArgumentError(f"{name}={value!r}: a positive number of texels")
+    return n
+
+
 def _as_float(img: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(img, dtype=np.float32)
 
@@ -59,7 +68,7 @@ def e2c(e_img: np.ndarray, face_w: int = 256, mode: str = "bilinear",
         raise ValueError("e_img must have 2 or 3 dimensions.")
     squeeze = e_img.ndim == 2
     src = e_img[..., None] if squeeze else e_img
-    w = int(face_w)
+    w = _texels("face_w", face_w)
     if cube_format == "dice":
         # Laid out as a dice by cubeforge itself: no row of faces copied into it after.
         dice = _back(_cubeforge.e2c_faces(_as_float(src), w, _nearest(mode), True), e_img.dtype)
@@ -128,7 +137,7 @@ def c2e(cubemap, h: int, w: int, mode: str = "bilinear", cube_format: str = "dic
         raise ValueError("Cubemap faces must be square.")
     # Each face as it lies (a dice's cell, a horizon's slice): float32 ones are not copied.
     faces = [np.asarray(f[..., None] if squeeze else f, dtype=np.float32) for f in faces]
-    out = _cubeforge.c2e_faces(faces, int(h), int(w), nearest)
+    out = _cubeforge.c2e_faces(faces, _texels("h", h), _texels("w", w), nearest)
     out = _back(out, dtype)
     return out[..., 0] if squeeze else out
 
@@ -157,6 +166,7 @@ def e2p(e_img: np.ndarray, fov_deg: Union[float, Tuple[float, float]], u_deg: fl
     v = float(np.deg2rad(v_deg))
     in_rot = float(np.deg2rad(in_rot_deg))
     out = _cubeforge.e2p_view(_as_float(src), h_fov, v_fov, u, v, in_rot,
-                              int(out_hw[0]), int(out_hw[1]), _nearest(mode))
+                              _texels("out_hw[0]", out_hw[0]), _texels("out_hw[1]", out_hw[1]),
+                              _nearest(mode))
     out = _back(out, e_img.dtype)
     return out[..., 0] if squeeze else out

@@ -84,6 +84,26 @@ fn images_of(py: Python<'_>, a: &PyReadonlyArrayDyn<'_, f32>) -> PyResult<Vec<Im
         .collect())
 }
 
+/// Refuses NaN and infinite values, which an array converted in memory would carry into its
+/// output (a file's are replaced by 0 as it is read, with a warning: `write` does that).
+fn finite(py: Python<'_>, images: &[Image]) -> PyResult<()> {
+    let bad = images
+        .iter()
+        .flat_map(|i| &i.pixels)
+        .filter(|p| !p.is_finite())
+        .count();
+    if bad > 0 {
+        return Err(crate::bad_arg(
+            py,
+            format!(
+                "convert: {bad} texels of the array hold NaN or infinite values: give finite \
+                 radiance (numpy.nan_to_num), or write() it, which replaces them by 0 as a file's are"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// What `cubeforge.read` returns: the pixels (an image, or each level's faces) and the file's
 /// metadata.
 #[pyfunction]
@@ -205,6 +225,7 @@ pub fn convert_array<'py>(
         return Err(crate::bad_arg(py, format!("size={size}: 1 to 16384")));
     }
     let mut images = images_of(py, &array)?;
+    finite(py, &images)?;
     let source = if images.len() == 6 {
         let faces: [Image; 6] =
             std::array::from_fn(|i| std::mem::replace(&mut images[i], Image::new(0, 0)));

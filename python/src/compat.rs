@@ -236,7 +236,8 @@ pub fn e2c_faces<'py>(
     let cell = n * c;
     // Zeroed by the allocator (fresh pages, zero until written): a dice's empty cells are
     // never touched.
-    let mut out = vec![0f32; if dice { 12 * n * cell } else { 6 * n * cell }];
+    let dims = [if dice { 12 } else { 6 }, n, n, c];
+    let mut out = crate::zeroed(py, &format!("e2c: face_w={face_w}"), &dims)?;
     py.detach(|| {
         let e = E2c::new(src, shape, n, nearest);
         if dice {
@@ -416,7 +417,7 @@ pub fn c2e_faces<'py>(
             "c2e: six square faces, and w a multiple of 8",
         ));
     }
-    let mut out = vec![0f32; h * w * c];
+    let mut out = crate::zeroed(py, &format!("c2e: h={h}, w={w}"), &[h, w, c])?;
     py.detach(|| {
         let p = padded_faces(&views, n, c);
         let tp = facetype(h, w);

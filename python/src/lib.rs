@@ -57,6 +57,25 @@ pub(crate) fn bad_arg(py: Python<'_>, text: impl Into<String>) -> PyErr {
     raise_as(py, "ArgumentError", text.into())
 }
 
+/// A zeroed output of `dims` floats for `what`, or an `ArgumentError` when their count
+/// overflows or their bytes exceed the memory budget (half of what this process may use):
+/// `e2c(face_w=10**6)` aborted the interpreter when the allocation failed.
+pub(crate) fn zeroed(py: Python<'_>, what: &str, dims: &[usize]) -> PyResult<Vec<f32>> {
+    let budget = cubeforge::Limits::default().max_memory;
+    let count = dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
+    let bytes = count.and_then(|n| n.checked_mul(4)).map(|b| b as u64);
+    match (count, bytes) {
+        (Some(n), Some(b)) if b <= budget => Ok(vec![0f32; n]),
+        _ => Err(bad_arg(
+            py,
+            format!(
+                "{what}: an output of {dims:?} floats, more than the memory budget of {} MiB",
+                budget >> 20
+            ),
+        )),
+    }
+}
+
 #[pymodule]
 fn _cubeforge(m: &Bound<'_, PyModule>) -> PyResult<()> {
     run::quiet_cancel_panics();

@@ -87,9 +87,16 @@ pub fn e2p_view<'py>(
     let src = e_img
         .as_slice()
         .map_err(|e| crate::bad_arg(py, e.to_string()))?;
+    if ![h_fov, v_fov, u, v, in_rot].iter().all(|a| a.is_finite()) {
+        return Err(crate::bad_arg(
+            py,
+            "e2p: fov_deg, u_deg, v_deg and in_rot_deg must be finite numbers",
+        ));
+    }
     let c = shape[2];
     // Zeroed by the allocator; every texel is written once below.
-    let mut out = vec![0f32; out_h * out_w * c];
+    let what = format!("e2p: out_hw=({out_h}, {out_w})");
+    let mut out = crate::zeroed(py, &what, &[out_h, out_w, c])?;
     py.detach(|| {
         let e = E2c::bare(src, shape, nearest);
         let m = camera(u, v, in_rot);

@@ -27,8 +27,10 @@ use std::sync::Mutex;
 /// Where the cache's entries live: `get` and `put` of `ac/KEY` and `cas/SHA256` under one
 /// root (an HTTP server in [`super::http`], a folder or a map in tests).
 pub trait Store: Send + Sync {
-    /// The bytes under `path`; `Ok(None)` when there are none (a miss, not a failure).
-    fn get(&self, path: &str) -> std::result::Result<Option<Vec<u8>>, String>;
+    /// The bytes under `path`; `Ok(None)` when there are none (a miss, not a failure). A body
+    /// longer than `most` bytes comes back cut after `most + 1` of them (too long to be what
+    /// the caller expects, which it refuses, never held whole: a store may send anything).
+    fn get(&self, path: &str, most: u64) -> std::result::Result<Option<Vec<u8>>, String>;
     /// Stores `bytes` under `path`.
     fn put(&self, path: &str, bytes: &[u8]) -> std::result::Result<(), String>;
     /// The store in one short phrase for warnings, never with credentials.
@@ -60,6 +62,10 @@ pub struct Cache {
 
 /// The name of the one output of a job's first entry: the files it read.
 const INPUTS: &str = "inputs.json";
+
+/// The most bytes an `ac/` entry may have: cubeforge's name a few files in a few hundred
+/// bytes; a store that sends more is refused before it fills the memory.
+const ENTRY_BYTES: u64 = 1 << 20;
 
 /// The files a job read, as its first entry's `inputs.json` keeps them.
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -132,11 +138,11 @@ impl Cache {
         }
     }
 
-    fn get(&self, path: &str) -> Option<Vec<u8>> {
+    fn get(&self, path: &str, most: u64) -> Option<Vec<u8>> {
         if self.dead.load(Ordering::Relaxed) {
             return None;
         }
-        self.store.get(path).unwrap_or_else(|e| {
+        self.store.get(path, most).unwrap_or_else(|e| {
             self.failed("cannot read", e);
             None
         })
@@ -171,7 +177,7 @@ impl Cache {
     /// The outputs named by the `ActionResult` under `key` (None: a miss, or an entry
     /// cubeforge cannot use, with a warning).
     fn entry(&self, key: &str, id: &str) -> Option<Vec<Output>> {
-        let bytes = self.get(key)?;
+        let bytes = self.get(key, ENTRY_BYTES)?;
         reapi::decode(&bytes)
             .map_err(|e| self.refuse(id, format!("{key} is {e}")))
             .ok()
@@ -180,7 +186,20 @@ impl Cache {
     /// The bytes of `blob`, checked against its hash and size (a blob that does not match is
     /// refused with a warning).
     fn blob(&self, blob: &Output, id: &str, name: &Path) -> Option<Vec<u8>> {
-        let bytes = self.get(&format!("cas/{}", blob.sha256))?;
+        // A size beyond what this process may hold is refused before the body is read.
+        let most = crate::io::Limits::default().max_memory;
+        if blob.size > most {
+            self.refuse(
+                id,
+                format!(
+                    "the blob of {} claims {} bytes, more than this process may hold",
+                    name.display(),
+                    blob.size
+                ),
+            );
+            return None;
+        }
+        let bytes = self.get(&format!("cas/{}", blob.sha256), blob.size)?;
         if sha_hex(&bytes) != blob.sha256 || bytes.len() as u64 != blob.size {
             self.damaged
                 .lock()
@@ -481,108 +500,5 @@ fn sha_file(path: &Path) -> Option<String> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A store in memory, counting its writes.
-    #[derive(Default)]
-    struct Memory(
-        Mutex<HashMap<String, Vec<u8>>>,
-        std::sync::atomic::AtomicUsize,
-    );
-
-    impl Store for std::sync::Arc<Memory> {
-        fn get(&self, path: &str) -> std::result::Result<Option<Vec<u8>>, String> {
-            Ok(self.0.lock().unwrap().get(path).cloned())
-        }
-        fn put(&self, path: &str, bytes: &[u8]) -> std::result::Result<(), String> {
-            self.1.fetch_add(1, Ordering::Relaxed);
-            self.0.lock().unwrap().insert(path.into(), bytes.to_vec());
-            Ok(())
-        }
-        fn name(&self) -> String {
-            "memory".into()
-        }
-        fn has(&self, path: &str) -> std::result::Result<bool, String> {
-            Ok(self.0.lock().unwrap().contains_key(path))
-        }
-    }
-
-    /// A hit needs the bytes of every file the job read; a changed file is a miss, and a
-    /// read-only cache never writes.
-    #[test]
-    fn a_hit_needs_the_same_bytes() {
-        let t = tempfile::tempdir().unwrap();
-        let (input, out) = (t.path().join("in.txt"), t.path().join("out.png"));
-        std::fs::write(&input, b"one").unwrap();
-        std::fs::write(&out, b"result").unwrap();
-        let mem = std::sync::Arc::new(Memory::default());
-        let (reads, written) = (vec![input.clone()], vec![out.clone()]);
-        Cache::new(mem.clone(), true).upload("job", &out, &reads, &written);
-        assert_eq!(mem.1.load(Ordering::Relaxed), 0);
-        // The output's blob and the list's, then the two entries that name them.
-        let cache = Cache::new(mem.clone(), false);
-        cache.upload("job", &out, &reads, &written);
-        assert_eq!(mem.1.load(Ordering::Relaxed), 4);
-        assert_eq!(cache.blob_counts(), (2, 0));
-        // Again (another machine): the store has both blobs, and only the entries are sent.
-        let again = Cache::new(mem.clone(), false);
-        again.upload("job", &out, &reads, &written);
-        assert_eq!(mem.1.load(Ordering::Relaxed), 6);
-        assert_eq!(again.blob_counts(), (0, 2));
-        let hit = Cache::new(mem.clone(), false)
-            .fetch("job", &out)
-            .expect("a hit");
-        assert_eq!(hit.files, vec![(out.clone(), b"result".to_vec())]);
-        assert!(Cache::new(mem.clone(), false)
-            .fetch("other job", &out)
-            .is_none());
-        std::fs::write(&input, b"two").unwrap();
-        assert!(Cache::new(mem.clone(), false).fetch("job", &out).is_none());
-    }
-
-    /// A manifest's paths must stay inside the job's output.
-    #[test]
-    fn only_inside_the_output() {
-        let out = Path::new("out/sky");
-        assert!(inside(Path::new("out/sky"), out));
-        assert!(inside(Path::new("out/sky/px.png"), out));
-        assert!(!inside(Path::new("out/sky/../../etc/x"), out));
-        assert!(!inside(Path::new("out/skyline.png"), out));
-        assert!(!inside(Path::new("/etc/passwd"), out));
-        assert!(inside(Path::new("out/sky.levels.json"), out));
-        assert!(!inside(Path::new("out/sky."), out));
-        assert!(!inside(Path::new("out/sky.x/../../y"), out));
-        // An entry's names are relative to the output's folder, plain names only.
-        assert_eq!(
-            relative(Path::new("out/sky/px.png"), out).unwrap(),
-            "sky/px.png"
-        );
-        assert_eq!(
-            place("sky/px.png", out).unwrap(),
-            Path::new("out/sky/px.png")
-        );
-        assert_eq!(
-            place("sky.levels.json", out).unwrap(),
-            Path::new("out/sky.levels.json")
-        );
-        for bad in [
-            "../sky/px.png",
-            "sky/../../x",
-            "/etc/passwd",
-            "skyline.png",
-            "sky//x",
-            "",
-        ] {
-            assert!(place(bad, out).is_none(), "{bad}");
-        }
-        assert_eq!(
-            relative(Path::new("a.png"), Path::new("a.png")).unwrap(),
-            "a.png"
-        );
-        assert_eq!(
-            place("a.png", Path::new("a.png")).unwrap(),
-            Path::new("a.png")
-        );
-    }
-}
+#[path = "cache_tests.rs"]
+mod tests;

@@ -76,20 +76,22 @@ fn status(code: ureq::http::StatusCode) -> String {
 }
 
 impl Store for HttpStore {
-    fn get(&self, path: &str) -> std::result::Result<Option<Vec<u8>>, String> {
+    fn get(&self, path: &str, most: u64) -> std::result::Result<Option<Vec<u8>>, String> {
         let mut req = self.agent.get(self.url(path));
         if let Some(a) = &self.auth {
             req = req.header("Authorization", a);
         }
         let mut resp = req.call().map_err(|e| e.to_string())?;
         match resp.status().as_u16() {
-            200 => resp
-                .body_mut()
-                .with_config()
-                .limit(u64::MAX)
-                .read_to_vec()
-                .map(Some)
-                .map_err(|e| e.to_string()),
+            200 => {
+                use std::io::Read;
+                let mut bytes = Vec::new();
+                let body = resp.body_mut().with_config().limit(u64::MAX).reader();
+                body.take(most.saturating_add(1))
+                    .read_to_end(&mut bytes)
+                    .map(|_| Some(bytes))
+                    .map_err(|e| e.to_string())
+            }
             404 => Ok(None),
             _ => Err(status(resp.status())),
         }

@@ -237,3 +237,82 @@ pub(crate) fn record(
         outputs,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Seeded mutations of a state file (bytes flipped, set, cut, spliced; numbers and
+    /// nesting made extreme): it loads or is set aside with a warning naming it, and every
+    /// record it keeps is judged (`why`) without a panic. `CUBEFORGE_STATE_ROUNDS=n`: n
+    /// times as many.
+    #[test]
+    fn mutated_state_files_load_or_are_set_aside() {
+        let t = tempfile::tempdir().unwrap();
+        let (input, out) = (t.path().join("in.exr"), t.path().join("out.ktx2"));
+        std::fs::write(&input, b"in").unwrap();
+        std::fs::write(&out, b"out").unwrap();
+        let hashes = Hashes::default();
+        let mut state = State::default();
+        for id in ["sky", "sky/bevy"] {
+            let r = record(id, vec![input.clone()], vec![out.clone()], &hashes).unwrap();
+            state.jobs.insert(id.into(), r);
+        }
+        let src = state.to_bytes().unwrap();
+        let path = t.path().join("m.state.json");
+        let scale: usize = std::env::var("CUBEFORGE_STATE_ROUNDS")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(1);
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let (mut kept, mut refused) = (0, 0);
+        for round in 0..1000 * scale {
+            let mut b = src.clone();
+            for _ in 0..1 + next() % 3 {
+                let at = (next() as usize) % b.len().max(1);
+                match next() % 7 {
+                    0 if at < b.len() => b[at] ^= 1 << (next() % 8),
+                    1 if at < b.len() => b[at] = b"\"{}[],:0\\\n"[(next() % 10) as usize],
+                    2 => b.truncate(at),
+                    3 => {
+                        let n: &[u8] = [&b"1e400"[..], b"-1", b"18446744073709551616", b"null"]
+                            [(next() % 4) as usize];
+                        b.splice(at..at, n.iter().copied()).for_each(drop);
+                    }
+                    4 => {
+                        let deep = "[".repeat(1 + (next() % 5000) as usize);
+                        b.splice(at..at, deep.bytes()).for_each(drop);
+                    }
+                    5 => {
+                        let end = (at + 1 + (next() % 64) as usize).min(b.len());
+                        let span = b[at..end].to_vec();
+                        b.splice(at..at, span).for_each(drop);
+                    }
+                    _ if at < b.len() => b[at] = next() as u8,
+                    _ => {}
+                }
+            }
+            std::fs::write(&path, &b).unwrap();
+            let (loaded, warning) = State::load(&path);
+            if let Some(w) = warning {
+                assert!(
+                    w.contains("m.state.json") && !w.contains('\n'),
+                    "round {round}: {w}"
+                );
+                refused += 1;
+            } else {
+                kept += 1;
+            }
+            for (id, r) in &loaded.jobs {
+                let _ = why(id, Some(r), &hashes);
+            }
+        }
+        println!("mutated state files: {kept} loaded, {refused} set aside");
+    }
+}

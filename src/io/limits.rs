@@ -183,6 +183,17 @@ impl Limits {
 
     /// Refuses a plan that needs more than the memory budget, naming what needs it.
     pub fn check_memory(&self, what: impl std::fmt::Display, bytes: u64) -> Result<()> {
+        self.check_memory_for(None, what, bytes)
+    }
+
+    /// [`Self::check_memory`] of work on `file`, which the refusal names: a job's plan is
+    /// mostly its input's, and a header that claims a huge image must be findable.
+    pub fn check_memory_for(
+        &self,
+        file: Option<&Path>,
+        what: impl std::fmt::Display,
+        bytes: u64,
+    ) -> Result<()> {
         if bytes > self.max_memory {
             let default = if self.max_memory == default_memory_budget() {
                 " (the default: half of what this process may use)"
@@ -190,7 +201,7 @@ impl Limits {
                 ""
             };
             return Err(Error::limit(
-                None,
+                file,
                 LimitKind::Memory,
                 format!(
                     "{what} needs about {} of memory, over the budget of {}{default}",

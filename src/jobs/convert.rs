@@ -106,9 +106,17 @@ impl ConvertJob {
         Input::open_level(&self.inputs, self.from, &self.read, self.level)
     }
 
-    fn check_memory(&self, to: Kind, size: usize, input: u64) -> Result<()> {
+    /// The plan of a `to` output of `size` from `file`, which a refusal names.
+    fn check_memory(
+        &self,
+        file: Option<&PathBuf>,
+        to: Kind,
+        size: usize,
+        input: u64,
+    ) -> Result<()> {
         let (w, h) = to.image_size(size);
-        self.limits().check_memory(
+        self.limits().check_memory_for(
+            file.map(PathBuf::as_path),
             format_args!("{} {size} ({w}x{h} output)", param("size")),
             self.plan_bytes(to, size, input),
         )
@@ -181,7 +189,7 @@ impl Job for ConvertJob {
         // headers describe it, the output at the size it will have.
         let input = self.input()?;
         if let Some(size) = self.size.or(input.face_size()).filter(|&s| s > 0) {
-            self.check_memory(to, size, input.plan_bytes())?;
+            self.check_memory(input.paths().first(), to, size, input.plan_bytes())?;
         }
         let (loaded, notes) = input.load()?;
         progress.stage("decode");
@@ -214,7 +222,7 @@ impl Job for ConvertJob {
             )));
         }
         // Again with what was decoded (standard input's size is known only now).
-        self.check_memory(to, size, loaded.working_bytes())?;
+        self.check_memory(loaded.files.first(), to, size, loaded.working_bytes())?;
         // The format decided now that the input's is known (faces follow it): the tone
         // warning that only now applies.
         let target = self.target(Some(loaded.hdr))?;

@@ -211,7 +211,9 @@ impl Job for IblJob {
         // specular chain (and the sheen chain), the diffuse map.
         let input = self.input()?;
         let (size, diffuse) = self.sizes(input.face_size());
-        self.read.limits.check_memory(
+        let file = input.paths().first().map(PathBuf::as_path);
+        self.read.limits.check_memory_for(
+            file,
             format_args!(
                 "{} {size} and {} {diffuse}",
                 param("size"),

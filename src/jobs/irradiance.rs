@@ -140,7 +140,8 @@ impl Job for IrradianceJob {
         let target = self.target()?;
         // The whole plan against the budget before any file is decoded.
         let input = Input::open(&self.inputs, self.from, &self.read)?;
-        self.read.limits.check_memory(
+        self.read.limits.check_memory_for(
+            input.paths().first().map(PathBuf::as_path),
             format_args!("{} {}", param("size"), self.size),
             self.plan_bytes(input.face_size(), input.plan_bytes()),
         )?;

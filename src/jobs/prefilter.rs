@@ -110,8 +110,10 @@ impl PrefilterJob {
             .saturating_add(input)
     }
 
-    fn check_memory(&self, size: usize, input: u64) -> Result<()> {
-        self.read.limits.check_memory(
+    /// The plan of a chain of `size` from `file`, which a refusal names.
+    fn check_memory(&self, file: Option<&PathBuf>, size: usize, input: u64) -> Result<()> {
+        self.read.limits.check_memory_for(
+            file.map(PathBuf::as_path),
             format_args!("{} {size}", param("size")),
             self.plan_bytes(size, input),
         )
@@ -128,7 +130,7 @@ impl PrefilterJob {
                 param("min_size")
             )));
         }
-        self.check_memory(size, loaded.working_bytes())?;
+        self.check_memory(loaded.files.first(), size, loaded.working_bytes())?;
         Ok(size)
     }
 
@@ -253,7 +255,7 @@ impl Job for PrefilterJob {
         // The whole plan against the budget before any file is decoded.
         let input = Input::open(&self.inputs, self.from, &self.read)?;
         if let Some(size) = self.size.or(input.face_size()) {
-            self.check_memory(size, input.plan_bytes())?;
+            self.check_memory(input.paths().first(), size, input.plan_bytes())?;
         }
         let (loaded, notes) = input.load()?;
         progress.stage("decode");

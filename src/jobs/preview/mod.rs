@@ -300,7 +300,8 @@ impl Job for PreviewJob {
         let (checked, materials) = self.checked()?;
         warnings.extend(checked);
         let input = self.input()?;
-        self.limits.check_memory(
+        self.limits.check_memory_for(
+            input.paths().first().map(|p| p.as_path()),
             format_args!("{} {}", param("size"), self.view.size),
             self.estimate_with(&input, &materials)?,
         )?;

@@ -183,3 +183,53 @@ fn unusable_cache_urls_are_refused() {
         assert!(!t.path().join("proj/build").exists(), "{url}: a job ran");
     }
 }
+
+/// A cache that answers every GET with an endless body: the hostile sweep found the HTTP store
+/// read any body whole (`limit(u64::MAX)`), so such a server filled the machine's memory. An
+/// entry is read to 1 MiB and refused (a warning; the jobs run here), the connection dropped:
+/// the server gets to send little more than that and what the socket buffers hold.
+#[test]
+fn a_cache_that_sends_an_endless_body_is_refused() {
+    use std::io::{Read, Write};
+    use std::sync::atomic::{AtomicU64, Ordering};
+    use std::sync::Arc;
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    clone(&d.join("a"));
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let url = format!("http://{}", listener.local_addr().unwrap());
+    let most = Arc::new(AtomicU64::new(0));
+    let seen = most.clone();
+    std::thread::spawn(move || {
+        for conn in listener.incoming() {
+            let Ok(mut s) = conn else { break };
+            let seen = seen.clone();
+            std::thread::spawn(move || {
+                let mut head = [0u8; 4096];
+                let n = s.read(&mut head).unwrap_or(0);
+                if !head[..n].starts_with(b"GET ") {
+                    let _ = s.write_all(b"HTTP/1.1 404 Not Found\r\ncontent-length: 0\r\n\r\n");
+                    return;
+                }
+                let _ = s.write_all(b"HTTP/1.1 200 OK\r\nconnection: close\r\n\r\n");
+                let chunk = vec![0x0au8; 1 << 16];
+                let mut sent = 0u64;
+                // At most 256 MiB: enough to tell a bounded reader from one that is not.
+                while sent < 256 << 20 && s.write_all(&chunk).is_ok() {
+                    sent += chunk.len() as u64;
+                }
+                seen.fetch_max(sent, Ordering::Relaxed);
+            });
+        }
+    });
+    let o = batch(&d.join("a"), &["--cache", url.as_str()], TOKEN);
+    let out = text(&o);
+    assert!(o.status.success(), "{out}");
+    assert!(out.contains("not an ActionResult"), "{out}");
+    let sent = most.load(Ordering::Relaxed);
+    assert!(
+        sent < 32 << 20,
+        "the server sent {} MiB before the reader stopped",
+        sent >> 20
+    );
+}
