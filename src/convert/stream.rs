@@ -16,7 +16,7 @@
 
 use super::{Loaded, Source};
 use crate::error::Result;
-use crate::flux::{Grid, PeakRow, Peaks, RowStats};
+use crate::flux::{Grid, Peaks, RowStats};
 use crate::image::Image;
 use crate::io::bands::{self, BandSource, Shape};
 use crate::io::ReadOptions;
@@ -142,19 +142,25 @@ fn reduce(b: &BandSource, path: &Path, f: usize) -> Result<Loaded> {
         .chunks_mut(lines / f * (w / f))
         .map(Mutex::new)
         .collect();
-    let shrink = |y0: usize, rows: &[Vec4], ceiling: Vec4| {
-        let band = reduce_band(rows, w, y0, &weights, ceiling);
+    // Each band's reduced rows written into their place in the reduced image: straight
+    // there when one 2 x 2 step makes them, else through the band's own smaller copy.
+    // `seen` hears each full row just before its pair is reduced (still in cache).
+    let shrink = |y0: usize, rows: &[Vec4], ceiling: Vec4, seen: &mut dyn FnMut(usize, &[Vec4])| {
         let mut slot = slots[y0 / lines].lock().unwrap_or_else(|e| e.into_inner());
-        slot.copy_from_slice(&band.pixels);
+        if weights.len() == 1 {
+            reduce_rows(rows, w, y0, &weights[0], ceiling, &mut slot, seen);
+        } else {
+            let mut first = Image::new(w / 2, rows.len() / w / 2);
+            reduce_rows(rows, w, y0, &weights[0], ceiling, &mut first.pixels, seen);
+            slot.copy_from_slice(&further(first, y0, &weights).pixels);
+        }
     };
     let all = |_: usize| true;
     let first = |y0: usize, rows: &[Vec4]| {
-        let stats: Vec<RowStats> = rows
-            .chunks_exact(w)
-            .enumerate()
-            .map(|(i, r)| RowStats::of_row(grid, r, y0 + i))
-            .collect();
-        shrink(y0, rows, Vec4::INFINITY);
+        let mut stats = Vec::with_capacity(rows.len() / w);
+        shrink(y0, rows, Vec4::INFINITY, &mut |y, r| {
+            stats.push(RowStats::of_row(grid, r, y))
+        });
         stats
     };
     let (bands, replaced) = b.map(path, lines, &all, &first)?;
@@ -168,12 +174,10 @@ fn reduce(b: &BandSource, path: &Path, f: usize) -> Result<Loaded> {
             .collect();
         let pick = |i: usize| hot[i];
         let again = |y0: usize, rows: &[Vec4]| {
-            let peaks: Vec<PeakRow> = rows
-                .chunks_exact(w)
-                .enumerate()
-                .map(|(i, r)| Peaks::of_row(grid, y0 + i, r, ceiling))
-                .collect();
-            shrink(y0, rows, ceiling.extend(f32::INFINITY));
+            let mut peaks = Vec::with_capacity(rows.len() / w);
+            shrink(y0, rows, ceiling.extend(f32::INFINITY), &mut |y, r| {
+                peaks.push(Peaks::of_row(grid, y, r, ceiling))
+            });
             peaks
         };
         let (redone, _) = b.map(path, lines, &pick, &again)?;
@@ -216,19 +220,53 @@ pub fn reduce_band(
     weights: &[Vec<f32>],
     ceiling: Vec4,
 ) -> Image {
-    let n = rows.len() / w;
-    let mut img = Image::new(w / 2, n / 2);
-    let row_weight = &weights[0];
-    for (j, out) in img.pixels.chunks_exact_mut(w / 2).enumerate() {
+    let mut img = Image::new(w / 2, rows.len() / w / 2);
+    reduce_rows(
+        rows,
+        w,
+        y0,
+        &weights[0],
+        ceiling,
+        &mut img.pixels,
+        &mut |_, _| {},
+    );
+    further(img, y0, weights)
+}
+
+/// The steps of [`reduce_band`] after the first, on the band's reduced copy `img`.
+fn further(mut img: Image, y0: usize, weights: &[Vec<f32>]) -> Image {
+    for (k, row_weight) in weights.iter().enumerate().skip(1) {
+        let y = y0 >> k;
+        img = img.downsample_2x_rows(&row_weight[y..y + img.height], Vec4::INFINITY);
+    }
+    img
+}
+
+/// The first 2 x 2 step of [`reduce_band`] into `out` (half the rows and columns), each
+/// full row handed to `seen(its row in the panorama, its texels)` just before its pair is
+/// reduced, while it is in cache.
+fn reduce_rows(
+    rows: &[Vec4],
+    w: usize,
+    y0: usize,
+    row_weight: &[f32],
+    ceiling: Vec4,
+    out: &mut [Vec4],
+    seen: &mut dyn FnMut(usize, &[Vec4]),
+) {
+    for (j, out) in out.chunks_exact_mut(w / 2).enumerate() {
         let (a, b) = (2 * j, 2 * j + 1);
+        let ra = &rows[a * w..(a + 1) * w];
+        let rb = &rows[b * w..(b + 1) * w];
+        seen(y0 + a, ra);
+        seen(y0 + b, rb);
         let (wa, wb) = (row_weight[y0 + a], row_weight[y0 + b]);
         let total = 2.0 * (wa + wb);
         if total <= 0.0 {
+            out.fill(Vec4::ZERO);
             continue;
         }
         let (fa, fb) = (wa / total, wb / total);
-        let ra = &rows[a * w..(a + 1) * w];
-        let rb = &rows[b * w..(b + 1) * w];
         for ((o, pa), pb) in out
             .iter_mut()
             .zip(ra.chunks_exact(2))
@@ -238,9 +276,4 @@ pub fn reduce_band(
                 + (pb[0].min(ceiling) + pb[1].min(ceiling)) * fb;
         }
     }
-    for (k, row_weight) in weights.iter().enumerate().skip(1) {
-        let y = y0 >> k;
-        img = img.downsample_2x_rows(&row_weight[y..y + img.height], Vec4::INFINITY);
-    }
-    img
 }

@@ -116,11 +116,7 @@ fn streamed_cube_is_as_close_to_the_exact_means_as_the_whole_images() {
                 100.0 * ea,
                 100.0 * eb
             );
-            assert!(
-                ea < 0.01,
-                "{}: the whole image's cube {ea}",
-                path.display()
-            );
+            assert!(ea < 0.01, "{}: the whole image's cube {ea}", path.display());
             assert!(
                 eb < 0.02,
                 "{}: the reduced copy's cube {eb}",
