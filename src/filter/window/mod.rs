@@ -39,7 +39,7 @@ use super::lobe::Lobe;
 use crate::cube::{face_dir, texel_dir, CubeSampler, Faces};
 use crate::image::Image;
 use fit::fit_log_weight;
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 use source::Source;
 use std::f64::consts::FRAC_PI_2;
@@ -338,10 +338,15 @@ fn filter_band(
             .fold(0.0f32, f32::max);
         found.clear();
         source.gather(axis, (reach + radius + 1e-4).min(max_reach), &mut found);
+        // A tile's row is at most eight texels: one call of the bright part's lanes.
+        let mut lit = [Vec3::ZERO; 8];
         for y in y0..y1 {
-            for x in x0..x1 {
-                let n = centre(face, x, y);
-                band[(y - y0) * size + x] = found.mean(window, n) + bright.at(n).extend(0.0);
+            let ns: [Vec3; 8] = std::array::from_fn(|i| centre(face, (x0 + i).min(x1 - 1), y));
+            let k = x1 - x0;
+            bright.at_many(&ns[..k], &mut lit[..k]);
+            for (x, l) in (x0..x1).zip(lit) {
+                let n = ns[x - x0];
+                band[(y - y0) * size + x] = found.mean(window, n) + l.extend(0.0);
             }
         }
     }
