@@ -338,16 +338,19 @@ fn filter_band(
             .fold(0.0f32, f32::max);
         found.clear();
         source.gather(axis, (reach + radius + 1e-4).min(max_reach), &mut found);
-        // A tile's row is at most eight texels: one call of the bright part's lanes.
-        let mut lit = [Vec3::ZERO; 8];
-        for y in y0..y1 {
-            let ns: [Vec3; 8] = std::array::from_fn(|i| centre(face, (x0 + i).min(x1 - 1), y));
-            let k = x1 - x0;
-            bright.at_many(&ns[..k], &mut lit[..k]);
-            for (x, l) in (x0..x1).zip(lit) {
-                let n = ns[x - x0];
-                band[(y - y0) * size + x] = found.mean(window, n) + l.extend(0.0);
-            }
+        // The whole tile's bright part in one call (at most 8 x 8 texels): a row of a
+        // four-wide tile alone would leave half of its eight lanes idle.
+        let w = x1 - x0;
+        let k = w * (y1 - y0);
+        let ns: [Vec3; 64] = std::array::from_fn(|i| {
+            let i = i.min(k - 1);
+            centre(face, x0 + i % w, y0 + i / w)
+        });
+        let mut lit = [Vec3::ZERO; 64];
+        bright.at_many(&ns[..k], &mut lit[..k]);
+        for (i, (n, l)) in ns[..k].iter().zip(lit).enumerate() {
+            let (x, y) = (x0 + i % w, y0 + i / w);
+            band[(y - y0) * size + x] = found.mean(window, *n) + l.extend(0.0);
         }
     }
 }
