@@ -8,6 +8,9 @@ use crate::cube::{solid_angle_table, texel_dir, CubeMap, Faces};
 use glam::{Vec3, Vec4};
 use std::f32::consts::PI;
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+
 /// Texels too bright to importance-sample without fireflies (an HDR sun), split off the
 /// source: their excess over a threshold is convolved exactly, texel by texel.
 #[derive(Clone, Debug, Default)]
@@ -248,6 +251,29 @@ impl BrightSum {
         Vec4::select(w.cmpgt(Vec4::ZERO), w, Vec4::ZERO)
     }
 
+    /// [`BrightSum::at`] of each of `ns` into `out` (as long): GGX lobes eight texels at a
+    /// time in AVX lanes where the CPU has them (the same bits; a level's bright part cost
+    /// as much as its sampled tail four lanes wide).
+    pub(crate) fn at_many(&self, ns: &[Vec3], out: &mut [Vec3]) {
+        #[cfg(target_arch = "x86_64")]
+        if let Lobe::Ggx { alpha } = self.lobe {
+            if crate::simd::avx2_available() {
+                for (n, o) in ns.chunks(8).zip(out.chunks_mut(8)) {
+                    if self.patches.is_empty() {
+                        o.fill(Vec3::ZERO);
+                    } else {
+                        // SAFETY: the CPU has AVX and AVX2 (checked just above).
+                        unsafe { avx2::ggx_at8(self, alpha, n, o) };
+                    }
+                }
+                return;
+            }
+        }
+        for (n, o) in ns.iter().zip(out) {
+            *o = self.at(*n);
+        }
+    }
+
     /// The bright texels' part of the convolution at unit direction `n`: patches in order,
     /// each member's share summed in its lane, the lanes added in a fixed order.
     #[inline]
@@ -270,5 +296,52 @@ impl BrightSum {
         }
         let total = |v: Vec4| (v.x + v.z) + (v.y + v.w);
         Vec3::new(total(acc[0]), total(acc[1]), total(acc[2]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Eight texels at a time give `at`'s bits for every texel: near a sun and its patches,
+    /// far from it, at the edges of the patches' reach, in runs shorter than eight.
+    #[test]
+    fn at_many_matches_at_bit_for_bit() {
+        let sun = Vec3::new(-0.3, 0.5, 0.8).normalize();
+        let base = CubeMap::from_fn(48, |d| {
+            let v = if d.dot(sun) > 0.99 {
+                3e4 * (1.0 + d.x)
+            } else {
+                0.2 + 0.1 * d.y
+            };
+            Vec4::new(v, v * 0.5, v * 0.25, 1.0)
+        });
+        let (_, bright) = split_bright(&base, 64.0);
+        assert!(bright.patches.len() > 1);
+        let ns: Vec<Vec3> = (0..2000)
+            .map(|i| {
+                let (u, v) = (i as f32 * 0.618_034 % 1.0, i as f32 / 2000.0);
+                let (z, phi) = (1.0 - 2.0 * v, std::f32::consts::TAU * u);
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                Vec3::new(r * phi.cos(), r * phi.sin(), z)
+            })
+            .collect();
+        for alpha in [0.01f32, 0.0278, 0.111, 0.25, 1.0] {
+            let sum = BrightSum::new(&bright, Lobe::Ggx { alpha });
+            for len in [8usize, 5, 1] {
+                for chunk in ns.chunks(len) {
+                    let mut got = vec![Vec3::NAN; chunk.len()];
+                    sum.at_many(chunk, &mut got);
+                    for (n, g) in chunk.iter().zip(&got) {
+                        let want = sum.at(*n);
+                        assert_eq!(
+                            g.to_array().map(f32::to_bits),
+                            want.to_array().map(f32::to_bits),
+                            "alpha {alpha} at {n}"
+                        );
+                    }
+                }
+            }
+        }
     }
 }

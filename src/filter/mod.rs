@@ -376,7 +376,12 @@ pub fn prefilter_planned(
                 } else {
                     faces
                 };
-                let (faces, rescale) = keep_flux(faces, flux);
+                // A copy of the base has its flux to the bit: its factor would be exactly 1
+                // (a 512 px level 0 spent a sum and a pass over 25 MB finding that out).
+                let (faces, rescale) = match lobe {
+                    Some(_) => keep_flux(faces, flux),
+                    None => (faces, 0.0),
+                };
                 progress(info.level);
                 (faces, (samples, rescale))
             })

@@ -39,7 +39,7 @@ use super::lobe::Lobe;
 use crate::cube::{face_dir, texel_dir, CubeSampler, Faces};
 use crate::image::Image;
 use fit::fit_log_weight;
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 use source::Source;
 use std::f64::consts::FRAC_PI_2;
@@ -338,11 +338,19 @@ fn filter_band(
             .fold(0.0f32, f32::max);
         found.clear();
         source.gather(axis, (reach + radius + 1e-4).min(max_reach), &mut found);
-        for y in y0..y1 {
-            for x in x0..x1 {
-                let n = centre(face, x, y);
-                band[(y - y0) * size + x] = found.mean(window, n) + bright.at(n).extend(0.0);
-            }
+        // The whole tile's bright part in one call (at most 8 x 8 texels): a row of a
+        // four-wide tile alone would leave half of its eight lanes idle.
+        let w = x1 - x0;
+        let k = w * (y1 - y0);
+        let ns: [Vec3; 64] = std::array::from_fn(|i| {
+            let i = i.min(k - 1);
+            centre(face, x0 + i % w, y0 + i / w)
+        });
+        let mut lit = [Vec3::ZERO; 64];
+        bright.at_many(&ns[..k], &mut lit[..k]);
+        for (i, (n, l)) in ns[..k].iter().zip(lit).enumerate() {
+            let (x, y) = (x0 + i % w, y0 + i / w);
+            band[(y - y0) * size + x] = found.mean(window, *n) + l.extend(0.0);
         }
     }
 }
