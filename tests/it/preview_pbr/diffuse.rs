@@ -193,6 +193,17 @@ fn the_diffuse_light_is_the_maps_cosine_integral() {
     rows.push(format!("| 9 SH coefficients (before) | {} |", pc(m.sh9)));
     let table = rows.join("\n");
     println!("{table}");
+    // What it costs a preview (printed, not checked: the machine's load moves it).
+    let env = common::preview_env(&input).unwrap();
+    let cube = level0(&env.sampler);
+    let t = std::time::Instant::now();
+    let light = IrradianceLight::new(&cube, filter::IRRADIANCE_LIGHT_SIZE);
+    println!(
+        "IrradianceLight of a {}-face map: {:.1} ms, {} peak texels",
+        cube.size(),
+        t.elapsed().as_secs_f64() * 1e3,
+        light.peak_texels()
+    );
     assert!(m.preview.0 < 0.01 && m.preview.1 < 0.03, "{table}");
     assert!(m.sh9.0 > 10.0 * m.preview.0, "{table}");
     crate::figures::check("docs/preview.md", "preview diffuse", &table);
