@@ -11,7 +11,8 @@
 //! - diffuse = c_diff E(N) / pi (Lambert: radiance out = albedo E / pi), E the map's
 //!   irradiance as the `irradiance` job sums it, looked up by normal
 //!   ([`crate::filter::IrradianceLight`]): not its 9 SH coefficients, which ring around a sun
-//!   (46.7% mean, 154% beside the sun's terminator on a white rough sphere).
+//!   (a white rough sphere lit by them was 46.7% off on the mean facing the `ibl --sun` test
+//!   sky's disc and 154% away from it; its diffuse is now 0.12% off, docs/preview.md).
 //!
 //! - with `preview --sun`, the sun's own terms ([`super::sun`]) added: Lambert and GGX of a
 //!   directional light.
