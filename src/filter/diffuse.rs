@@ -10,7 +10,7 @@
 #![warn(missing_docs)]
 
 use super::{bright, sh, BRIGHT_RATIO};
-use crate::cube::{box_reduce_face, solid_angle_table, texel_dir, CubeMap, Faces};
+use crate::cube::{box_reduce_face, solid_angle_table, texel_dir, CubeMap, CubeSampler, Faces};
 use crate::image::Image;
 use glam::{Vec3, Vec4};
 use serde::Serialize;
@@ -116,11 +116,27 @@ pub(crate) fn reduced(faces: &Faces, max: usize) -> Cow<'_, Faces> {
 /// over a reduced copy, the HDR peaks over their own texels, one sum per output texel in a
 /// fixed order (the same bytes on every thread count).
 fn brute_force(src: &Faces, size: usize, progress: &(dyn Fn(u64) + Sync)) -> Faces {
-    use rayon::prelude::*;
     let (residual, bright) = bright::split_bright_faces(src, BRIGHT_RATIO);
     let small = reduced(&residual, IRRADIANCE_SOURCE_SIZE);
     let texels = Lanes::of_faces(&small);
     let peaks = Lanes::of_bright(&bright);
+    by_rows(size, progress, |n| {
+        let sum = texels.cosine_sum(n);
+        // Normalised by the discrete integral of the cosine, so a constant stays exact.
+        let wsum = sum.w;
+        if wsum > 0.0 {
+            let lit = sum.truncate() + peaks.cosine_sum(n).truncate();
+            (lit / wsum).extend(1.0)
+        } else {
+            Vec4::W
+        }
+    })
+}
+
+/// Six `size` faces, each texel `f` of its centre's direction, rows in parallel
+/// (`progress(1)` per row).
+fn by_rows(size: usize, progress: &(dyn Fn(u64) + Sync), f: impl Fn(Vec3) -> Vec4 + Sync) -> Faces {
+    use rayon::prelude::*;
     let inv = 1.0 / size as f32;
     let mut out: Faces = std::array::from_fn(|_| Image::new(size, size));
     let mut rows: Vec<(usize, usize, &mut [Vec4])> = Vec::with_capacity(6 * size);
@@ -131,20 +147,141 @@ fn brute_force(src: &Faces, size: usize, progress: &(dyn Fn(u64) + Sync)) -> Fac
     }
     rows.into_par_iter().for_each(|(face, y, row)| {
         for (x, texel) in row.iter_mut().enumerate() {
-            let n = texel_dir(face, x, y, inv);
-            let sum = texels.cosine_sum(n);
-            // Normalised by the discrete integral of the cosine, so a constant stays exact.
-            let wsum = sum.w;
-            *texel = if wsum > 0.0 {
-                let lit = sum.truncate() + peaks.cosine_sum(n).truncate();
-                (lit / wsum).extend(1.0)
-            } else {
-                Vec4::W
-            };
+            *texel = f(texel_dir(face, x, y, inv));
         }
         progress(1);
     });
     out
+}
+
+/// Face edge of [`IrradianceLight`]'s cube of the bounded part: against the brute-force
+/// cosine integral, docs/preview.md gives the error of this size and its neighbours
+/// (`tests/it/preview_pbr/diffuse.rs` measures it).
+pub const IRRADIANCE_LIGHT_SIZE: usize = 32;
+
+/// A map's irradiance as a renderer looks it up by normal (the preview's diffuse light): the
+/// sum [`irradiance`] computes (its bounded part over a 64-face copy, its HDR peaks over
+/// their own texels), its bounded part kept in a small cube looked up bilinearly and its
+/// peaks summed at the exact normal, since a sun's clamped cosine bends at its terminator
+/// faster than any cheap cube follows.
+pub struct IrradianceLight {
+    /// Per texel: the bounded part's irradiance over pi (rgb), and 1 over the discrete
+    /// integral of the cosine the irradiance job divides by (alpha), for the peaks.
+    cube: CubeSampler,
+    peaks: Vec<PeakPatch>,
+}
+
+/// Bright texels close together: summed at once where a normal sees all of them above its
+/// horizon (the clamped cosine is then linear), member by member where it cuts them.
+struct PeakPatch {
+    axis: Vec3,
+    /// Sine of the patch's angular radius: |n.axis| beyond it, the patch is on one side.
+    reach: f32,
+    /// Per channel, the members' directions weighed by solid angle times excess radiance.
+    sum: [Vec3; 3],
+    /// Direction and solid angle times excess radiance of each member.
+    members: Vec<(Vec3, Vec3)>,
+}
+
+impl IrradianceLight {
+    /// The irradiance of `base`'s level 0, its bounded part in a `size` cube.
+    pub fn new(base: &CubeMap, size: usize) -> IrradianceLight {
+        let src = reduced(&base.levels[0], SH_SOURCE_SIZE);
+        let (residual, bright) = bright::split_bright_faces(&src, BRIGHT_RATIO);
+        let texels = Lanes::of_faces(&reduced(&residual, IRRADIANCE_SOURCE_SIZE));
+        let faces = by_rows(size.max(1), &|_| {}, |n| {
+            let sum = texels.cosine_sum(n);
+            if sum.w > 0.0 {
+                (sum.truncate() / sum.w).extend(1.0 / sum.w)
+            } else {
+                Vec4::ZERO
+            }
+        });
+        let peaks = bright
+            .patches
+            .iter()
+            .map(|p| {
+                let members: Vec<(Vec3, Vec3)> = p
+                    .members
+                    .iter()
+                    .map(|&i| {
+                        let (d, sa, excess) = bright.texels[i];
+                        (d, excess.truncate() * sa)
+                    })
+                    .collect();
+                let sum = [0, 1, 2].map(|c| members.iter().map(|(d, w)| *d * w[c]).sum());
+                PeakPatch {
+                    axis: p.axis,
+                    reach: (p.radius + 1e-3).min(std::f32::consts::FRAC_PI_2).sin(),
+                    sum,
+                    members,
+                }
+            })
+            .collect();
+        IrradianceLight {
+            cube: CubeSampler::new(&CubeMap {
+                levels: vec![faces],
+            }),
+            peaks,
+        }
+    }
+
+    /// Irradiance over pi at unit normal `n`: what a white Lambertian surface reflects.
+    #[inline]
+    pub fn at(&self, n: Vec3) -> Vec3 {
+        let t = self.cube.bilinear(n, 0);
+        let mut lit = Vec3::ZERO;
+        for p in &self.peaks {
+            let c = n.dot(p.axis);
+            if c >= p.reach {
+                lit += Vec3::new(n.dot(p.sum[0]), n.dot(p.sum[1]), n.dot(p.sum[2]));
+            } else if c > -p.reach {
+                for (d, w) in &p.members {
+                    lit += *w * n.dot(*d).max(0.0);
+                }
+            }
+        }
+        t.truncate() + lit * t.w
+    }
+
+    /// Face edge of the bounded part's cube.
+    pub fn size(&self) -> usize {
+        self.cube.size()
+    }
+
+    /// How many bright texels are summed at each normal.
+    pub fn peak_texels(&self) -> usize {
+        self.peaks.iter().map(|p| p.members.len()).sum()
+    }
+
+    /// [`IrradianceLight::at`] at the texel centres of a `size` cube (alpha 1): for a renderer
+    /// that can only look a cube up (the viewer's GPU).
+    pub fn to_cube(&self, size: usize) -> CubeMap {
+        opaque(by_rows(size.max(1), &|_| {}, |n| self.at(n).extend(1.0)))
+    }
+
+    /// Bytes [`IrradianceLight::new`] holds at its peak for a base of `face` texels and a cube
+    /// of `size`: the copies of the source it sums (box-reduced to 256, its bounded part, the
+    /// 64-face copy in lanes), the bright texels (at most 4096) and the cube with its border.
+    pub fn plan_bytes(face: usize, size: usize) -> u64 {
+        let src = face.min(SH_SOURCE_SIZE) as u64;
+        let copies = if face > SH_SOURCE_SIZE { 2 } else { 1 };
+        let small = IRRADIANCE_SOURCE_SIZE as u64;
+        let bordered = (size as u64 + 4).pow(2);
+        copies * 6 * src * src * 16
+            + 6 * small * small * (16 + 28)
+            + bright::MAX_BRIGHT as u64 * 64
+            + 6 * bordered * 16
+    }
+}
+
+impl std::fmt::Debug for IrradianceLight {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("IrradianceLight")
+            .field("size", &self.size())
+            .field("peak_texels", &self.peak_texels())
+            .finish()
+    }
 }
 
 /// Vectors per block: eight lanes, two independent chains of sums per quantity.

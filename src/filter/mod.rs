@@ -16,7 +16,8 @@ mod shape;
 mod window;
 
 pub use diffuse::{
-    brute_irradiance_with_progress, irradiance, irradiance_with_progress, IrradianceMethod,
+    brute_irradiance_with_progress, irradiance, irradiance_with_progress, IrradianceLight,
+    IrradianceMethod, IRRADIANCE_LIGHT_SIZE,
 };
 pub(crate) use roughness::plan_mapped;
 pub use roughness::{RoughnessMapping, BABYLON_LOD_GENERATION_SCALE};

@@ -179,10 +179,16 @@ impl Job for ViewJob {
         // The map, a GGX chain beside it, and their page data (half floats in base64, twice
         // over while the script is assembled).
         let levels = 64 - face.leading_zeros() as u64;
+        // pbr's diffuse: the map's irradiance, and the cube of it the page reads.
+        let irradiance = crate::filter::IrradianceLight::plan_bytes(
+            face as usize,
+            crate::filter::IRRADIANCE_LIGHT_SIZE,
+        ) + 4 * view::data_bytes(view::IRRADIANCE_SIZE as u64, 1);
         Ok(input
             .plan_bytes()
             .saturating_mul(3)
-            .saturating_add(4 * view::data_bytes(face, levels)))
+            .saturating_add(4 * view::data_bytes(face, levels))
+            .saturating_add(irradiance))
     }
 
     fn run(&self, progress: &dyn Progress) -> Result<Report> {

@@ -8,8 +8,11 @@
 //!   R = reflect(I, N) at the level whose roughness is the material's (the chain's own
 //!   mapping, inverted), trilinear; A, B the DFG terms of [`crate::lut::dfg`] at
 //!   (n.v, roughness), bilinear in a 128 x 128 table;
-//! - diffuse = c_diff E(N) / pi, E the irradiance from the map's 9 SH coefficients (Lambert:
-//!   radiance out = albedo E / pi), clamped at 0 where the SH rings below it.
+//! - diffuse = c_diff E(N) / pi (Lambert: radiance out = albedo E / pi), E the map's
+//!   irradiance as the `irradiance` job sums it, looked up by normal
+//!   ([`crate::filter::IrradianceLight`]): not its 9 SH coefficients, which ring around a sun
+//!   (a white rough sphere lit by them was 46.7% off on the mean facing the `ibl --sun` test
+//!   sky's disc and 154% away from it; its diffuse is now 0.12% off, docs/preview.md).
 //!
 //! - with `preview --sun`, the sun's own terms ([`super::sun`]) added: Lambert and GGX of a
 //!   directional light.
@@ -25,13 +28,13 @@ use super::sun::Sun;
 use crate::cube::{CubeMap, CubeSampler, Environment};
 use crate::error::{Error, Result};
 use crate::filter::RoughnessMapping;
-use crate::filter::{self, FilterKind, IrradianceMethod};
+use crate::filter::{self, FilterKind, IrradianceLight};
 use crate::ibl::{self, Engine};
 use crate::image::Image;
 use crate::lut;
 use glam::Vec3;
 use std::path::Path;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 /// Largest face edge of a GGX chain prefiltered at load time (a larger map's level 0 is
 /// box-reduced to it first).
@@ -132,20 +135,19 @@ pub fn dfg_table() -> &'static Image {
 #[derive(Clone, Debug)]
 pub struct SplitSum {
     mapping: LevelMapping,
-    /// Irradiance over pi, as SH coefficients per channel.
-    irradiance_over_pi: [[f64; 3]; 9],
+    /// The map's irradiance, looked up by normal.
+    diffuse: Arc<IrradianceLight>,
     dfg: &'static Image,
     /// The sun taken out of the map, shone as a directional light (`preview --sun`).
     sun: Option<Sun>,
 }
 
 impl SplitSum {
-    /// Split-sum lighting from a chain's mapping and the order-2 SH coefficients of its
-    /// radiance ([`crate::filter::sh::project`] order).
-    pub fn new(mapping: LevelMapping, radiance_sh: &[[f64; 3]; 9]) -> SplitSum {
+    /// Split-sum lighting from a chain's mapping and its map's irradiance.
+    pub fn new(mapping: LevelMapping, diffuse: IrradianceLight) -> SplitSum {
         SplitSum {
             mapping,
-            irradiance_over_pi: filter::sh::irradiance_over_pi(radiance_sh),
+            diffuse: Arc::new(diffuse),
             dfg: dfg_table(),
             sun: None,
         }
@@ -162,19 +164,18 @@ impl SplitSum {
         self.sun.as_ref()
     }
 
-    /// Split-sum lighting for a chain whose level 0 is `cube`'s (its SH as the `irradiance`
-    /// command computes them).
+    /// Split-sum lighting for a chain whose level 0 is `cube`'s (its irradiance as the
+    /// `irradiance` command sums it, [`filter::IRRADIANCE_LIGHT_SIZE`] faces).
     pub fn for_cube(cube: &CubeMap, mapping: LevelMapping) -> SplitSum {
-        let level0 = CubeMap {
-            levels: vec![cube.levels[0].clone()],
-        };
-        let (_, sh) = filter::irradiance(&level0, 1, IrradianceMethod::Sh);
-        SplitSum::new(mapping, &sh)
+        SplitSum::new(
+            mapping,
+            IrradianceLight::new(cube, filter::IRRADIANCE_LIGHT_SIZE),
+        )
     }
 
-    /// Irradiance over pi as SH coefficients per channel ([`crate::filter::sh`] order).
-    pub fn irradiance_sh(&self) -> &[[f64; 3]; 9] {
-        &self.irradiance_over_pi
+    /// The map's irradiance the diffuse term reads.
+    pub fn diffuse(&self) -> &IrradianceLight {
+        &self.diffuse
     }
 
     /// The chain's mapping of levels to roughness.
@@ -200,13 +201,10 @@ impl SplitSum {
         (t.x, t.y)
     }
 
-    /// Irradiance over pi at unit normal `n` from the SH, at least 0: what a white Lambertian
-    /// surface reflects.
+    /// Irradiance over pi at unit normal `n`: what a white Lambertian surface reflects.
     #[inline]
     pub fn irradiance_over_pi(&self, n: Vec3) -> Vec3 {
-        filter::sh::eval(&self.irradiance_over_pi, n)
-            .truncate()
-            .max(Vec3::ZERO)
+        self.diffuse.at(n)
     }
 
     /// The radiance a `pbr` material of base colour `base` sends towards `v` at unit normal
@@ -267,7 +265,7 @@ impl std::fmt::Debug for PbrSetup {
 }
 
 impl PbrSetup {
-    /// The environment's own chain, read with `mapping` (its level 0 gives the diffuse SH).
+    /// The environment's own chain, read with `mapping` (its level 0 gives the irradiance).
     fn own_chain(level0: &CubeMap, mapping: LevelMapping, note: String) -> PbrSetup {
         PbrSetup {
             split_sum: SplitSum::for_cube(level0, mapping),

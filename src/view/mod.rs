@@ -1,5 +1,6 @@
 //! The interactive viewer's files: a static page (index.html, its scripts) and the scene it
-//! draws (data.js: the map's levels as RGB16F, pbr's GGX chain, SH and DFG table, the decal
+//! draws (data.js: the map's levels as RGB16F, pbr's GGX chain, irradiance cube and DFG
+//! table, the decal
 //! and control map, the materials and what `info` says of the map). Data travels as scripts,
 //! not fetched files, so the page opens from disk (`file://`) as well as from any server.
 //! The renderer (viewer.js) is the preview's scene on the GPU: its programs are written from
@@ -21,6 +22,11 @@ pub use page::{files, paths};
 
 /// Rows of the pbr roughness -> level table (read linearly between rows).
 const LOD_ROWS: usize = 257;
+
+/// Face edge of the irradiance cube the page's pbr diffuse reads: the CPU preview's
+/// irradiance ([`crate::filter::IrradianceLight`]) at its texel centres, looked up bilinearly
+/// by the GPU (the sun's terminator is where the two part; docs/view.md gives the figure).
+pub const IRRADIANCE_SIZE: usize = 128;
 
 /// What the page draws, besides the environment.
 #[derive(Default)]
@@ -106,11 +112,7 @@ pub fn scene_script(env: &LoadedEnv, setup: &PbrSetup, extras: &Extras) -> Strin
     let lod_table: Vec<f32> = (0..LOD_ROWS)
         .map(|i| split.lod(i as f32 / (LOD_ROWS - 1) as f32))
         .collect();
-    let sh: Vec<[f32; 3]> = split
-        .irradiance_sh()
-        .iter()
-        .map(|c| c.map(|v| v as f32))
-        .collect();
+    let irradiance = CubeSampler::new(&split.diffuse().to_cube(IRRADIANCE_SIZE));
     let materials: serde_json::Map<String, Value> = presets()
         .iter()
         .map(|(m, _)| (m.name.clone(), material_json(m)))
@@ -123,7 +125,7 @@ pub fn scene_script(env: &LoadedEnv, setup: &PbrSetup, extras: &Extras) -> Strin
         "pbr": {
             "chain": setup.chain.as_ref().map(chain_json),
             "lod_table": lod_table,
-            "sh": sh,
+            "irradiance": chain_json(&irradiance),
             "roughness": split.mapping().level_roughness(),
         },
         "dfg": image_json(pbr::dfg_table()),

@@ -17,6 +17,7 @@ window.cubeforgeShaders = {
   precision highp samplerCube;
   uniform samplerCube env;
   uniform samplerCube chain;      // pbr's GGX chain
+  uniform samplerCube irradiance; // pbr's diffuse: the map's irradiance over pi
   uniform sampler2D decal;
   uniform sampler2D control;
   uniform sampler2D dfg;
@@ -27,7 +28,7 @@ window.cubeforgeShaders = {
   uniform float lodBias, bgLevel, exposure, halfSize, size;
   uniform int tonemap, samples;
   uniform vec2 offsets[16];
-  uniform vec3 eye, fwd, right, up, sh[9];
+  uniform vec3 eye, fwd, right, up;
   uniform float tanHalf;
   uniform int parallax;           // 0 none, 1 approx, 2 exact (Brennan)
   uniform float envRadius;
@@ -135,15 +136,6 @@ window.cubeforgeShaders = {
   vec4 background(vec3 d) {
     return seamTint(d, textureLod(env, d, bgLevel));
   }
-  vec3 shIrradiance(vec3 n) {
-    float x = n.x, y = n.y, z = n.z;
-    vec3 c = sh[0] * 0.282095
-      + sh[1] * 0.488603 * y + sh[2] * 0.488603 * z + sh[3] * 0.488603 * x
-      + sh[4] * 1.092548 * x * y + sh[5] * 1.092548 * y * z
-      + sh[6] * 0.315392 * (3.0 * z * z - 1.0)
-      + sh[7] * 1.092548 * x * z + sh[8] * 0.546274 * (x * x - y * y);
-    return max(c, vec3(0.0));
-  }
   // The fragment programs, with the lookup vectors one pixel right (vx) and below (vy) for
   // the level of detail (ok false: unbounded footprint, the coarsest level).
   vec3 fragmentStage(vec3 v[4], float factor, vec2 uv, vec3 vx[4], vec3 vy[4], bool ok) {
@@ -160,7 +152,7 @@ window.cubeforgeShaders = {
       vec3 f0c = mix(vec3(f0), bc, metallic);
       vec2 ab = texture(dfg, vec2(nv, clamp(roughness, 0.0, 1.0))).xy;
       vec3 pre = v[0] == vec3(0.0) ? vec3(0.0) : textureLod(chain, v[0], pbrLod + lodBias + blur).rgb;
-      vec3 diffuse = bc * (1.0 - metallic) * shIrradiance(nn);
+      vec3 diffuse = bc * (1.0 - metallic) * textureLod(irradiance, nn, 0.0).rgb;
       return diffuse + pre * (f0c * ab.x + vec3(ab.y));
     }
     float lods[4] = float[4](0.0, 0.0, 0.0, 0.0);

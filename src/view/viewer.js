@@ -205,8 +205,9 @@
     const model = { reflect: 0, refract: 1, dispersion: 2, pbr: 3 }[mat.model];
     // pbr's own GGX chain goes up when a pbr material first needs it.
     if (model === 3 && scene.pbr.chain && textures[1][2] === textures[0][2]) {
-      textures[1][2] = cubeTexture(scene.pbr.chain);
+      // Made on its own unit: cubeTexture binds to the active one (the irradiance's, last).
       gl.activeTexture(gl.TEXTURE1);
+      textures[1][2] = cubeTexture(scene.pbr.chain);
       gl.bindTexture(gl.TEXTURE_CUBE_MAP, textures[1][2]);
     }
     const perVertex = state.shading === 'per-vertex' && !cross;
@@ -243,7 +244,8 @@
                 ['chain', gl.TEXTURE_CUBE_MAP, envTex],
                 ['decal', gl.TEXTURE_2D, scene.decal ? texture2d(scene.decal, true) : null],
                 ['control', gl.TEXTURE_2D, scene.control ? texture2d(scene.control, true) : null],
-                ['dfg', gl.TEXTURE_2D, texture2d(scene.dfg, false)]];
+                ['dfg', gl.TEXTURE_2D, texture2d(scene.dfg, false)],
+                ['irradiance', gl.TEXTURE_CUBE_MAP, cubeTexture(scene.pbr.irradiance)]];
     textures.forEach(([, target, tex], i) => {
       gl.activeTexture(gl.TEXTURE0 + i);
       if (tex) gl.bindTexture(target, tex);
@@ -349,7 +351,6 @@
     gl.uniform3fv(u.fwd, cam.fwd);
     gl.uniform3fv(u.right, cam.right);
     gl.uniform3fv(u.up, cam.up);
-    gl.uniform3fv(u.sh, new Float32Array([].concat(...scene.pbr.sh)));
     gl.uniform1f(u.tanHalf, Math.tan(state.fov * Math.PI / 360));
     gl.uniform1i(u.parallax, state.env_radius > 0 ? (state.parallax === 'exact' ? 2 : 1) : 0);
     gl.uniform1f(u.envRadius, state.env_radius);

@@ -277,6 +277,14 @@ impl PreviewJob {
                 peak = peak.max(c.decode_bytes - c.held_bytes.min(c.decode_bytes));
             }
         }
+        if materials.iter().any(|m| m.model == Model::Pbr) {
+            // The diffuse light: the map's irradiance and the copies it is summed from.
+            let face = env.face_size().unwrap_or(pbr::PREFILTER_MAX_SIZE);
+            input = input.saturating_add(crate::filter::IrradianceLight::plan_bytes(
+                face,
+                crate::filter::IRRADIANCE_LIGHT_SIZE,
+            ));
+        }
         let size = self.view.size as u64;
         let pixels = size.saturating_mul(size) * self.cells();
         Ok(pixels

@@ -4,6 +4,7 @@
 //! mapping; material files; the command line.
 
 mod brute;
+mod diffuse;
 mod inputs;
 mod sun;
 
