@@ -353,29 +353,11 @@ impl Image {
         ceiling: Vec4,
         out: &mut [Vec4],
     ) {
-        self.box_many_below(x, y, None, wrap_x, ceiling, out)
-    }
-
-    /// `bilinear_many_below` where tap i, given `half` = (hx, hy), stands for a box `hx[i]` x
-    /// `hy[i]` texels either side of it (an antialiased texel's share of its footprint): its
-    /// value is the exact mean of the texels over the box (their overlap), not the tent's
-    /// blend, so boxes that tile a footprint sum to the footprint's exact mean however coarse
-    /// the texels are. Half-widths are taken up to half a texel (there the two agree).
-    pub(crate) fn box_many_below(
-        &self,
-        x: &[f32],
-        y: &[f32],
-        half: Option<(&[f32], &[f32])>,
-        wrap_x: bool,
-        ceiling: Vec4,
-        out: &mut [Vec4],
-    ) {
         const CHUNK: usize = 64;
-        for (c, ((x, y), out)) in x
+        for ((x, y), out) in x
             .chunks(CHUNK)
             .zip(y.chunks(CHUNK))
             .zip(out.chunks_mut(CHUNK))
-            .enumerate()
         {
             let n = out.len();
             let mut col = [[0i32; CHUNK]; 2];
@@ -405,11 +387,6 @@ impl Image {
                 col[1][i] = index(xb, wf);
                 row[0][i] = index(y0, hf);
                 row[1][i] = index(y0 + 1.0, hf);
-            }
-            if let Some((hx, hy)) = half {
-                let span = c * CHUNK..c * CHUNK + n;
-                sharpen(&mut ax[..n], &hx[span.clone()]);
-                sharpen(&mut ay[..n], &hy[span]);
             }
             let at = |r: i32, c: i32| r as usize * self.width + c as usize;
             #[cfg(target_arch = "x86_64")]
@@ -546,17 +523,6 @@ fn floor_small(v: f32) -> f32 {
 fn index(v: f32, n: f32) -> i32 {
     // SAFETY: max/min drop NaN and bound the value to 0..n-1 < 2^31.
     unsafe { v.max(0.0).min(n - 1.0).to_int_unchecked::<i32>() }
-}
-
-/// Bilinear fractions (the tap's offset past texel centre `x0`, 0..1) made the weight of
-/// texel `x0 + 1` in the box of half-width `h` texels around the tap: the part of the box
-/// past their shared edge (at fraction 0.5). h = 0.5 leaves the fraction as it is.
-#[inline]
-fn sharpen(frac: &mut [f32], half: &[f32]) {
-    for (a, &h) in frac.iter_mut().zip(half) {
-        let h = h.clamp(1.0 / 64.0, 0.5);
-        *a = ((*a - 0.5) * (0.5 / h) + 0.5).clamp(0.0, 1.0);
-    }
 }
 
 #[inline]

@@ -258,7 +258,6 @@ impl Resampler {
             dirs: Dirs::default(),
             slot: [0; BATCH],
             weight: [0.0; BATCH],
-            half: [0.0; BATCH],
         };
         // Source texels a texel spans (0 without antialiasing: always one tap).
         let ratio = |cx: f32, cy: f32| {
@@ -297,8 +296,7 @@ impl Resampler {
                 let centre = dir(cx, cy);
                 if ratio <= ONE_TAP && (centre.is_some() || !this.antialias) {
                     if let Some(d) = centre {
-                        // A point tap: the tent, as on the single-tap path.
-                        taps.push(d, (0, f32::INFINITY), i, 1.0, &mut acc);
+                        taps.push(d, 0, i, 1.0, &mut acc);
                         empty[i] = false;
                     }
                     continue;
@@ -315,12 +313,6 @@ impl Resampler {
                     (rest.ceil() as usize).clamp(1, sub)
                 };
                 let step = 1.0 / n as f32;
-                // Each tap stands for a square of the texel's footprint, n x n tiling it.
-                let half = if centre.is_none() {
-                    f32::INFINITY
-                } else {
-                    0.5 * step * ratio * src_angle
-                };
                 for j in 0..n {
                     for k in 0..n {
                         let sx = x as f32 + (k as f32 + 0.5) * step;
@@ -328,7 +320,7 @@ impl Resampler {
                         if let Some(d) = dir(sx, sy) {
                             let wgt = density(sx, sy);
                             if wgt > 0.0 {
-                                taps.push(d, (level, half), i, wgt, &mut acc);
+                                taps.push(d, level, i, wgt, &mut acc);
                                 total[i] += wgt;
                                 empty[i] = false;
                             }
@@ -397,27 +389,17 @@ struct Taps<'a> {
     dirs: Dirs,
     slot: [u8; BATCH],
     weight: [f32; BATCH],
-    /// Each tap's square, radians either side (see `Environment::sample_many_box`).
-    half: [f32; BATCH],
 }
 
 impl Taps<'_> {
     #[inline]
-    fn push(
-        &mut self,
-        d: Vec3,
-        (level, half): (usize, f32),
-        slot: usize,
-        weight: f32,
-        acc: &mut [Vec4; RUN],
-    ) {
+    fn push(&mut self, d: Vec3, level: usize, slot: usize, weight: f32, acc: &mut [Vec4; RUN]) {
         if self.dirs.is_full() || (level != self.level && self.dirs.len > 0) {
             self.flush(acc);
         }
         self.level = level;
         self.slot[self.dirs.len] = slot as u8;
         self.weight[self.dirs.len] = weight;
-        self.half[self.dirs.len] = half;
         self.dirs.push(d);
     }
 
@@ -431,10 +413,8 @@ impl Taps<'_> {
         }
         self.dirs.normalize();
         let mut out = [Vec4::ZERO; BATCH];
-        let half = &self.half[..n];
-
         self.env
-            .sample_many_box(&self.dirs, self.level, self.interp, half, &mut out[..n]);
+            .sample_many(&self.dirs, self.level, self.interp, &mut out[..n]);
         for ((&s, &w), v) in self.slot[..n].iter().zip(&self.weight[..n]).zip(&out[..n]) {
             acc[s as usize] += *v * w;
         }

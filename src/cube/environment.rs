@@ -46,22 +46,6 @@ pub trait Environment: Sync {
             *o = self.sample(dirs.get(i), level, interp);
         }
     }
-    /// `sample_many` for antialiasing taps, each standing for a square `half[i]` radians
-    /// either side of its direction (its share of an output texel's footprint): an
-    /// environment of coarse texels gives the square's mean over them, so the taps of a
-    /// footprint sum to its exact mean (a tent would blur it by a texel more). By default
-    /// `sample_many`.
-    fn sample_many_box(
-        &self,
-        dirs: &Dirs,
-        level: usize,
-        interp: Interp,
-        half: &[f32],
-        out: &mut [Vec4],
-    ) {
-        let _ = half;
-        self.sample_many(dirs, level, interp, out)
-    }
 }
 
 /// Directions per batch: enough to amortise a call, small enough to live on the stack.

@@ -419,44 +419,6 @@ impl Environment for ImageEnv<'_> {
         }
     }
 
-    /// A panorama's boxes in texels of the level: `half` over a row's angle (pi / height)
-    /// down, and over a column's (2 pi / width, times the cosine of the latitude) across.
-    fn sample_many_box(
-        &self,
-        dirs: &Dirs,
-        level: usize,
-        interp: Interp,
-        half: &[f32],
-        out: &mut [Vec4],
-    ) {
-        if self.projection != Projection::Equirect || interp != Interp::Bilinear {
-            return self.sample_many(dirs, level, interp, out);
-        }
-        let n = dirs.len;
-        let img = self.level(level);
-        let (w, h) = (img.width as f32, img.height as f32);
-        let mut u = [0.0f32; BATCH];
-        let mut v = [0.0f32; BATCH];
-        project(dirs, &mut u, &mut v, equirect::dir_to_uv);
-        let mut hx = [0.0f32; BATCH];
-        let mut hy = [0.0f32; BATCH];
-        let (across, down) = (w / std::f32::consts::TAU, h / std::f32::consts::PI);
-        for i in 0..n {
-            u[i] *= w;
-            v[i] *= h;
-            hy[i] = half[i] * down;
-            let cos = (1.0 - dirs.y[i] * dirs.y[i]).max(1e-12).sqrt();
-            hx[i] = half[i] * across / cos;
-        }
-        let ceiling = if level == 0 {
-            self.ceiling
-        } else {
-            Vec4::INFINITY
-        };
-        let boxes = Some((&hx[..n], &hy[..n]));
-        img.box_many_below(&u[..n], &v[..n], boxes, true, ceiling, &mut out[..n]);
-    }
-
     fn texel_angle(&self) -> f32 {
         let img = self.base;
         match self.projection {
