@@ -89,8 +89,11 @@ fn off(cube: &CubeMap, truth: &[[f64; 3]]) -> f64 {
 /// panoramas' suns then fall on enough points; 64 left the truth itself 4% off on
 /// esplanade): the whole image's cube within 1% of each texel's exact mean (measured
 /// 0.04-0.74%, park the largest), the copy reduced as decoded within 2% (measured
-/// 0.28-1.78%, esplanade the largest; city 0.65% where its whole image is 0.07%: the
-/// reduced path is the next place to look for texels nearer the truth).
+/// 0.28-1.78%, esplanade the largest; city 0.65% where its whole image is 0.07%). Not the
+/// copy's texels (its levels equal the whole image's pyramid, peaks and all) but the taps:
+/// faces this small get 16 taps a side, so the whole image's footprints read a level finer
+/// than the reduced copy holds. At 512 (4 a side) a 16K panorama's finest texels read the
+/// 8192-wide level, which is the reduced copy itself.
 #[test]
 fn streamed_cube_is_as_close_to_the_exact_means_as_the_whole_images() {
     let opts = ReadOptions::default();
