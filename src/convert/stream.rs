@@ -134,8 +134,7 @@ fn reduce(b: &BandSource, path: &Path, f: usize) -> Result<Loaded> {
     let grid = Grid::Projection(Projection::Equirect, w, h);
     let lines = b.block_lines().next_power_of_two().max(f).max(MIN_BAND);
     let weights = level_weights(w, h, f);
-    // Each band's reduced rows written straight into their place in the reduced image (its
-    // band images freed at once and reused by the thread's next band).
+    // The reduced image, one slot of rows a band.
     let mut image = Image::new(w / f, h / f);
     let slots: Vec<Mutex<&mut [Vec4]>> = image
         .pixels
