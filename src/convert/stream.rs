@@ -1,33 +1,40 @@
 //! A large panorama folded into a reduced copy as it is decoded (issue 47): a job whose
 //! outputs are much coarser than its input (a 16K panorama to 512 px faces) never holds the
-//! full float image (16 bytes a texel, 2 GB at 16K), and reads each of its texels once.
+//! full float image (16 bytes a texel, 2 GB at 16K), and inflates each block once.
 //!
-//! Each band of rows is decoded into a thread's buffer and box-reduced there by 2^m per axis,
-//! each 2 x 2 step weighted by the rows' solid angles as the lookup pyramid's are (the flux is
-//! kept), while every full row's sums and maximum are taken for the peaks. Once the mean is
-//! known, the few bands with texels above the peak ceiling are decoded again: their peaks are
-//! kept at full resolution (splatted into each output, as from a whole image) and their
-//! reduced rows made again below the ceiling. m is the largest that keeps a reduced texel no
-//! wider than half the finest output texel, so the exact resampler still takes two taps or
-//! more per axis of every texel: on the real panoramas, cubes of 8 and 16 from the reduced
-//! copy differ from the whole image's by at most 1.6% of the map's mean texel (esplanade;
-//! 5.2% with reduced texels as wide as the finest output texel), the flux by under 0.01%
-//! (`tests/it/streamed.rs` prints them).
+//! Each band's rows come from `io::bands` a row at a time as planes and are reduced 2 x 2
+//! while in cache, each pair of rows weighted by their solid angles as the lookup pyramid's
+//! are (the flux is kept); nothing of the full image is held beyond two rows a thread. The
+//! peaks' ceiling (`PEAK_RATIO` times the mean) is needed before the first row is reduced,
+//! so it is guessed from 16 evenly spaced bands read first (their mean with each value
+//! clamped to their plain mean's ceiling: a sun in the sample weighs 16 times its share
+//! there, and one outside it is missed, so the guess lands below the mean's own). Every
+//! reduced row is clamped to the guess and the full texels above it kept as peaks; once the
+//! pass has the mean, the ceiling is raised to it and what the peaks held between the two
+//! goes back into the reduced texels. A guess above the mean's ceiling, or one so low that
+//! more than a texel in 16 would be a peak, reads the bands again below the mean's own.
+//! The copy is always half the panorama's size: the resampler takes the levels it needs
+//! from its pyramid, as from a whole image's. Cubes of 8 and 16 from it differ from the
+//! whole image's by at most 1.5% of the map's mean texel (esplanade), the flux by under
+//! 0.01% (`tests/it/streamed.rs` prints them).
 
 use super::{Loaded, Source};
 use crate::error::Result;
 use crate::flux::{Grid, Peaks, RowStats};
 use crate::image::Image;
-use crate::io::bands::{self, BandSource, Shape};
+use crate::io::bands::{self, BandSource, Rows, Shape};
 use crate::io::ReadOptions;
 use crate::layout::{equirect, Kind, Projection};
-use glam::Vec4;
+use glam::{Vec3, Vec4};
+use rayon::prelude::*;
+use std::marker::PhantomData;
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-/// A panorama reduced as it was decoded, with its peaks at full resolution.
+/// A panorama reduced 2 x 2 as it was decoded, with its peaks at full resolution.
 pub struct Reduced {
-    /// The panorama box-reduced by 2^m per axis, below the peaks' ceiling.
+    /// The panorama box-reduced 2 x 2, below the peaks' ceiling.
     pub image: Image,
     /// The full-resolution texels above the ceiling (None: no peaks).
     pub peaks: Option<Peaks>,
@@ -38,20 +45,21 @@ pub struct Reduced {
 /// Fewest rows a band holds: enough work per task to keep the threads busy.
 const MIN_BAND: usize = 32;
 
-/// Times (a power of two) a panorama of `w` x `h` may be reduced for outputs whose finest
-/// texel spans `min_footprint` radians: a reduced texel (its row's angle, pi / height) no
-/// wider than half that texel, at least 8 rows left, both sides divisible. 1: not worth it.
+/// Times a panorama of `w` x `h` is reduced for outputs whose finest texel spans
+/// `min_footprint` radians: 2 where a reduced texel (its row's angle, pi / height) is no
+/// wider than half that texel, at least 8 rows are left and both sides are even; 1 (not
+/// worth it) otherwise. Never more: the resampler reads coarser levels from the copy's
+/// pyramid (esplanade's cube of 8: 0.39% of the mean texel off the whole image's, where a
+/// copy reduced as far as the output allowed was 1.64% off).
 pub fn factor(w: usize, h: usize, min_footprint: f32) -> usize {
     let angle = std::f32::consts::PI / h.max(1) as f32;
-    let mut f = 1;
-    while 4.0 * f as f32 * angle <= min_footprint
-        && h / (2 * f) >= 8
-        && w.is_multiple_of(2 * f)
-        && h.is_multiple_of(2 * f)
-    {
-        f *= 2;
+    let halve =
+        4.0 * angle <= min_footprint && h / 2 >= 8 && w.is_multiple_of(2) && h.is_multiple_of(2);
+    if halve {
+        2
+    } else {
+        1
     }
-    f
 }
 
 /// What loading a panorama reduced takes, from its header alone: jobs plan their memory
@@ -77,14 +85,18 @@ impl Plan {
 
     /// Bytes in use while a job works from it: the file and each thread's band while it is
     /// decoded, the reduced copy, and its lookup pyramid (half as many again, as
-    /// [`super::InputPlan::working_bytes`] counts a whole image's). Peaks are left out: at
-    /// most a few texels in a thousand on real panoramas.
+    /// [`super::InputPlan::working_bytes`] counts a whole image's), and the peaks (24 bytes
+    /// each, as many as a guessed ceiling may keep: one texel in `MOST_PEAKS`; 2.2% of the
+    /// 16K esplanade's are above its mean's). The sample the ceiling is guessed from is
+    /// freed before the copy is made, and is smaller.
     pub fn working_bytes(&self) -> u64 {
         let (w, h) = (self.shape.width, self.shape.height);
         let reduced = ((w / self.factor) * (h / self.factor)) as u64 * 16;
+        let peaks = (w * h / MOST_PEAKS) as u64 * 24;
         self.shape
             .decode_bytes(self.lines())
             .saturating_add(reduced + reduced / 2)
+            .saturating_add(peaks)
     }
 }
 
@@ -123,74 +135,48 @@ pub(crate) fn load_planned(path: &Path, opts: &ReadOptions, plan: &Plan) -> Resu
         if b.size() != (plan.shape.width, plan.shape.height) {
             return Ok(None);
         }
-        reduce(b, path, plan.factor).map(Some)
+        reduce(b, path).map(Some)
     })?;
     Ok(loaded.flatten())
 }
 
-/// The two passes over the bands (see the module's text).
-fn reduce(b: &BandSource, path: &Path, f: usize) -> Result<Loaded> {
+/// Bands read first, at most, for the ceiling (every band of a panorama that has no more).
+const SAMPLE_BANDS: usize = 16;
+
+/// The passes over the bands (see the module's text).
+fn reduce(b: &BandSource, path: &Path) -> Result<Loaded> {
     let (w, h) = b.size();
-    let grid = Grid::Projection(Projection::Equirect, w, h);
-    let lines = b.block_lines().next_power_of_two().max(f).max(MIN_BAND);
-    let weights = level_weights(w, h, f);
-    // The reduced image, one slot of rows a band.
-    let mut image = Image::new(w / f, h / f);
-    let slots: Vec<Mutex<&mut [Vec4]>> = image
-        .pixels
-        .chunks_mut(lines / f * (w / f))
-        .map(Mutex::new)
-        .collect();
-    // Each band's reduced rows written into their place in the reduced image: straight
-    // there when one 2 x 2 step makes them, else through the band's own smaller copy.
-    // `seen` hears each full row just before its pair is reduced (still in cache).
-    let shrink = |y0: usize, rows: &[Vec4], ceiling: Vec4, seen: &mut dyn FnMut(usize, &[Vec4])| {
-        let mut slot = slots[y0 / lines].lock().unwrap_or_else(|e| e.into_inner());
-        if weights.len() == 1 {
-            reduce_rows(rows, w, y0, &weights[0], ceiling, &mut slot, seen);
-        } else {
-            let mut first = Image::new(w / 2, rows.len() / w / 2);
-            reduce_rows(rows, w, y0, &weights[0], ceiling, &mut first.pixels, seen);
-            slot.copy_from_slice(&further(first, y0, &weights).pixels);
-        }
-    };
-    let all = |_: usize| true;
-    let first = |y0: usize, rows: &[Vec4]| {
-        let mut stats = Vec::with_capacity(rows.len() / w);
-        shrink(y0, rows, Vec4::INFINITY, &mut |y, r| {
-            stats.push(RowStats::of_row(grid, r, y))
-        });
-        stats
-    };
-    let (bands, replaced) = b.map(path, lines, &all, &first)?;
-    let bands: Vec<Vec<RowStats>> = bands.into_iter().flatten().collect();
-    let rows: Vec<RowStats> = bands.iter().flatten().copied().collect();
-    let mut peaks = None;
-    if let Some(ceiling) = Peaks::ceiling_of(&rows) {
-        let hot: Vec<bool> = bands
-            .iter()
-            .map(|b| b.iter().any(|r| r.above(ceiling)))
-            .collect();
-        let pick = |i: usize| hot[i];
-        let again = |y0: usize, rows: &[Vec4]| {
-            let mut peaks = Vec::with_capacity(rows.len() / w);
-            shrink(y0, rows, ceiling.extend(f32::INFINITY), &mut |y, r| {
-                peaks.push(Peaks::of_row(grid, y, r, ceiling))
+    let lines = b.block_lines().next_power_of_two().max(MIN_BAND);
+    let guess = guess_ceiling(b, path, lines)?;
+    let mut image = Image::new(w / 2, h / 2);
+    let most = w * h / MOST_PEAKS;
+    let (mut rows, mut peaks, replaced) = reduce_below(b, path, (lines, most), guess, &mut image)?;
+    let exact = Peaks::ceiling_of(&rows).unwrap_or(Vec3::INFINITY);
+    match peaks {
+        // The guess below the mean's own ceiling (as it is meant to be): the peaks between
+        // the two go back into the reduced image.
+        Some(None) if guess.cmple(exact).all() => {}
+        Some(Some(mut p)) if guess.cmple(exact).all() => {
+            let weights = equirect::row_weights(w, h);
+            let share = |y: usize| {
+                let pair = y & !1;
+                weights[y] / (2.0 * (weights[pair] + weights[pair + 1]))
+            };
+            let half = w / 2;
+            p.raise(exact, |x, y, back| {
+                let t = &mut image.pixels[(y / 2) * half + x / 2];
+                *t += (back * share(y)).extend(0.0);
             });
-            peaks
-        };
-        let (redone, _) = b.map(path, lines, &pick, &again)?;
-        peaks = Peaks::from_streamed(
-            grid,
-            ceiling,
-            redone.into_iter().flatten().flatten().collect(),
-        );
+            peaks = Some(Some(p).filter(|p| !p.is_empty()));
+        }
+        // A sample far from the whole: read again below the mean's own ceiling.
+        _ => (rows, peaks, _) = reduce_below(b, path, (lines, usize::MAX), exact, &mut image)?,
     }
-    drop(slots);
+    drop(rows);
     Ok(Loaded {
         source: Source::Reduced(Box::new(Reduced {
             image,
-            peaks,
+            peaks: peaks.flatten(),
             full: (w, h),
         })),
         kind: Kind::Equirect.into(),
@@ -198,6 +184,173 @@ fn reduce(b: &BandSource, path: &Path, f: usize) -> Result<Loaded> {
         meta: b.meta(replaced),
         files: vec![path.to_path_buf()],
     })
+}
+
+/// The ceiling guessed from evenly spaced bands: `PEAK_RATIO` times their mean with each
+/// value clamped to the ceiling of their plain mean, so a sun that falls in the sample
+/// (whose weight there is many times its own) does not lift it.
+fn guess_ceiling(b: &BandSource, path: &Path, lines: usize) -> Result<Vec3> {
+    let (w, h) = b.size();
+    let grid = Grid::Projection(Projection::Equirect, w, h);
+    let every = (h.div_ceil(lines) / SAMPLE_BANDS).max(1);
+    let sampled = |i: usize| i % every == every / 2;
+    let keep = |y0: usize, n: usize, rows: &mut dyn Rows| {
+        let mut planes = vec![0.0f32; 4 * w * n];
+        planes
+            .chunks_exact_mut(4 * w)
+            .for_each(|r| rows.next_into(r));
+        (y0, planes)
+    };
+    let (sample, _) = b.map_rows(path, lines, &sampled, &keep)?;
+    let sample: Vec<(usize, Vec<f32>)> = sample.into_iter().flatten().collect();
+    let stats = |clamp: Vec3| -> Vec<RowStats> {
+        sample
+            .par_iter()
+            .flat_map_iter(|(y0, planes)| {
+                (*y0..)
+                    .zip(planes.chunks_exact(4 * w))
+                    .map(move |(y, row)| RowStats::sums_of_planes(grid, row, y, clamp))
+            })
+            .collect()
+    };
+    let plain = Peaks::ceiling_of(&stats(Vec3::INFINITY)).unwrap_or(Vec3::INFINITY);
+    Ok(Peaks::ceiling_of(&stats(plain)).unwrap_or(Vec3::INFINITY))
+}
+
+/// Every row's weighted sums, the peaks (None: more than asked for) and the count of values
+/// replaced.
+type Found = (Vec<RowStats>, Option<Option<Peaks>>, usize);
+
+/// One in this many texels may be peaks below a guessed ceiling before the pass gives up on
+/// it (their 24 bytes each are held): a guess far below the mean's own.
+const MOST_PEAKS: usize = 16;
+
+/// One pass over the bands of `lines` rows: each band's rows reduced below `ceiling` into
+/// its slot of the reduced `image`, their peaks above it kept (unless there are more than
+/// `most`) and every row's sums taken.
+fn reduce_below(
+    b: &BandSource,
+    path: &Path,
+    (lines, most): (usize, usize),
+    ceiling: Vec3,
+    image: &mut Image,
+) -> Result<Found> {
+    let (w, h) = b.size();
+    let grid = Grid::Projection(Projection::Equirect, w, h);
+    let weights = equirect::row_weights(w, h);
+    let slots: Vec<Mutex<&mut [Vec4]>> = image
+        .pixels
+        .chunks_mut(lines / 2 * (w / 2))
+        .map(Mutex::new)
+        .collect();
+    let count = AtomicUsize::new(0);
+    let shrink = |y0: usize, n: usize, rows: &mut dyn Rows| {
+        let mut slot = slots[y0 / lines].lock().unwrap_or_else(|e| e.into_inner());
+        let (mut sums, mut peaks) = (Vec::with_capacity(n), Vec::new());
+        let pairs = Pairs { rows, w, y0 };
+        pairs.reduce(n, &weights, ceiling, &mut slot, &mut |y, planes| {
+            sums.push(RowStats::sums_of_planes(grid, planes, y, Vec3::INFINITY));
+            let (r, g, b) = (&planes[..w], &planes[w..2 * w], &planes[2 * w..3 * w]);
+            let above = |p: &[f32], c: f32| p.iter().fold(false, |a, &v| a | (v > c));
+            let hot = above(r, ceiling.x) || above(g, ceiling.y) || above(b, ceiling.z);
+            if hot && count.load(Ordering::Relaxed) <= most {
+                let row = Peaks::of_planes(grid, y, planes, ceiling);
+                count.fetch_add(row.len(), Ordering::Relaxed);
+                peaks.push(row);
+            }
+        });
+        (sums, peaks)
+    };
+    let (bands, replaced) = b.map_rows(path, lines, &|_| true, &shrink)?;
+    let (mut rows, mut found) = (Vec::with_capacity(h), Vec::new());
+    for (sums, peaks) in bands.into_iter().flatten() {
+        rows.extend(sums);
+        found.extend(peaks);
+    }
+    let whole = count.into_inner() <= most;
+    let peaks = whole.then(|| Peaks::from_streamed(grid, ceiling, found));
+    Ok((rows, peaks, replaced))
+}
+
+/// A band's rows (the first `y0` of a panorama `w` wide), reduced a pair at a time.
+struct Pairs<'a> {
+    rows: &'a mut dyn Rows,
+    w: usize,
+    y0: usize,
+}
+
+impl Pairs<'_> {
+    /// The first 2 x 2 step of the band's `n` rows into `out` (half the rows and columns),
+    /// each value clamped to its channel's `ceiling`, the same sums as [`reduce_rows`]; each
+    /// full row handed to `seen(its row in the panorama, its planes)` while it is in cache.
+    fn reduce(
+        self,
+        n: usize,
+        row_weight: &[f32],
+        ceiling: Vec3,
+        out: &mut [Vec4],
+        seen: &mut dyn FnMut(usize, &[f32]),
+    ) {
+        let Pairs { rows, w, y0 } = self;
+        let mut a = vec![0.0f32; 4 * w];
+        let mut b = vec![0.0f32; 4 * w];
+        let mut sums = vec![0.0f32; 2 * w];
+        for (j, out) in out.chunks_exact_mut(w / 2).take(n / 2).enumerate() {
+            let (ya, yb) = (y0 + 2 * j, y0 + 2 * j + 1);
+            rows.next_into(&mut a);
+            rows.next_into(&mut b);
+            seen(ya, &a);
+            seen(yb, &b);
+            let (wa, wb) = (row_weight[ya], row_weight[yb]);
+            let total = 2.0 * (wa + wb);
+            if total <= 0.0 {
+                out.fill(Vec4::ZERO);
+                continue;
+            }
+            let how = (wa / total, wb / total, ceiling.extend(f32::INFINITY));
+            crate::simd::fast(PairRow((&a, &b, how, &mut sums, out), PhantomData));
+        }
+    }
+}
+
+/// Two rows' planes, their weights and the ceiling, the sums' planes and the reduced row.
+type PairArgs<'k> = (
+    &'k [f32],
+    &'k [f32],
+    (f32, f32, Vec4),
+    &'k mut [f32],
+    &'k mut [Vec4],
+);
+
+crate::simd::kernel!(PairRow(PairArgs<'k>) -> () = pair_row);
+
+/// One reduced row from the planes of rows `a` and `b` (weighed `fa` and `fb`, each value
+/// clamped to its channel's `ceiling`), each channel into its plane of `sums` first, then
+/// into the texels of `out`.
+#[inline(always)]
+fn pair_row((a, b, (fa, fb, ceiling), sums, out): PairArgs) {
+    let w = a.len() / 4;
+    let half = w / 2;
+    // As `Vec4::min` on x86 (`minps`: the ceiling where a value is NaN).
+    let lo = |v: f32, c: f32| if v < c { v } else { c };
+    for c in 0..4 {
+        let cc = ceiling[c];
+        let (pa, pb) = (&a[c * w..(c + 1) * w], &b[c * w..(c + 1) * w]);
+        let plane = &mut sums[c * half..(c + 1) * half];
+        for ((s, qa), qb) in plane
+            .iter_mut()
+            .zip(pa.chunks_exact(2))
+            .zip(pb.chunks_exact(2))
+        {
+            *s = (lo(qa[0], cc) + lo(qa[1], cc)) * fa + (lo(qb[0], cc) + lo(qb[1], cc)) * fb;
+        }
+    }
+    let (r, rest) = sums.split_at(half);
+    let (g, rest) = rest.split_at(half);
+    let (bl, al) = rest.split_at(half);
+    for ((((t, &r), &g), &b), &a) in out.iter_mut().zip(r).zip(g).zip(bl).zip(al) {
+        *t = Vec4::new(r, g, b, a);
+    }
 }
 
 /// Each 2 x 2 step's row weights for reducing a `w` x `h` panorama by `f` (a power of two):
@@ -220,15 +373,7 @@ pub fn reduce_band(
     ceiling: Vec4,
 ) -> Image {
     let mut img = Image::new(w / 2, rows.len() / w / 2);
-    reduce_rows(
-        rows,
-        w,
-        y0,
-        &weights[0],
-        ceiling,
-        &mut img.pixels,
-        &mut |_, _| {},
-    );
+    reduce_rows(rows, (w, y0), &weights[0], ceiling, &mut img.pixels);
     further(img, y0, weights)
 }
 
@@ -241,24 +386,19 @@ fn further(mut img: Image, y0: usize, weights: &[Vec<f32>]) -> Image {
     img
 }
 
-/// The first 2 x 2 step of [`reduce_band`] into `out` (half the rows and columns), each
-/// full row handed to `seen(its row in the panorama, its texels)` just before its pair is
-/// reduced, while it is in cache.
+/// The first 2 x 2 step of [`reduce_band`] (rows `y0..` of a panorama `w` wide) into `out`
+/// (half the rows and columns).
 fn reduce_rows(
     rows: &[Vec4],
-    w: usize,
-    y0: usize,
+    (w, y0): (usize, usize),
     row_weight: &[f32],
     ceiling: Vec4,
     out: &mut [Vec4],
-    seen: &mut dyn FnMut(usize, &[Vec4]),
 ) {
     for (j, out) in out.chunks_exact_mut(w / 2).enumerate() {
         let (a, b) = (2 * j, 2 * j + 1);
         let ra = &rows[a * w..(a + 1) * w];
         let rb = &rows[b * w..(b + 1) * w];
-        seen(y0 + a, ra);
-        seen(y0 + b, rb);
         let (wa, wb) = (row_weight[y0 + a], row_weight[y0 + b]);
         let total = 2.0 * (wa + wb);
         if total <= 0.0 {

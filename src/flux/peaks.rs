@@ -19,6 +19,13 @@ struct Peak {
 /// One streamed row's peak texels (see `Peaks::from_streamed`).
 pub(crate) struct PeakRow(Vec<Peak>);
 
+impl PeakRow {
+    /// Its count of peak texels.
+    pub(crate) fn len(&self) -> usize {
+        self.0.len()
+    }
+}
+
 /// The texels of row `y` of `face` above `ceiling`, with their excess.
 fn row_peaks(
     grid: Grid,
@@ -57,11 +64,6 @@ pub(crate) struct RowStats {
 }
 
 impl RowStats {
-    /// Whether the row holds a texel with a channel above `ceiling`.
-    pub(crate) fn above(&self, ceiling: Vec3) -> bool {
-        self.max.cmpgt(ceiling).any()
-    }
-
     fn of(grid: Grid, image: &Image, y: usize) -> RowStats {
         let w = grid.dims().0;
         Self::of_row(grid, &image.pixels[y * w..(y + 1) * w], y)
@@ -107,6 +109,50 @@ impl RowStats {
         }
         RowStats { sum, weight, max }
     }
+}
+
+impl RowStats {
+    /// [`RowStats::of_row`]'s sums of an equirect panorama's row `y` given as planes (R, G,
+    /// B, A: see `io::bands::Rows`), each value clamped to its channel's `clamp`, in eight
+    /// lanes at a time (they differ from `of_row`'s in the last bits); no maximum is taken.
+    pub(crate) fn sums_of_planes(grid: Grid, planes: &[f32], y: usize, clamp: Vec3) -> RowStats {
+        let w = planes.len() / 4;
+        let a = grid.density(0.5, y as f32 + 0.5) as f64;
+        let mut sum = [0.0f64; 3];
+        for (c, plane) in planes.chunks_exact(w).take(3).enumerate() {
+            let kernel = Sum((plane, clamp[c]), std::marker::PhantomData);
+            sum[c] = crate::simd::fast(kernel) * a;
+        }
+        RowStats {
+            sum,
+            weight: a * w as f64,
+            max: Vec3::ZERO,
+        }
+    }
+}
+
+crate::simd::kernel!(Sum((&'k [f32], f32)) -> f64 = sum_of);
+
+/// The sum of `values`, each at most `clamp`: blocks of 256 in eight f32 lanes, the blocks
+/// in f64.
+#[inline(always)]
+fn sum_of((values, clamp): (&[f32], f32)) -> f64 {
+    let lo = |v: f32| if v < clamp { v } else { clamp };
+    let mut sum = 0.0f64;
+    for block in values.chunks(256) {
+        let mut lanes = [0.0f32; 8];
+        let mut eights = block.chunks_exact(8);
+        for e in &mut eights {
+            for i in 0..8 {
+                lanes[i] += lo(e[i]);
+            }
+        }
+        for (i, &v) in eights.remainder().iter().enumerate() {
+            lanes[i] += lo(v);
+        }
+        sum += lanes.iter().sum::<f32>() as f64;
+    }
+    sum
 }
 
 impl Peaks {
@@ -184,10 +230,11 @@ impl Peaks {
         })
     }
 
-    /// A panorama's peaks found as it streams by (`convert::stream`): the ceiling from every
-    /// row's stats ([`RowStats::of_row`]), then the peaks of the rows above it, in row order.
+    /// A panorama's peaks found as it streams by (`convert::stream`): those above `ceiling`
+    /// of every row, in row order.
     pub(crate) fn from_streamed(grid: Grid, ceiling: Vec3, rows: Vec<PeakRow>) -> Option<Peaks> {
-        let texels: Vec<Peak> = rows.into_iter().flat_map(|r| r.0).collect();
+        let mut texels = Vec::with_capacity(rows.iter().map(PeakRow::len).sum());
+        rows.into_iter().for_each(|r| texels.extend(r.0));
         (!texels.is_empty()).then_some(Peaks {
             ceiling,
             grid,
@@ -195,9 +242,43 @@ impl Peaks {
         })
     }
 
-    /// The peak texels of row `y` of a streamed panorama (see `from_streamed`).
-    pub(crate) fn of_row(grid: Grid, y: usize, row: &[Vec4], ceiling: Vec3) -> PeakRow {
-        PeakRow(row_peaks(grid, 0, y, row, ceiling).collect())
+    /// The peak texels of row `y` of a streamed panorama (see `from_streamed`), given as
+    /// planes (R, G, B, A: see `io::bands::Rows`).
+    pub(crate) fn of_planes(grid: Grid, y: usize, planes: &[f32], ceiling: Vec3) -> PeakRow {
+        let w = planes.len() / 4;
+        let (r, g, b) = (&planes[..w], &planes[w..2 * w], &planes[2 * w..3 * w]);
+        let over = |x: &usize| r[*x] > ceiling.x || g[*x] > ceiling.y || b[*x] > ceiling.z;
+        // A panorama's row shares one solid angle (two sines): asked once.
+        let row = matches!(grid, Grid::Projection(Projection::Equirect, ..))
+            .then(|| grid.solid_angle(0, y) > 0.0);
+        let peaks = (0..w).filter(over).filter_map(|x| {
+            let excess = (Vec3::new(r[x], g[x], b[x]) - ceiling).max(Vec3::ZERO);
+            let covers = row.unwrap_or_else(|| grid.solid_angle(x, y) > 0.0);
+            covers.then_some(Peak {
+                face: 0,
+                x: x as u32,
+                y: y as u32,
+                excess,
+            })
+        });
+        PeakRow(peaks.collect())
+    }
+
+    /// Raises the ceiling to `to` (no channel lower than it was): what each peak texel held
+    /// between the two goes to `back(x, y, that part)`, in the peaks' order, and texels left
+    /// with no excess are no longer peaks.
+    pub(crate) fn raise(&mut self, to: Vec3, mut back: impl FnMut(usize, usize, Vec3)) {
+        let from = self.ceiling;
+        for p in &mut self.texels {
+            let value = from + p.excess;
+            let part = (value.min(to) - from).max(Vec3::ZERO);
+            if part != Vec3::ZERO {
+                back(p.x as usize, p.y as usize, part);
+            }
+            p.excess = (value - to).max(Vec3::ZERO);
+        }
+        self.texels.retain(|p| p.excess != Vec3::ZERO);
+        self.ceiling = to;
     }
 
     /// Scales the peaks' excess and ceiling by 2^`exposure` (`Loaded::expose`).

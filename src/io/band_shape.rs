@@ -1,6 +1,6 @@
-//! The shape of a file decoded in bands (`io::bands`), from its header alone: apart from
-//! `bands`, so the band readers of each format (`exr::stream`, `rgbe::stream`) name it without
-//! importing the module that names them.
+//! The shape of a file decoded in bands (`io::bands`), from its header alone, and the rows of
+//! a band as planes: apart from `bands`, so the band readers of each format (`exr::stream`,
+//! `rgbe::stream`) name them without importing the module that names them.
 
 /// What decoding a file in bands takes, from its header alone: jobs plan their memory with it
 /// before the file is read.
@@ -31,4 +31,12 @@ impl Shape {
         let threads = rayon::current_num_threads() as u64;
         self.file_bytes.saturating_add(threads.saturating_mul(band))
     }
+}
+
+/// A band's rows decoded one at a time, each as four planes (R, G, B, A: alpha 1 where the
+/// file has none), for a fold that reduces each row while it is in cache.
+pub trait Rows {
+    /// Decodes the band's next row into `planes` (four times the width, a plane after
+    /// another); zeros after a decoding error, which the map then returns.
+    fn next_into(&mut self, planes: &mut [f32]);
 }

@@ -8,7 +8,27 @@ use crate::error::Result;
 use glam::Vec4;
 use std::path::Path;
 
-pub use super::band_shape::Shape;
+pub use super::band_shape::{Rows, Shape};
+
+/// Rows already decoded as texels, handed out as planes.
+struct TexelRows<'a> {
+    rows: std::slice::ChunksExact<'a, Vec4>,
+}
+
+impl Rows for TexelRows<'_> {
+    fn next_into(&mut self, planes: &mut [f32]) {
+        let w = planes.len() / 4;
+        let Some(row) = self.rows.next() else {
+            planes.fill(0.0);
+            return;
+        };
+        for (c, plane) in planes.chunks_exact_mut(w).enumerate() {
+            for (v, p) in plane.iter_mut().zip(row) {
+                *v = p[c];
+            }
+        }
+    }
+}
 
 /// A checked file ready to be decoded band by band.
 pub enum BandSource<'a> {
@@ -48,6 +68,34 @@ impl BandSource<'_> {
         match self {
             BandSource::Exr(b) => b.map(path, lines, pick, fold),
             BandSource::Hdr(b) => Ok((b.map(lines, pick, fold), 0)),
+        }
+    }
+
+    /// `map` with each band handed to `fold(first row, rows, its rows)` a row at a time, as
+    /// planes: an OpenEXR file's straight from its blocks, never as texels.
+    pub fn map_rows<T: Send>(
+        &self,
+        path: &Path,
+        lines: usize,
+        pick: &(dyn Fn(usize) -> bool + Sync),
+        fold: &(dyn Fn(usize, usize, &mut dyn Rows) -> T + Sync),
+    ) -> Result<(Vec<Option<T>>, usize)> {
+        match self {
+            BandSource::Exr(b) => b.map_rows(path, lines, pick, fold),
+            BandSource::Hdr(b) => {
+                let w = b.size().0;
+                let texels = |y0: usize, rows: &[Vec4]| {
+                    let n = rows.len() / w;
+                    fold(
+                        y0,
+                        n,
+                        &mut TexelRows {
+                            rows: rows.chunks_exact(w),
+                        },
+                    )
+                };
+                Ok((b.map(lines, pick, &texels), 0))
+            }
         }
     }
 

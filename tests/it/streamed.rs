@@ -91,18 +91,17 @@ fn off(cube: &CubeMap, truth: &[[f64; 3]]) -> f64 {
 }
 
 /// The reduced copy's cube against the whole image's: flux bound 0.5% (the flux tests'),
-/// mean texel difference measured at most 1.64% of the map's (esplanade, faces of 8), bound
+/// mean texel difference measured at most 1.45% of the map's (esplanade, faces of 16), bound
 /// 2%.
 ///
 /// Both against the brute force (1536 / size points a texel per axis, 192 at faces 8: the
 /// panoramas' suns then fall on enough points; 64 left the truth itself 4% off on
 /// esplanade): the whole image's cube within 1% of each texel's exact mean (measured
 /// 0.04-0.74%, park the largest), the copy reduced as decoded within 2% (measured
-/// 0.28-1.78%, esplanade the largest; city 0.65% where its whole image is 0.07%). Not the
-/// copy's texels (its levels equal the whole image's pyramid, peaks and all) but the taps:
-/// faces this small get 16 taps a side, so the whole image's footprints read a level finer
-/// than the reduced copy holds. At 512 (4 a side) a 16K panorama's finest texels read the
-/// 8192-wide level, which is the reduced copy itself.
+/// 0.13-1.71%, esplanade's faces of 16 the largest). The copy is half the panorama's size
+/// and its pyramid is the whole image's from level 1; faces this small get 16 taps a side,
+/// so the whole image's footprints read level 0 where the copy's read level 1. At 512 (4 a
+/// side) a 16K panorama's finest texels read the 8192-wide level, the copy itself.
 #[test]
 fn streamed_panoramas_give_the_whole_images_cube() {
     let opts = ReadOptions::default();

@@ -17,21 +17,43 @@ use rayon::prelude::*;
 
 /// What each thread keeps between blocks: its inflater and buffers, grown to the largest
 /// block it met.
-struct Scratch {
+pub(super) struct Scratch {
+    pub unpack: Unpack,
+    pub floats: Vec<f32>,
+    pub halves: Vec<f16>,
+}
+
+/// A thread's decompressors and the buffers a block is unpacked into.
+pub(super) struct Unpack {
     inflate: libdeflater::Decompressor,
     piz: super::piz::Scratch,
     zstd: Option<zstd::bulk::Decompressor<'static>>,
     inner: Vec<u8>,
     bytes: Vec<u8>,
-    floats: Vec<f32>,
-    halves: Vec<f16>,
+}
+
+impl Unpack {
+    /// The buffer the last block was unpacked into (unless it was stored as it is).
+    pub(super) fn bytes(&self) -> &[u8] {
+        &self.bytes
+    }
+
+    pub(super) fn new() -> Self {
+        Unpack {
+            inflate: libdeflater::Decompressor::new(),
+            piz: Default::default(),
+            zstd: None,
+            inner: Vec::new(),
+            bytes: Vec::new(),
+        }
+    }
 }
 
 /// A decompressed block's samples: as stored (for each line, each channel's samples in
 /// little-endian order), or as ZIP and RLE leave them once the predictor is undone: the
 /// bytes at even offsets of the stored form, then those at odd offsets.
 #[derive(Clone, Copy)]
-enum Samples<'a> {
+pub(super) enum Samples<'a> {
     Plain(&'a [u8]),
     Split(&'a [u8]),
 }
@@ -94,7 +116,7 @@ pub(super) fn decode_blocks(
 
 /// The bytes of one scan line of `w` texels in the stored channels, and each channel's 16-bit
 /// words per sample (for PIZ): what every block of the layer is cut by.
-fn sizes(slots: &[(Option<usize>, SampleType)], w: usize) -> (usize, Vec<usize>) {
+pub(super) fn sizes(slots: &[(Option<usize>, SampleType)], w: usize) -> (usize, Vec<usize>) {
     let line_bytes = slots.iter().map(|(_, t)| t.bytes_per_sample() * w).sum();
     let words = slots
         .iter()
@@ -103,121 +125,30 @@ fn sizes(slots: &[(Option<usize>, SampleType)], w: usize) -> (usize, Vec<usize>)
     (line_bytes, words)
 }
 
-/// How `map_bands` reads: the chunks are ZSTD (see `read_meta`), the lines are sanitized,
-/// and the rows a band holds (a power of two no smaller than any block's lines).
-pub(super) struct BandRead {
-    pub zstd: bool,
-    pub sanitize: bool,
-    pub lines: usize,
-}
-
-/// The layer in bands of `lines` rows, the bands `pick` keeps decoded in parallel, each into
-/// a thread's buffer (sanitized if asked) and handed to `fold(first row, rows)`: how a
-/// panorama is reduced as it is decoded, the whole never held. The folds in band order (None
-/// where not picked) and the values replaced.
-pub(super) fn map_bands<T: Send>(
-    meta: &MetaData,
-    (slots, alpha): &Layout,
-    chunks: &[RawChunk],
-    BandRead {
-        zstd,
-        sanitize,
-        lines,
-    }: BandRead,
-    pick: &(dyn Fn(usize) -> bool + Sync),
-    fold: &(dyn Fn(usize, &[Vec4]) -> T + Sync),
-) -> std::result::Result<(Vec<Option<T>>, usize), String> {
-    let header = &meta.headers[0];
-    let (w, h) = (header.layer_size.0, header.layer_size.1);
-    let mut bands: Vec<Vec<&RawChunk>> = vec![Vec::new(); h.div_ceil(lines)];
-    for c in chunks {
-        let (y, n) = (c.bounds.position.1 as usize, c.bounds.size.1);
-        if n == 0 || y + n > h || y / lines != (y + n - 1) / lines {
-            return Err(format!("the block at line {y} crosses a band"));
-        }
-        bands[y / lines].push(c);
-    }
-    for (i, band) in bands.iter_mut().enumerate() {
-        band.sort_by_key(|c| c.bounds.position.1);
-        let mut next = i * lines;
-        for c in band.iter() {
-            if c.bounds.position.1 as usize != next {
-                return Err(format!(
-                    "scan lines {next} to {} are missing",
-                    c.bounds.position.1
-                ));
-            }
-            next += c.bounds.size.1;
-        }
-        if next != h.min((i + 1) * lines) {
-            return Err(format!(
-                "scan lines {next} to {} are missing",
-                h.min((i + 1) * lines)
-            ));
-        }
-    }
-    let (line_bytes, words) = sizes(slots, w);
-    let block = Block {
-        meta,
-        slots,
-        alpha: *alpha,
-        words: &words,
-        line_bytes,
-        zstd,
-    };
-    let each = |(s, buf): &mut (Scratch, Vec<Vec4>), (i, band): (usize, Vec<&RawChunk>)| {
-        if !pick(i) {
-            return Ok((None, 0));
-        }
-        let y0 = i * lines;
-        let n = h.min(y0 + lines) - y0;
-        buf.resize(n * w, Vec4::ZERO);
-        let mut replaced = 0;
-        for c in band {
-            let y = c.bounds.position.1 as usize;
-            let rows = &mut buf[(y - y0) * w..(y - y0 + c.bounds.size.1) * w];
-            replaced += block.decode(s, y, c, rows, sanitize)?;
-        }
-        Ok((Some(fold(y0, &buf[..n * w])), replaced))
-    };
-    let make = scratch(w);
-    let done: Vec<(Option<T>, usize)> = bands
-        .into_par_iter()
-        .enumerate()
-        .map_init(|| (make(), Vec::new()), each)
-        .collect::<std::result::Result<_, String>>()?;
-    let replaced = done.iter().map(|d| d.1).sum();
-    Ok((done.into_iter().map(|d| d.0).collect(), replaced))
-}
-
 /// A thread's scratch for lines of `w` texels.
-fn scratch(w: usize) -> impl Fn() -> Scratch + Sync {
+pub(super) fn scratch(w: usize) -> impl Fn() -> Scratch + Sync {
     move || Scratch {
-        inflate: libdeflater::Decompressor::new(),
-        piz: Default::default(),
-        zstd: None,
-        inner: Vec::new(),
-        bytes: Vec::new(),
+        unpack: Unpack::new(),
         floats: vec![0.0; 4 * w],
         halves: vec![f16::ZERO; w],
     }
 }
 
 /// What decoding any block of the common layout needs to know.
-struct Block<'m> {
-    meta: &'m MetaData,
-    slots: &'m [(Option<usize>, SampleType)],
-    alpha: bool,
+pub(super) struct Block<'m> {
+    pub meta: &'m MetaData,
+    pub slots: &'m [(Option<usize>, SampleType)],
+    pub alpha: bool,
     /// 16-bit words per sample of each channel, for PIZ.
-    words: &'m [usize],
-    line_bytes: usize,
-    zstd: bool,
+    pub words: &'m [usize],
+    pub line_bytes: usize,
+    pub zstd: bool,
 }
 
 impl Block<'_> {
     /// Decompresses `chunk` (its first line `y`) and converts it into `rows`, sanitized with
     /// `sanitize`: the count of values replaced.
-    fn decode(
+    pub(super) fn decode(
         &self,
         s: &mut Scratch,
         y: usize,
@@ -225,31 +156,50 @@ impl Block<'_> {
         rows: &mut [Vec4],
         sanitize: bool,
     ) -> std::result::Result<usize, String> {
-        let Block {
-            meta,
-            slots,
-            alpha,
-            words,
-            line_bytes,
-            zstd,
-        } = *self;
-        let header = &meta.headers[0];
-        let w = header.layer_size.0;
+        let w = self.meta.headers[0].layer_size.0;
         let Scratch {
+            unpack,
+            floats,
+            halves,
+        } = s;
+        let samples = self.unpack(unpack, y, chunk, rows.len() / w)?;
+        let mut count = 0;
+        for (line, row) in rows.chunks_exact_mut(w).enumerate() {
+            let start = line * self.line_bytes;
+            fill_row(samples, start, self.slots, self.alpha, row, floats, halves);
+            if sanitize {
+                count += row
+                    .iter_mut()
+                    .map(crate::image::sanitize_texel)
+                    .sum::<usize>();
+            }
+        }
+        Ok(count)
+    }
+
+    /// Decompresses `chunk` (its first line `y`, `lines` lines) into `u`: its samples.
+    #[inline(always)]
+    pub(super) fn unpack<'a>(
+        &self,
+        u: &'a mut Unpack,
+        y: usize,
+        chunk: &'a RawChunk,
+        lines: usize,
+    ) -> std::result::Result<Samples<'a>, String> {
+        let header = &self.meta.headers[0];
+        let w = header.layer_size.0;
+        let Unpack {
             inflate,
             piz,
             zstd: inflate_zstd,
             inner,
             bytes,
-            floats,
-            halves,
-        } = s;
-        let expected = line_bytes * (rows.len() / w);
-        let owned;
+        } = u;
+        let expected = self.line_bytes * lines;
         let samples = match (header.compression, chunk.data) {
             // A block that would not shrink is stored as it is, whatever the compression.
             (_, data) if data.len() == expected => Samples::Plain(data),
-            (_, data) if zstd => {
+            (_, data) if self.zstd => {
                 super::zstd::unpack(data, header, &chunk.bounds, inflate_zstd, inner, bytes)
                     .map_err(|e| format!("{e} (block at line {y})"))?;
                 Samples::Plain(&bytes[..])
@@ -274,37 +224,26 @@ impl Block<'_> {
                 Samples::Split(&bytes[..expected])
             }
             (Compression::PIZ, data) => {
-                super::piz::decompress(data, words, w, rows.len() / w, piz, bytes)
+                super::piz::decompress(data, self.words, w, lines, piz, bytes)
                     .map_err(|e| format!("{e} (block at line {y})"))?;
                 Samples::Plain(&bytes[..])
             }
             (Compression::Uncompressed, data) => Samples::Plain(data),
             _ => {
                 let chunk = chunk.to_chunk();
-                owned = guarded(|| UncompressedBlock::decompress_chunk(chunk, meta, false))?;
-                Samples::Plain(&owned.data)
+                let owned =
+                    guarded(|| UncompressedBlock::decompress_chunk(chunk, self.meta, false))?;
+                *bytes = owned.data;
+                Samples::Plain(&bytes[..])
             }
         };
-        let data = match samples {
-            Samples::Plain(d) | Samples::Split(d) => d,
-        };
+        let (Samples::Plain(data) | Samples::Split(data)) = samples;
         if data.len() != expected {
             return Err(format!(
                 "the block at line {y} decompresses to the wrong size"
             ));
         }
-        let mut count = 0;
-        for (line, row) in rows.chunks_exact_mut(w).enumerate() {
-            let start = line * line_bytes;
-            fill_row(samples, start, slots, alpha, row, floats, halves);
-            if sanitize {
-                count += row
-                    .iter_mut()
-                    .map(crate::image::sanitize_texel)
-                    .sum::<usize>();
-            }
-        }
-        Ok(count)
+        Ok(samples)
     }
 }
 
@@ -323,6 +262,39 @@ fn fill_row(
 ) {
     let w = row.len();
     let planes = &mut floats[..4 * w];
+    let written = line_planes(samples, start, slots, alpha, planes, halves);
+    let (r, rest) = planes.split_at(w);
+    let (g, rest) = rest.split_at(w);
+    let (b, a) = rest.split_at(w);
+    if written == [true; 4] {
+        for ((((t, &r), &g), &b), &a) in row.iter_mut().zip(r).zip(g).zip(b).zip(a) {
+            *t = Vec4::new(r, g, b, a);
+        }
+        return;
+    }
+    // A slot no channel fills keeps what the row held.
+    for (k, plane) in [r, g, b, a].into_iter().enumerate() {
+        if written[k] {
+            for (t, &v) in row.iter_mut().zip(plane) {
+                t[k] = v;
+            }
+        }
+    }
+}
+
+/// The line starting at byte `start` of the stored form as four planes of `planes` (R, G,
+/// B, A, a quarter each): each channel's samples to its slot's plane, alpha 1 if absent;
+/// which planes were written.
+#[inline(always)]
+pub(super) fn line_planes(
+    samples: Samples,
+    start: usize,
+    slots: &[(Option<usize>, SampleType)],
+    alpha: bool,
+    planes: &mut [f32],
+    halves: &mut [f16],
+) -> [bool; 4] {
+    let w = planes.len() / 4;
     let mut written = [false; 4];
     let mut at = start;
     for &(slot, kind) in slots {
@@ -344,23 +316,7 @@ fn fill_row(
         planes[3 * w..].fill(1.0);
         written[3] = true;
     }
-    let (r, rest) = planes.split_at(w);
-    let (g, rest) = rest.split_at(w);
-    let (b, a) = rest.split_at(w);
-    if written == [true; 4] {
-        for ((((t, &r), &g), &b), &a) in row.iter_mut().zip(r).zip(g).zip(b).zip(a) {
-            *t = Vec4::new(r, g, b, a);
-        }
-        return;
-    }
-    // A slot no channel fills keeps what the row held.
-    for (k, plane) in [r, g, b, a].into_iter().enumerate() {
-        if written[k] {
-            for (t, &v) in row.iter_mut().zip(plane) {
-                t[k] = v;
-            }
-        }
-    }
+    written
 }
 
 /// One channel's samples (stored bytes `from..from + size`) as floats into `out`.

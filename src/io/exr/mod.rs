@@ -25,6 +25,7 @@ mod checks;
 mod names;
 mod piz;
 mod planes;
+mod rows;
 mod select;
 pub mod stream;
 mod zstd;

@@ -3,9 +3,10 @@
 //! bytes a texel, is never held. Files outside the common layout are not offered.
 
 use super::checks::{read_chunks, read_meta, RawChunk};
-use super::{blocks, fast_layout, select, Layout};
+use super::{fast_layout, rows, select, Layout};
 use crate::error::{Error, Result};
 use crate::image::ColorSpace;
+use crate::io::band_shape::Rows;
 use crate::io::band_shape::Shape;
 use crate::io::{FileFormat, Meta, ReadOptions};
 use exr::meta::MetaData;
@@ -50,13 +51,43 @@ impl Bands<'_> {
         pick: &(dyn Fn(usize) -> bool + Sync),
         fold: &(dyn Fn(usize, &[Vec4]) -> T + Sync),
     ) -> Result<(Vec<Option<T>>, usize)> {
-        let how = blocks::BandRead {
+        rows::map_bands(
+            &self.meta,
+            &self.layout,
+            &self.chunks,
+            self.how(lines),
+            pick,
+            fold,
+        )
+        .map_err(|e| Error::file(path, format!("cannot decode OpenEXR: {e}")))
+    }
+
+    /// `map` with each band handed to `fold(first row, rows, its rows)` a row at a time, as
+    /// planes ([`Rows`]).
+    pub fn map_rows<T: Send>(
+        &self,
+        path: &Path,
+        lines: usize,
+        pick: &(dyn Fn(usize) -> bool + Sync),
+        fold: &(dyn Fn(usize, usize, &mut dyn Rows) -> T + Sync),
+    ) -> Result<(Vec<Option<T>>, usize)> {
+        rows::map_rows(
+            &self.meta,
+            &self.layout,
+            &self.chunks,
+            self.how(lines),
+            pick,
+            fold,
+        )
+        .map_err(|e| Error::file(path, format!("cannot decode OpenEXR: {e}")))
+    }
+
+    fn how(&self, lines: usize) -> rows::BandRead {
+        rows::BandRead {
             zstd: self.zstd,
             sanitize: self.sanitize,
             lines,
-        };
-        blocks::map_bands(&self.meta, &self.layout, &self.chunks, how, pick, fold)
-            .map_err(|e| Error::file(path, format!("cannot decode OpenEXR: {e}")))
+        }
     }
 
     /// What `io::read` says of the file, with `replaced` values sanitized.
