@@ -87,8 +87,8 @@ impl Plan {
     /// decoded, the reduced copy, and its lookup pyramid (half as many again, as
     /// [`super::InputPlan::working_bytes`] counts a whole image's), and the peaks (24 bytes
     /// each, as many as a guessed ceiling may keep: one texel in `MOST_PEAKS`; 2.2% of the
-    /// 16K esplanade's are above its mean's). The sample the ceiling is guessed from is
-    /// freed before the copy is made, and is smaller.
+    /// 16K esplanade's are above its mean's). The sample the ceiling is guessed from (16 x
+    /// 32 rows) is freed before the copy is made, and is smaller.
     pub fn working_bytes(&self) -> u64 {
         let (w, h) = (self.shape.width, self.shape.height);
         let reduced = ((w / self.factor) * (h / self.factor)) as u64 * 16;
@@ -194,8 +194,10 @@ fn guess_ceiling(b: &BandSource, path: &Path, lines: usize) -> Result<Vec3> {
     let grid = Grid::Projection(Projection::Equirect, w, h);
     let every = (h.div_ceil(lines) / SAMPLE_BANDS).max(1);
     let sampled = |i: usize| i % every == every / 2;
+    // A band's first rows (no more than the fewest a band holds: a file of tall blocks
+    // would otherwise keep half its rows), the rest not decoded.
     let keep = |y0: usize, n: usize, rows: &mut dyn Rows| {
-        let mut planes = vec![0.0f32; 4 * w * n];
+        let mut planes = vec![0.0f32; 4 * w * n.min(MIN_BAND)];
         planes
             .chunks_exact_mut(4 * w)
             .for_each(|r| rows.next_into(r));
