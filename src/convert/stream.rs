@@ -148,16 +148,19 @@ fn reduce(b: &BandSource, path: &Path) -> Result<Loaded> {
     let (w, h) = b.size();
     let lines = b.block_lines().next_power_of_two().max(MIN_BAND);
     let guess = guess_ceiling(b, path, lines)?;
+    let weights = equirect::row_weights(w, h);
     let mut image = Image::new(w / 2, h / 2);
     let most = w * h / MOST_PEAKS;
-    let (mut rows, mut peaks, replaced) = reduce_below(b, path, (lines, most), guess, &mut image)?;
+    let pass = |ceiling, most, image: &mut Image| {
+        reduce_below(b, path, (lines, most), (ceiling, &weights), image)
+    };
+    let (mut rows, mut peaks, replaced) = pass(guess, most, &mut image)?;
     let exact = Peaks::ceiling_of(&rows).unwrap_or(Vec3::INFINITY);
     match peaks {
         // The guess below the mean's own ceiling (as it is meant to be): the peaks between
         // the two go back into the reduced image.
         Some(None) if guess.cmple(exact).all() => {}
         Some(Some(mut p)) if guess.cmple(exact).all() => {
-            let weights = equirect::row_weights(w, h);
             let share = |y: usize| {
                 let pair = y & !1;
                 weights[y] / (2.0 * (weights[pair] + weights[pair + 1]))
@@ -170,7 +173,7 @@ fn reduce(b: &BandSource, path: &Path) -> Result<Loaded> {
             peaks = Some(Some(p).filter(|p| !p.is_empty()));
         }
         // A sample far from the whole: read again below the mean's own ceiling.
-        _ => (rows, peaks, _) = reduce_below(b, path, (lines, usize::MAX), exact, &mut image)?,
+        _ => (rows, peaks, _) = pass(exact, usize::MAX, &mut image)?,
     }
     drop(rows);
     Ok(Loaded {
@@ -227,19 +230,18 @@ type Found = (Vec<RowStats>, Option<Option<Peaks>>, usize);
 /// it (their 24 bytes each are held): a guess far below the mean's own.
 const MOST_PEAKS: usize = 16;
 
-/// One pass over the bands of `lines` rows: each band's rows reduced below `ceiling` into
-/// its slot of the reduced `image`, their peaks above it kept (unless there are more than
-/// `most`) and every row's sums taken.
+/// One pass over the bands of `lines` rows: each band's rows reduced below `ceiling` (each
+/// row weighed by `weights`, its solid angle) into its slot of the reduced `image`, their
+/// peaks above it kept (unless there are more than `most`) and every row's sums taken.
 fn reduce_below(
     b: &BandSource,
     path: &Path,
     (lines, most): (usize, usize),
-    ceiling: Vec3,
+    (ceiling, weights): (Vec3, &[f32]),
     image: &mut Image,
 ) -> Result<Found> {
     let (w, h) = b.size();
     let grid = Grid::Projection(Projection::Equirect, w, h);
-    let weights = equirect::row_weights(w, h);
     let slots: Vec<Mutex<&mut [Vec4]>> = image
         .pixels
         .chunks_mut(lines / 2 * (w / 2))
@@ -250,7 +252,7 @@ fn reduce_below(
         let mut slot = slots[y0 / lines].lock().unwrap_or_else(|e| e.into_inner());
         let (mut sums, mut peaks) = (Vec::with_capacity(n), Vec::new());
         let pairs = Pairs { rows, w, y0 };
-        pairs.reduce(n, &weights, ceiling, &mut slot, &mut |y, planes| {
+        pairs.reduce(n, weights, ceiling, &mut slot, &mut |y, planes| {
             sums.push(RowStats::sums_of_planes(grid, planes, y, Vec3::INFINITY));
             let (r, g, b) = (&planes[..w], &planes[w..2 * w], &planes[2 * w..3 * w]);
             let above = |p: &[f32], c: f32| p.iter().fold(false, |a, &v| a | (v > c));

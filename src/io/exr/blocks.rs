@@ -33,11 +33,6 @@ pub(super) struct Unpack {
 }
 
 impl Unpack {
-    /// The buffer the last block was unpacked into (unless it was stored as it is).
-    pub(super) fn bytes(&self) -> &[u8] {
-        &self.bytes
-    }
-
     pub(super) fn new() -> Self {
         Unpack {
             inflate: libdeflater::Decompressor::new(),
@@ -65,7 +60,7 @@ pub(super) enum Samples<'a> {
 /// header says uncompressed, the chunks are ZSTD (see `read_meta`).
 pub(super) fn decode_blocks(
     meta: &MetaData,
-    (slots, alpha): &Layout,
+    layout: &Layout,
     chunks: Vec<RawChunk>,
     sanitize: bool,
     zstd: bool,
@@ -88,7 +83,7 @@ pub(super) fn decode_blocks(
     if next != h {
         return Err(format!("scan lines {next} to {h} are missing"));
     }
-    let (line_bytes, words) = sizes(slots, w);
+    let block = Block::new(meta, layout, zstd);
     let mut img = Image::new(w, h);
     let mut rest = img.pixels.as_mut_slice();
     let mut jobs = Vec::with_capacity(blocks.len());
@@ -100,29 +95,10 @@ pub(super) fn decode_blocks(
     let replaced = jobs
         .into_par_iter()
         .map_init(scratch(w), |s, (y, chunk, rows)| {
-            let block = Block {
-                meta,
-                slots,
-                alpha: *alpha,
-                words: &words,
-                line_bytes,
-                zstd,
-            };
             block.decode(s, y, &chunk, rows, sanitize)
         })
         .try_reduce(|| 0, |a, b| Ok(a + b))?;
     Ok((img, replaced))
-}
-
-/// The bytes of one scan line of `w` texels in the stored channels, and each channel's 16-bit
-/// words per sample (for PIZ): what every block of the layer is cut by.
-pub(super) fn sizes(slots: &[(Option<usize>, SampleType)], w: usize) -> (usize, Vec<usize>) {
-    let line_bytes = slots.iter().map(|(_, t)| t.bytes_per_sample() * w).sum();
-    let words = slots
-        .iter()
-        .map(|(_, t)| t.bytes_per_sample() / 2)
-        .collect();
-    (line_bytes, words)
 }
 
 /// A thread's scratch for lines of `w` texels.
@@ -136,16 +112,55 @@ pub(super) fn scratch(w: usize) -> impl Fn() -> Scratch + Sync {
 
 /// What decoding any block of the common layout needs to know.
 pub(super) struct Block<'m> {
-    pub meta: &'m MetaData,
+    meta: &'m MetaData,
     pub slots: &'m [(Option<usize>, SampleType)],
     pub alpha: bool,
     /// 16-bit words per sample of each channel, for PIZ.
-    pub words: &'m [usize],
+    words: Vec<usize>,
     pub line_bytes: usize,
-    pub zstd: bool,
+    zstd: bool,
 }
 
-impl Block<'_> {
+/// Where a block's samples are once unpacked: the chunk's own bytes (a block stored as it
+/// is), or the thread's buffer ([`Unpack`]) as stored or split.
+#[derive(Clone, Copy)]
+pub(super) enum Held {
+    Chunk,
+    Plain,
+    Split,
+}
+
+impl Held {
+    /// The samples of `chunk`, unpacked into `u` as this says, `len` bytes.
+    pub(super) fn samples<'a>(self, chunk: &'a RawChunk, u: &'a Unpack, len: usize) -> Samples<'a> {
+        match self {
+            Held::Chunk => Samples::Plain(&chunk.data[..len]),
+            Held::Plain => Samples::Plain(&u.bytes[..len]),
+            Held::Split => Samples::Split(&u.bytes[..len]),
+        }
+    }
+}
+
+impl<'m> Block<'m> {
+    /// The blocks of `meta`'s layer, laid out as `layout` says; `zstd`: the header says
+    /// uncompressed, the chunks are ZSTD (see `read_meta`).
+    pub(super) fn new(meta: &'m MetaData, (slots, alpha): &'m Layout, zstd: bool) -> Self {
+        let w = meta.headers[0].layer_size.0;
+        let line_bytes = slots.iter().map(|(_, t)| t.bytes_per_sample() * w).sum();
+        let words = slots
+            .iter()
+            .map(|(_, t)| t.bytes_per_sample() / 2)
+            .collect();
+        Block {
+            meta,
+            slots,
+            alpha: *alpha,
+            words,
+            line_bytes,
+            zstd,
+        }
+    }
+
     /// Decompresses `chunk` (its first line `y`) and converts it into `rows`, sanitized with
     /// `sanitize`: the count of values replaced.
     pub(super) fn decode(
@@ -162,7 +177,9 @@ impl Block<'_> {
             floats,
             halves,
         } = s;
-        let samples = self.unpack(unpack, y, chunk, rows.len() / w)?;
+        let lines = rows.len() / w;
+        let held = self.unpack(unpack, y, chunk, lines)?;
+        let samples = held.samples(chunk, unpack, self.line_bytes * lines);
         let mut count = 0;
         for (line, row) in rows.chunks_exact_mut(w).enumerate() {
             let start = line * self.line_bytes;
@@ -177,15 +194,16 @@ impl Block<'_> {
         Ok(count)
     }
 
-    /// Decompresses `chunk` (its first line `y`, `lines` lines) into `u`: its samples.
+    /// Decompresses `chunk` (its first line `y`, `lines` lines) into `u`: where its samples
+    /// are ([`Held::samples`]).
     #[inline(always)]
-    pub(super) fn unpack<'a>(
+    pub(super) fn unpack(
         &self,
-        u: &'a mut Unpack,
+        u: &mut Unpack,
         y: usize,
-        chunk: &'a RawChunk,
+        chunk: &RawChunk,
         lines: usize,
-    ) -> std::result::Result<Samples<'a>, String> {
+    ) -> std::result::Result<Held, String> {
         let header = &self.meta.headers[0];
         let w = header.layer_size.0;
         let Unpack {
@@ -196,13 +214,13 @@ impl Block<'_> {
             bytes,
         } = u;
         let expected = self.line_bytes * lines;
-        let samples = match (header.compression, chunk.data) {
+        let held = match (header.compression, chunk.data) {
             // A block that would not shrink is stored as it is, whatever the compression.
-            (_, data) if data.len() == expected => Samples::Plain(data),
+            (_, data) if data.len() == expected => Held::Chunk,
             (_, data) if self.zstd => {
                 super::zstd::unpack(data, header, &chunk.bounds, inflate_zstd, inner, bytes)
                     .map_err(|e| format!("{e} (block at line {y})"))?;
-                Samples::Plain(&bytes[..])
+                Held::Plain
             }
             (Compression::ZIP1 | Compression::ZIP16, data) => {
                 bytes.resize(expected, 0);
@@ -214,36 +232,40 @@ impl Block<'_> {
                     ));
                 }
                 undo_differences(&mut bytes[..expected]);
-                Samples::Split(&bytes[..expected])
+                Held::Split
             }
             (Compression::RLE, data) => {
                 bytes.resize(expected, 0);
                 unpack_rle(data, &mut bytes[..expected])
                     .map_err(|e| format!("the RLE block at line {y} {e}"))?;
                 undo_differences(&mut bytes[..expected]);
-                Samples::Split(&bytes[..expected])
+                Held::Split
             }
             (Compression::PIZ, data) => {
-                super::piz::decompress(data, self.words, w, lines, piz, bytes)
+                super::piz::decompress(data, &self.words, w, lines, piz, bytes)
                     .map_err(|e| format!("{e} (block at line {y})"))?;
-                Samples::Plain(&bytes[..])
+                Held::Plain
             }
-            (Compression::Uncompressed, data) => Samples::Plain(data),
+            // Stored as it is, yet not of the size it should be: caught below.
+            (Compression::Uncompressed, _) => Held::Chunk,
             _ => {
                 let chunk = chunk.to_chunk();
                 let owned =
                     guarded(|| UncompressedBlock::decompress_chunk(chunk, self.meta, false))?;
                 *bytes = owned.data;
-                Samples::Plain(&bytes[..])
+                Held::Plain
             }
         };
-        let (Samples::Plain(data) | Samples::Split(data)) = samples;
-        if data.len() != expected {
+        let held_len = match held {
+            Held::Chunk => chunk.data.len(),
+            Held::Plain | Held::Split => bytes.len(),
+        };
+        if held_len != expected {
             return Err(format!(
                 "the block at line {y} decompresses to the wrong size"
             ));
         }
-        Ok(samples)
+        Ok(held)
     }
 }
 

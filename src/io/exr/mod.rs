@@ -50,6 +50,11 @@ pub fn part_index(bytes: &[u8], path: &Path, name: &str) -> Result<usize> {
     select::part_named(&meta, name).map_err(fail)
 }
 
+/// The error of `path` whose bytes say `msg` where they cannot be decoded.
+fn undecodable(path: &Path) -> impl Fn(String) -> Error + Copy + '_ {
+    move |msg| Error::file(path, format!("cannot decode OpenEXR: {msg}"))
+}
+
 /// `decode`, with the part and level `opts` choose, and with `sanitize` the texels sanitized
 /// as [`crate::image::Image::sanitize`] does, counted in `Meta::replaced_values`: the common
 /// layout does it a line at a time as it decodes, rather than in another pass over a 128 MB
@@ -60,7 +65,7 @@ pub(crate) fn decode_with(
     opts: &super::ReadOptions,
     sanitize: bool,
 ) -> Result<(Decoded, Meta)> {
-    let fail = |msg: String| Error::file(path, format!("cannot decode OpenEXR: {msg}"));
+    let fail = undecodable(path);
     let (meta, table_start, zstd) = read_meta(bytes).map_err(fail)?;
     if meta.headers.is_empty() {
         return Err(Error::file(path, "OpenEXR file has no layers"));

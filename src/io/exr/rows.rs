@@ -4,7 +4,7 @@
 //! each row is converted, sanitized, measured and reduced while it is in cache, and no texel
 //! of the full image is ever widened to four floats in memory.
 
-use super::blocks::{self, Block, Samples, Scratch};
+use super::blocks::{self, Block, Held, Scratch};
 use super::checks::RawChunk;
 use super::Layout;
 use crate::io::band_shape::Rows;
@@ -63,34 +63,16 @@ fn group<'c, 'd>(
 /// where not picked) and the values replaced.
 pub(super) fn map_bands<T: Send>(
     meta: &MetaData,
-    (slots, alpha): &Layout,
+    layout: &Layout,
     chunks: &[RawChunk],
-    BandRead {
-        zstd,
-        sanitize,
-        lines,
-    }: BandRead,
+    how: BandRead,
     pick: &(dyn Fn(usize) -> bool + Sync),
     fold: &(dyn Fn(usize, &[Vec4]) -> T + Sync),
 ) -> std::result::Result<(Vec<Option<T>>, usize), String> {
-    let header = &meta.headers[0];
-    let (w, h) = (header.layer_size.0, header.layer_size.1);
-    let bands = group(h, chunks, lines)?;
-    let (line_bytes, words) = blocks::sizes(slots, w);
-    let block = Block {
-        meta,
-        slots,
-        alpha: *alpha,
-        words: &words,
-        line_bytes,
-        zstd,
-    };
-    let each = |(s, buf): &mut (Scratch, Vec<Vec4>), (i, band): (usize, Vec<&RawChunk>)| {
-        if !pick(i) {
-            return Ok((None, 0));
-        }
-        let y0 = i * lines;
-        let n = h.min(y0 + lines) - y0;
+    let w = meta.headers[0].layer_size.0;
+    let make = blocks::scratch(w);
+    let sanitize = how.sanitize;
+    let each = |(s, buf): &mut (Scratch, Vec<Vec4>), block: &Block, y0, n, band: Band| {
         buf.resize(n * w, Vec4::ZERO);
         let mut replaced = 0;
         for c in band {
@@ -98,52 +80,33 @@ pub(super) fn map_bands<T: Send>(
             let rows = &mut buf[(y - y0) * w..(y - y0 + c.bounds.size.1) * w];
             replaced += block.decode(s, y, c, rows, sanitize)?;
         }
-        Ok((Some(fold(y0, &buf[..n * w])), replaced))
+        Ok((fold(y0, &buf[..n * w]), replaced))
     };
-    let make = blocks::scratch(w);
-    let done: Vec<(Option<T>, usize)> = bands
-        .into_par_iter()
-        .enumerate()
-        .map_init(|| (make(), Vec::new()), each)
-        .collect::<std::result::Result<_, String>>()?;
-    let replaced = done.iter().map(|d| d.1).sum();
-    Ok((done.into_iter().map(|d| d.0).collect(), replaced))
+    each_band(
+        meta,
+        layout,
+        chunks,
+        how,
+        pick,
+        || (make(), Vec::new()),
+        each,
+    )
 }
 
 /// `map_bands` with each band handed to `fold(first row, rows, its rows)` a row at a time,
 /// as planes ([`Rows`]).
 pub(super) fn map_rows<T: Send>(
     meta: &MetaData,
-    (slots, alpha): &Layout,
+    layout: &Layout,
     chunks: &[RawChunk],
-    BandRead {
-        zstd,
-        sanitize,
-        lines,
-    }: BandRead,
+    how: BandRead,
     pick: &(dyn Fn(usize) -> bool + Sync),
     fold: &(dyn Fn(usize, usize, &mut dyn Rows) -> T + Sync),
 ) -> std::result::Result<(Vec<Option<T>>, usize), String> {
-    let header = &meta.headers[0];
-    let (w, h) = (header.layer_size.0, header.layer_size.1);
-    let bands = group(h, chunks, lines)?;
-    let (line_bytes, words) = blocks::sizes(slots, w);
-    let block = Block {
-        meta,
-        slots,
-        alpha: *alpha,
-        words: &words,
-        line_bytes,
-        zstd,
-    };
-    let each = |s: &mut Scratch, (i, band): (usize, Vec<&RawChunk>)| {
-        if !pick(i) {
-            return Ok((None, 0));
-        }
-        let y0 = i * lines;
-        let n = h.min(y0 + lines) - y0;
+    let sanitize = how.sanitize;
+    let each = |s: &mut Scratch, block: &Block, y0, n, band: Band| {
         let mut rows = BandRows {
-            block: &block,
+            block,
             chunks: band.into_iter(),
             s,
             current: None,
@@ -156,25 +119,45 @@ pub(super) fn map_rows<T: Send>(
         let done = fold(y0, n, &mut rows);
         match rows.error {
             Some(e) => Err(e),
-            None => Ok((Some(done), rows.replaced)),
+            None => Ok((done, rows.replaced)),
         }
     };
+    let make = blocks::scratch(meta.headers[0].layer_size.0);
+    each_band(meta, layout, chunks, how, pick, make, each)
+}
+
+/// One band's chunks, in row order.
+type Band<'c, 'd> = Vec<&'c RawChunk<'d>>;
+
+/// What `map_bands` and `map_rows` share: the chunks grouped by band, and the bands `pick`
+/// keeps handed in parallel to `each(a thread's state from init, the layer's blocks, first
+/// row, rows, the band's chunks)`, which gives the band's fold and its values replaced.
+fn each_band<S, T: Send>(
+    meta: &MetaData,
+    layout: &Layout,
+    chunks: &[RawChunk],
+    BandRead { zstd, lines, .. }: BandRead,
+    pick: &(dyn Fn(usize) -> bool + Sync),
+    init: impl Fn() -> S + Sync + Send,
+    each: impl Fn(&mut S, &Block, usize, usize, Band) -> Result<(T, usize), String> + Sync + Send,
+) -> std::result::Result<(Vec<Option<T>>, usize), String> {
+    let h = meta.headers[0].layer_size.1;
+    let bands = group(h, chunks, lines)?;
+    let block = Block::new(meta, layout, zstd);
     let done: Vec<(Option<T>, usize)> = bands
         .into_par_iter()
         .enumerate()
-        .map_init(blocks::scratch(w), each)
-        .collect::<std::result::Result<_, String>>()?;
+        .map_init(init, |s, (i, band)| {
+            if !pick(i) {
+                return Ok((None, 0));
+            }
+            let y0 = i * lines;
+            let n = h.min(y0 + lines) - y0;
+            each(s, &block, y0, n, band).map(|(t, r)| (Some(t), r))
+        })
+        .collect::<Result<_, String>>()?;
     let replaced = done.iter().map(|d| d.1).sum();
     Ok((done.into_iter().map(|d| d.0).collect(), replaced))
-}
-
-/// Where the current block's samples are: the chunk's own bytes (stored as they are), or
-/// the thread's buffer as stored or split.
-#[derive(Clone, Copy)]
-enum Held {
-    Chunk,
-    Plain,
-    Split,
 }
 
 /// One band's rows, decoded a block at a time as they are asked for.
@@ -199,11 +182,7 @@ impl BandRows<'_, '_, '_> {
         };
         let y = c.bounds.position.1 as usize;
         let lines = c.bounds.size.1;
-        let held = match self.block.unpack(&mut self.s.unpack, y, c, lines)? {
-            Samples::Plain(d) if std::ptr::eq(d.as_ptr(), c.data.as_ptr()) => Held::Chunk,
-            Samples::Plain(_) => Held::Plain,
-            Samples::Split(_) => Held::Split,
-        };
+        let held = self.block.unpack(&mut self.s.unpack, y, c, lines)?;
         self.current = Some((c, held));
         (self.line, self.lines) = (0, lines);
         Ok(())
@@ -227,12 +206,7 @@ impl Rows for BandRows<'_, '_, '_> {
             line_bytes,
             ..
         } = *self.block;
-        let expected = line_bytes * self.lines;
-        let samples = match held {
-            Held::Chunk => Samples::Plain(chunk.data),
-            Held::Plain => Samples::Plain(&self.s.unpack.bytes()[..expected]),
-            Held::Split => Samples::Split(&self.s.unpack.bytes()[..expected]),
-        };
+        let samples = held.samples(chunk, &self.s.unpack, line_bytes * self.lines);
         let start = self.line * line_bytes;
         let written = blocks::line_planes(samples, start, slots, alpha, planes, &mut self.s.halves);
         // The common layout has R, G and B; alpha is filled where absent.

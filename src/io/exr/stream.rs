@@ -3,7 +3,7 @@
 //! bytes a texel, is never held. Files outside the common layout are not offered.
 
 use super::checks::{read_chunks, read_meta, RawChunk};
-use super::{fast_layout, rows, select, Layout};
+use super::{fast_layout, rows, select, undecodable, Layout};
 use crate::error::{Error, Result};
 use crate::image::ColorSpace;
 use crate::io::band_shape::Rows;
@@ -59,7 +59,7 @@ impl Bands<'_> {
             pick,
             fold,
         )
-        .map_err(|e| Error::file(path, format!("cannot decode OpenEXR: {e}")))
+        .map_err(undecodable(path))
     }
 
     /// `map` with each band handed to `fold(first row, rows, its rows)` a row at a time, as
@@ -79,7 +79,7 @@ impl Bands<'_> {
             pick,
             fold,
         )
-        .map_err(|e| Error::file(path, format!("cannot decode OpenEXR: {e}")))
+        .map_err(undecodable(path))
     }
 
     fn how(&self, lines: usize) -> rows::BandRead {
@@ -185,7 +185,7 @@ pub fn with_bands<R>(
     }
     opts.limits.session.note(path);
     let bytes = super::super::read_file(path)?;
-    let fail = |msg: String| Error::file(path, format!("cannot decode OpenEXR: {msg}"));
+    let fail = undecodable(path);
     let (meta, table_start, zstd) = read_meta(&bytes).map_err(fail)?;
     let Some(layout) = common(&meta) else {
         return Ok(None);
