@@ -10,9 +10,11 @@
 //! clamped to their plain mean's ceiling: a sun in the sample weighs 16 times its share
 //! there, and one outside it is missed, so the guess lands below the mean's own). Every
 //! reduced row is clamped to the guess and the full texels above it kept as peaks; once the
-//! pass has the mean, the ceiling is raised to it and what the peaks held between the two
-//! goes back into the reduced texels. A guess above the mean's ceiling, or one so low that
-//! more than a texel in 16 would be a peak, reads the bands again below the mean's own.
+//! pass has the mean, the ceiling is raised to it, what the peaks held between the two goes
+//! back into the reduced texels, and each 2 x 2 block of peak texels whose flux is centred
+//! becomes one peak of the copy's size (`Peaks::settle`: the splat lands it as the four).
+//! A guess above the mean's ceiling, or one so low that more than a texel in 16 would be a
+//! peak, reads the bands again below the mean's own.
 //! The copy is always half the panorama's size: the resampler takes the levels it needs
 //! from its pyramid, as from a whole image's. Cubes of 8 and 16 from it differ from the
 //! whole image's by at most 1.5% of the map's mean texel (esplanade), the flux by under
@@ -20,7 +22,7 @@
 
 use super::{Loaded, Source};
 use crate::error::Result;
-use crate::flux::{Grid, Peaks, RowStats};
+use crate::flux::{Grid, PeakRow, Peaks, RowStats};
 use crate::image::Image;
 use crate::io::bands::{self, BandSource, Rows, Shape};
 use crate::io::ReadOptions;
@@ -154,32 +156,29 @@ fn reduce(b: &BandSource, path: &Path) -> Result<Loaded> {
     let pass = |ceiling, most, image: &mut Image| {
         reduce_below(b, path, (lines, most), (ceiling, &weights), image)
     };
-    let (mut rows, mut peaks, replaced) = pass(guess, most, &mut image)?;
+    let (mut rows, mut found, replaced) = pass(guess, most, &mut image)?;
     let exact = Peaks::ceiling_of(&rows).unwrap_or(Vec3::INFINITY);
-    match peaks {
-        // The guess below the mean's own ceiling (as it is meant to be): the peaks between
-        // the two go back into the reduced image.
-        Some(None) if guess.cmple(exact).all() => {}
-        Some(Some(mut p)) if guess.cmple(exact).all() => {
-            let share = |y: usize| {
-                let pair = y & !1;
-                weights[y] / (2.0 * (weights[pair] + weights[pair + 1]))
-            };
-            let half = w / 2;
-            p.raise(exact, |x, y, back| {
-                let t = &mut image.pixels[(y / 2) * half + x / 2];
-                *t += (back * share(y)).extend(0.0);
-            });
-            peaks = Some(Some(p).filter(|p| !p.is_empty()));
+    // The guess below the mean's own ceiling (as it is meant to be) keeps the pass; one
+    // far from the whole reads the bands again below the mean's own ceiling.
+    let from = match found {
+        Some(_) if guess.cmple(exact).all() => guess,
+        _ => {
+            (rows, found, _) = pass(exact, usize::MAX, &mut image)?;
+            exact
         }
-        // A sample far from the whole: read again below the mean's own ceiling.
-        _ => (rows, peaks, _) = pass(exact, usize::MAX, &mut image)?,
-    }
+    };
     drop(rows);
+    let share = |y: usize| {
+        let pair = y & !1;
+        weights[y] / (2.0 * (weights[pair] + weights[pair + 1]))
+    };
+    let grid = Grid::Projection(Projection::Equirect, w, h);
+    let rows = found.unwrap_or_default();
+    let peaks = Peaks::settle(grid, (from, exact), rows, &mut image, share);
     Ok(Loaded {
         source: Source::Reduced(Box::new(Reduced {
             image,
-            peaks: peaks.flatten(),
+            peaks,
             full: (w, h),
         })),
         kind: Kind::Equirect.into(),
@@ -222,9 +221,9 @@ fn guess_ceiling(b: &BandSource, path: &Path, lines: usize) -> Result<Vec3> {
     Ok(Peaks::ceiling_of(&stats(plain)).unwrap_or(Vec3::INFINITY))
 }
 
-/// Every row's weighted sums, the peaks (None: more than asked for) and the count of values
-/// replaced.
-type Found = (Vec<RowStats>, Option<Option<Peaks>>, usize);
+/// Every row's weighted sums, the rows' peaks (None: more than asked for) and the count of
+/// values replaced.
+type Found = (Vec<RowStats>, Option<Vec<PeakRow>>, usize);
 
 /// One in this many texels may be peaks below a guessed ceiling before the pass gives up on
 /// it (their 24 bytes each are held): a guess far below the mean's own.
@@ -272,8 +271,7 @@ fn reduce_below(
         found.extend(peaks);
     }
     let whole = count.into_inner() <= most;
-    let peaks = whole.then(|| Peaks::from_streamed(grid, ceiling, found));
-    Ok((rows, peaks, replaced))
+    Ok((rows, whole.then_some(found), replaced))
 }
 
 /// A band's rows (the first `y0` of a panorama `w` wide), reduced a pair at a time.

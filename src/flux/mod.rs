@@ -23,7 +23,7 @@ use std::f64::consts::PI;
 mod peaks;
 pub mod sun;
 pub use peaks::Peaks;
-pub(crate) use peaks::RowStats;
+pub(crate) use peaks::{PeakRow, RowStats};
 
 /// Texels with a channel above this multiple of its mean hold peaks. Low enough that the
 /// bounded part's lookup error is far under the 0.5% flux budget on real panoramas, high

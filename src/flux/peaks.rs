@@ -7,6 +7,9 @@ use crate::layout::Projection;
 use glam::{Mat3, Vec3, Vec4};
 use rayon::prelude::*;
 
+mod streamed;
+pub(crate) use streamed::PeakRow;
+
 /// One texel above the ceiling: where it is and by how much each channel exceeds it.
 #[derive(Clone, Copy, Debug)]
 struct Peak {
@@ -14,16 +17,6 @@ struct Peak {
     x: u32,
     y: u32,
     excess: Vec3,
-}
-
-/// One streamed row's peak texels (see `Peaks::from_streamed`).
-pub(crate) struct PeakRow(Vec<Peak>);
-
-impl PeakRow {
-    /// Its count of peak texels.
-    pub(crate) fn len(&self) -> usize {
-        self.0.len()
-    }
 }
 
 /// The texels of row `y` of `face` above `ceiling`, with their excess.
@@ -53,6 +46,8 @@ pub struct Peaks {
     pub ceiling: Vec3,
     grid: Grid,
     texels: Vec<Peak>,
+    /// Peaks summed over 2 x 2 blocks of texels, on `block_grid` (see `settle`).
+    blocks: Vec<Peak>,
 }
 
 /// One row's weighted sums (for the means) and maximum (to skip rows without peaks).
@@ -227,65 +222,15 @@ impl Peaks {
             ceiling,
             grid,
             texels,
+            blocks: Vec::new(),
         })
-    }
-
-    /// A panorama's peaks found as it streams by (`convert::stream`): those above `ceiling`
-    /// of every row, in row order.
-    pub(crate) fn from_streamed(grid: Grid, ceiling: Vec3, rows: Vec<PeakRow>) -> Option<Peaks> {
-        let mut texels = Vec::with_capacity(rows.iter().map(PeakRow::len).sum());
-        rows.into_iter().for_each(|r| texels.extend(r.0));
-        (!texels.is_empty()).then_some(Peaks {
-            ceiling,
-            grid,
-            texels,
-        })
-    }
-
-    /// The peak texels of row `y` of a streamed panorama (see `from_streamed`), given as
-    /// planes (R, G, B, A: see `io::bands::Rows`).
-    pub(crate) fn of_planes(grid: Grid, y: usize, planes: &[f32], ceiling: Vec3) -> PeakRow {
-        let w = planes.len() / 4;
-        let (r, g, b) = (&planes[..w], &planes[w..2 * w], &planes[2 * w..3 * w]);
-        let over = |x: &usize| r[*x] > ceiling.x || g[*x] > ceiling.y || b[*x] > ceiling.z;
-        // A panorama's row shares one solid angle (two sines): asked once.
-        let row = matches!(grid, Grid::Projection(Projection::Equirect, ..))
-            .then(|| grid.solid_angle(0, y) > 0.0);
-        let peaks = (0..w).filter(over).filter_map(|x| {
-            let excess = (Vec3::new(r[x], g[x], b[x]) - ceiling).max(Vec3::ZERO);
-            let covers = row.unwrap_or_else(|| grid.solid_angle(x, y) > 0.0);
-            covers.then_some(Peak {
-                face: 0,
-                x: x as u32,
-                y: y as u32,
-                excess,
-            })
-        });
-        PeakRow(peaks.collect())
-    }
-
-    /// Raises the ceiling to `to` (no channel lower than it was): what each peak texel held
-    /// between the two goes to `back(x, y, that part)`, in the peaks' order, and texels left
-    /// with no excess are no longer peaks.
-    pub(crate) fn raise(&mut self, to: Vec3, mut back: impl FnMut(usize, usize, Vec3)) {
-        let from = self.ceiling;
-        for p in &mut self.texels {
-            let value = from + p.excess;
-            let part = (value.min(to) - from).max(Vec3::ZERO);
-            if part != Vec3::ZERO {
-                back(p.x as usize, p.y as usize, part);
-            }
-            p.excess = (value - to).max(Vec3::ZERO);
-        }
-        self.texels.retain(|p| p.excess != Vec3::ZERO);
-        self.ceiling = to;
     }
 
     /// Scales the peaks' excess and ceiling by 2^`exposure` (`Loaded::expose`).
     pub(crate) fn expose(&mut self, exposure: f32) {
         let k = exposure.exp2();
         self.ceiling *= k;
-        for t in &mut self.texels {
+        for t in self.texels.iter_mut().chain(&mut self.blocks) {
             t.excess *= k;
         }
     }
@@ -293,8 +238,9 @@ impl Peaks {
     /// The peaks' flux: excess radiance times solid angle, summed (per channel).
     pub(crate) fn flux(&self) -> [f64; 3] {
         let mut sum = [0.0f64; 3];
-        for p in &self.texels {
-            let omega = self.grid.solid_angle(p.x as usize, p.y as usize);
+        let texels = self.texels.iter().map(|p| (self.grid, p));
+        for (grid, p) in texels.chain(self.blocks.iter().map(|p| (self.block_grid(), p))) {
+            let omega = grid.solid_angle(p.x as usize, p.y as usize);
             for (c, s) in sum.iter_mut().enumerate() {
                 *s += p.excess[c] as f64 * omega;
             }
@@ -326,12 +272,12 @@ impl Peaks {
 
     /// Number of peak texels.
     pub fn len(&self) -> usize {
-        self.texels.len()
+        self.texels.len() + self.blocks.len()
     }
 
     /// Whether there are none (never, for a `Peaks` that `find` returned).
     pub fn is_empty(&self) -> bool {
-        self.texels.is_empty()
+        self.texels.is_empty() && self.blocks.is_empty()
     }
 
     /// Each colour channel clamped to the ceiling (alpha untouched): the bounded part.
@@ -347,10 +293,11 @@ impl Peaks {
     pub fn splat(&self, out: Grid, lookup: Option<Mat3>, images: &mut [Image]) {
         let back = lookup.map(|m| m.transpose());
         let (ow, oh) = out.dims();
-        let shares: Vec<Vec<(u64, [f64; 3])>> = self
-            .texels
-            .par_chunks(1024)
-            .map(|chunk| self.shares(chunk, out, back))
+        let texels = self.texels.par_chunks(1024).map(|c| (self.grid, c));
+        let blocks = self.blocks.par_chunks(1024).map(|c| (self.block_grid(), c));
+        let shares: Vec<Vec<(u64, [f64; 3])>> = texels
+            .chain(blocks)
+            .map(|(grid, chunk)| Self::shares(grid, chunk, out, back))
             .collect();
         // Each texel once: its shares from every chunk, in the chunks' order, summed and
         // divided by its solid angle (atan2s), key ranges in parallel. Where a range ends
@@ -380,7 +327,7 @@ impl Peaks {
 
     /// One chunk of peaks' shares of the output texels, each texel's key once, in order
     /// (see [`Peaks::splat`]).
-    fn shares(&self, chunk: &[Peak], out: Grid, back: Option<Mat3>) -> Vec<(u64, [f64; 3])> {
+    fn shares(grid: Grid, chunk: &[Peak], out: Grid, back: Option<Mat3>) -> Vec<(u64, [f64; 3])> {
         let (ow, oh) = out.dims();
         let key = |(f, x, y): (usize, usize, usize)| ((f * oh + y) * ow + x) as u64;
         let mut shares: Vec<(u64, Vec3)> = Vec::new();
@@ -389,17 +336,17 @@ impl Peaks {
         let mut row_omega: Option<(u32, f64)> = None;
         for p in chunk {
             let (face, x, y) = (p.face as usize, p.x as f32, p.y as f32);
-            let Some(centre) = self.grid.dir(face, x + 0.5, y + 0.5) else {
+            let Some(centre) = grid.dir(face, x + 0.5, y + 0.5) else {
                 continue;
             };
             // Sub-cells per texel edge: two per output texel there (one where the
             // output texel spans two input texels or more).
             let (_, cx, cy) = out.locate(back.map_or(centre, |m| (m * centre).normalize()));
-            let a_in = self.grid.density(x + 0.5, y + 0.5).sqrt();
+            let a_in = grid.density(x + 0.5, y + 0.5).sqrt();
             let a_out = out.density(cx as f32 + 0.5, cy as f32 + 0.5).sqrt();
             let k = (2.0 * a_in / a_out.max(1e-12)).ceil().clamp(1.0, 64.0) as usize;
             cells.clear();
-            let total = self.grid.sub_cells(face, x, y, k, &mut cells);
+            let total = grid.sub_cells(face, x, y, k, &mut cells);
             if let Some(m) = back {
                 for c in &mut cells {
                     c.0 = (m * c.0).normalize();
@@ -408,7 +355,7 @@ impl Peaks {
             if total <= 0.0 {
                 continue;
             }
-            let omega = match (self.grid, row_omega) {
+            let omega = match (grid, row_omega) {
                 (Grid::Projection(Projection::Equirect, ..), Some((y, a))) if y == p.y => a,
                 (g @ Grid::Projection(Projection::Equirect, ..), _) => {
                     let a = g.solid_angle(0, p.y as usize);
