@@ -88,13 +88,13 @@ impl Plan {
     /// Bytes in use while a job works from it: the file and each thread's band while it is
     /// decoded, the reduced copy, and its lookup pyramid (half as many again, as
     /// [`super::InputPlan::working_bytes`] counts a whole image's), and the peaks (24 bytes
-    /// each, as many as a guessed ceiling may keep: one texel in `MOST_PEAKS`; 2.2% of the
-    /// 16K esplanade's are above its mean's). The sample the ceiling is guessed from (16 x
+    /// each, twice while they are settled, as many as a guessed ceiling may keep: one texel
+    /// in `MOST_PEAKS`; 2.2% of the 16K esplanade's are above its mean's). The sample the ceiling is guessed from (16 x
     /// 32 rows) is freed before the copy is made, and is smaller.
     pub fn working_bytes(&self) -> u64 {
         let (w, h) = (self.shape.width, self.shape.height);
         let reduced = ((w / self.factor) * (h / self.factor)) as u64 * 16;
-        let peaks = (w * h / MOST_PEAKS) as u64 * 24;
+        let peaks = (w * h / MOST_PEAKS) as u64 * 48;
         self.shape
             .decode_bytes(self.lines())
             .saturating_add(reduced + reduced / 2)

@@ -75,6 +75,7 @@ impl Peaks {
         half: &mut Image,
         share: impl Fn(usize) -> f32 + Sync,
     ) -> Option<Peaks> {
+        debug_assert!(rows.windows(2).all(|r| r[0].y < r[1].y), "rows in order");
         let mut slots: Vec<_> = half
             .pixels
             .chunks_mut(half.width.max(1))
@@ -109,8 +110,15 @@ impl Peaks {
                 }
             })
             .collect();
-        let texels: Vec<Peak> = settled.iter().flat_map(|s| s.0.iter().copied()).collect();
-        let blocks: Vec<Peak> = settled.iter().flat_map(|s| s.1.iter().copied()).collect();
+        // No more than twice the rows' bytes at once: the rows, then what is left of them.
+        drop(rows);
+        let count = |pick: fn(&(Vec<Peak>, Vec<Peak>)) -> usize| settled.iter().map(pick).sum();
+        let mut texels = Vec::with_capacity(count(|s| s.0.len()));
+        let mut blocks = Vec::with_capacity(count(|s| s.1.len()));
+        for (t, b) in settled {
+            texels.extend(t);
+            blocks.extend(b);
+        }
         (!texels.is_empty() || !blocks.is_empty()).then_some(Peaks {
             ceiling: to,
             grid,
