@@ -89,8 +89,9 @@ impl Plan {
     /// decoded, the reduced copy, and its lookup pyramid (half as many again, as
     /// [`super::InputPlan::working_bytes`] counts a whole image's), and the peaks (24 bytes
     /// each, twice while they are settled, as many as a guessed ceiling may keep: one texel
-    /// in `MOST_PEAKS`; 2.2% of the 16K esplanade's are above its mean's). The sample the ceiling is guessed from (16 x
-    /// 32 rows) is freed before the copy is made, and is smaller.
+    /// in `MOST_PEAKS`; 2.2% of the 16K esplanade's are above its mean's). The sample the
+    /// ceiling is guessed from (16 x 32 rows) is freed before the copy is made, and is
+    /// smaller.
     pub fn working_bytes(&self) -> u64 {
         let (w, h) = (self.shape.width, self.shape.height);
         let reduced = ((w / self.factor) * (h / self.factor)) as u64 * 16;
@@ -147,9 +148,14 @@ const SAMPLE_BANDS: usize = 16;
 
 /// The passes over the bands (see the module's text).
 fn reduce(b: &BandSource, path: &Path) -> Result<Loaded> {
-    let (w, h) = b.size();
     let lines = b.block_lines().next_power_of_two().max(MIN_BAND);
     let guess = guess_ceiling(b, path, lines)?;
+    reduce_from(b, path, lines, guess)
+}
+
+/// [`reduce`] with the ceiling guessed: `lines` rows a band.
+fn reduce_from(b: &BandSource, path: &Path, lines: usize, guess: Vec3) -> Result<Loaded> {
+    let (w, h) = b.size();
     let weights = equirect::row_weights(w, h);
     let mut image = Image::new(w / 2, h / 2);
     let most = w * h / MOST_PEAKS;
@@ -418,3 +424,6 @@ fn reduce_rows(
         }
     }
 }
+
+#[cfg(test)]
+mod tests;
