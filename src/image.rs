@@ -299,7 +299,7 @@ impl Image {
 
     /// Replaces NaN, infinite and negative values by 0, clamps values above [`MAX_RADIANCE`],
     /// and returns how many were replaced.
-    pub(crate) fn sanitize(&mut self) -> usize {
+    pub fn sanitize(&mut self) -> usize {
         use rayon::prelude::*;
         self.pixels.par_iter_mut().map(sanitize_texel).sum()
     }

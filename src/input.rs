@@ -228,8 +228,9 @@ fn warnings(loaded: &Loaded, inputs: &[PathBuf], read: &ReadOptions) -> Vec<Stri
     .collect()
 }
 
-/// The warning for `n` values of `file` replaced as it was read (None for none).
-fn replaced_note(file: &Path, n: u64) -> Option<String> {
+/// The warning for `n` values of `file` replaced as it was read (None for none); the Python
+/// package's `write` gives it for an array's.
+pub fn replaced_note(file: &Path, n: u64) -> Option<String> {
     (n > 0).then(|| {
         format!(
             "{}: replaced {n} NaN, infinite or negative values by 0 (and values above 1e28 by 1e28)",

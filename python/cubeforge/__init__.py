@@ -117,7 +117,8 @@ def write(path: PathLike, array: np.ndarray, *, from_: Optional[str] = None,
     tmp = tempfile.mkdtemp(prefix="cubeforge-")
     try:
         src = os.path.join(tmp, "faces" if array.ndim == 4 else "input.exr")
-        _cubeforge.write_exr(src, array)
+        # The array's NaN, infinite and negative values replaced as a file's, with its warning.
+        replaced = _cubeforge.write_exr(src, array)
         words = ["convert", src, "-o", os.fspath(path)]
         if array.ndim != 4:
             layout = from_ or _cubeforge.detect_layout(array.shape[1], array.shape[0])
@@ -126,7 +127,10 @@ def write(path: PathLike, array: np.ndarray, *, from_: Optional[str] = None,
             options = dict(options, from_=layout)
             if options.get("to") is None and layout is not None and array.ndim != 4:
                 options["to"] = layout
-        return _job(words, options, progress)
+        report = _job(words, options, progress)
+        if replaced:
+            report["warnings"].insert(0, replaced)
+        return report
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 

@@ -9,7 +9,7 @@ use glam::Vec4;
 use numpy::{PyArray1, PyArray3, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A library image's texels, owned by the numpy array made of them (its base): handed over
 /// without a copy. Vec4's 16-byte alignment is not f32's, so the Vec cannot become numpy's
@@ -158,16 +158,20 @@ pub fn read<'py>(py: Python<'py>, argv: Vec<String>) -> PyResult<Bound<'py, PyDi
 
 /// Writes an array as a 32-bit float EXR at `path` (one image), or six (px.exr ... nz.exr)
 /// in the folder `path` (a (6, n, n, c) array): the input of `cubeforge.write`'s convert job.
+/// Its NaN, infinite and negative values are replaced as a file's are when it is read, and
+/// the warning a file's read gives is returned (None: none replaced).
 #[pyfunction]
 pub fn write_exr(
     py: Python<'_>,
     path: PathBuf,
     array: PyReadonlyArrayDyn<'_, f32>,
-) -> PyResult<()> {
+) -> PyResult<Option<String>> {
     use cubeforge::internals::io::WriteOptions;
     use cubeforge::internals::output::encode_image;
     use cubeforge::internals::output::{deliver, Files};
-    let images = images_of(py, &array)?;
+    let mut images = images_of(py, &array)?;
+    let replaced: usize = images.iter_mut().map(Image::sanitize).sum();
+    let note = cubeforge::internals::input::replaced_note(Path::new("array"), replaced as u64);
     py.detach(|| {
         let opts = WriteOptions {
             exr_float: cubeforge::ExrFloat::F32,
@@ -187,7 +191,8 @@ pub fn write_exr(
         }
         deliver(&files, &cubeforge::Destination::Path(path.clone()), &[])
     })
-    .map_err(|e| crate::error(py, &e))
+    .map_err(|e| crate::error(py, &e))?;
+    Ok(note)
 }
 
 /// One image file as it is (a preview, a table: no layout), as a (height, width, 4) array.

@@ -52,17 +52,19 @@ def test_non_finite_view_angles_are_refused():
 
 
 def test_non_finite_arrays_are_refused_by_convert_and_replaced_by_write(tmp_path):
-    """convert() of an array carried NaN and infinities into its output; write() reads the
-    array back as a file, whose values are replaced (infinities with a warning; a NaN is 0
-    already in the float EXR the array is handed over as), and writes finite values."""
-    for value in (np.nan, np.inf, -np.inf):
+    """convert() of an array carried NaN and infinities into its output; write() replaces
+    them (and negatives) as a file's are when it is read, with the same one warning, and
+    writes finite values. NaN was written as 0 without the warning."""
+    for value in (np.nan, np.inf, -np.inf, -2.0):
         bad = np.ones((8, 16, 4), np.float32)
         bad[3, 5, 1] = value
-        with pytest.raises(cubeforge.ArgumentError, match="NaN or infinite"):
-            cubeforge.convert(bad, to="faces", size=4)
+        if not np.isfinite(value):
+            with pytest.raises(cubeforge.ArgumentError, match="NaN or infinite"):
+                cubeforge.convert(bad, to="faces", size=4)
         report = cubeforge.write(tmp_path / "p.exr", bad)
-        if np.isinf(value):
-            assert any("replaced 1" in w for w in report["warnings"]), report
+        replaced = [w for w in report["warnings"] if "replaced" in w]
+        assert replaced == ["array: replaced 1 NaN, infinite or negative values by 0 "
+                            "(and values above 1e28 by 1e28)"], report
         stats = cubeforge.info(tmp_path / "p.exr")["stats"]
         assert stats["nan"] == 0 and stats["inf"] == 0, stats
 
