@@ -66,3 +66,58 @@ fn every_guess_settles_to_the_mean_s_own_ceiling() {
         }
     }
 }
+
+/// The guess against the mean's own ceiling on the real panoramas, each sampled as a 16K
+/// file's bands are (16 rows of 256, as 16 bands of 32 rows of 8192), from a Radiance copy
+/// (one row a band): never above it (a second read of the whole file), and the share of
+/// texels it keeps as peaks. Skipped without ../shared/fixtures/real.
+#[test]
+fn the_guess_stays_below_the_mean_s_ceiling_on_real_panoramas() {
+    let real = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/fixtures/real/dwab");
+    let Ok(entries) = std::fs::read_dir(&real) else {
+        println!("SKIPPED: {} not found", real.display());
+        return;
+    };
+    let mut files: Vec<_> = entries.flatten().map(|e| e.path()).collect();
+    files.sort();
+    let dir = tempfile::tempdir().expect("a folder");
+    let opts = ReadOptions::default();
+    for file in files {
+        let Ok((crate::io::Decoded::Image(img), _)) = crate::convert::read::read(&file, &opts)
+        else {
+            continue;
+        };
+        let hdr = dir.path().join("pano.hdr");
+        std::fs::write(&hdr, crate::io::rgbe::encode(&img)).expect("writes");
+        let guess = bands::with_bands(&hdr, &opts, |b| guess_ceiling(b, &hdr, 1))
+            .expect("reads")
+            .expect("streams");
+        let (Ok((crate::io::Decoded::Image(back), _)), (w, h)) = (
+            crate::convert::read::read(&hdr, &opts),
+            (img.width, img.height),
+        ) else {
+            panic!("reads back");
+        };
+        let grid = Grid::Projection(Projection::Equirect, w, h);
+        let rows: Vec<RowStats> = (0..h)
+            .map(|y| RowStats::of_row(grid, &back.pixels[y * w..(y + 1) * w], y))
+            .collect();
+        let exact = Peaks::ceiling_of(&rows).expect("a mean");
+        let kept = back
+            .pixels
+            .iter()
+            .filter(|p| p.truncate().cmpgt(guess).any())
+            .count();
+        println!(
+            "{}: guess {:.2} of the mean's ceiling (largest channel), {:.2}% of texels kept",
+            file.file_name().unwrap().to_string_lossy(),
+            (guess / exact).max_element(),
+            100.0 * kept as f64 / (w * h) as f64
+        );
+        assert!(
+            guess.cmple(exact).all(),
+            "{}: {guess} above {exact}",
+            file.display()
+        );
+    }
+}
