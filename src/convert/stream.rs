@@ -87,9 +87,10 @@ impl Plan {
 
     /// Bytes in use while a job works from it: the file and each thread's band while it is
     /// decoded, the reduced copy, and its lookup pyramid (half as many again, as
-    /// [`super::InputPlan::working_bytes`] counts a whole image's), and the peaks (24 bytes
-    /// each, twice while they are settled, as many as a guessed ceiling may keep: one texel
-    /// in `MOST_PEAKS`; 2.2% of the 16K esplanade's are above its mean's). The sample the
+    /// [`super::InputPlan::working_bytes`] counts a whole image's), and the peaks (16 bytes
+    /// each as rows, and their settled 24 twice while they are gathered, as many as a guessed
+    /// ceiling may keep: one texel in `MOST_PEAKS`; 2.2% of the 16K esplanade's are above its
+    /// mean's). The sample the
     /// ceiling is guessed from (16 x 32 rows) is freed before the copy is made, and is
     /// smaller.
     pub fn working_bytes(&self) -> u64 {
@@ -242,7 +243,9 @@ fn guess_ceiling(b: &BandSource, path: &Path, lines: usize) -> Result<Vec3> {
 type Found = (Vec<RowStats>, Option<Vec<PeakRow>>, usize);
 
 /// One in this many texels may be peaks below a guessed ceiling before the pass gives up on
-/// it (their 24 bytes each are held): a guess far below the mean's own.
+/// it (and reads the bands again below the mean's own): a guess far below it. Forest, with
+/// 6% of its texels above its mean's ceiling, keeps 7.8% above its guess and is read twice;
+/// one in 8 would double the peaks' share of the memory plan.
 const MOST_PEAKS: usize = 16;
 
 /// One pass over the bands of `lines` rows: each band's rows reduced below `ceiling` (each

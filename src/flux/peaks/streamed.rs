@@ -18,7 +18,15 @@ use rayon::prelude::*;
 /// One streamed row's peak texels.
 pub(crate) struct PeakRow {
     y: u32,
-    texels: Vec<Peak>,
+    texels: Vec<RowPeak>,
+}
+
+/// A peak texel of a streamed row: 16 bytes where a settled `Peak` takes 24 (millions are
+/// held until the ceiling is known).
+#[derive(Clone, Copy)]
+struct RowPeak {
+    x: u32,
+    excess: Vec3,
 }
 
 impl PeakRow {
@@ -48,10 +56,8 @@ impl Peaks {
         let eights = (0..w / 8).map(|i| 8 * i).filter(|&x0| any(x0));
         for x in eights.flat_map(|x0| x0..x0 + 8).chain(w / 8 * 8..w) {
             if over(x) && covers.unwrap_or_else(|| grid.solid_angle(x, y) > 0.0) {
-                texels.push(Peak {
-                    face: 0,
+                texels.push(RowPeak {
                     x: x as u32,
-                    y: y as u32,
                     excess: (Vec3::new(r[x], g[x], b[x]) - ceiling).max(Vec3::ZERO),
                 });
             }
@@ -100,7 +106,13 @@ impl Peaks {
                         }
                         let excess = (value - to).max(Vec3::ZERO);
                         if excess != Vec3::ZERO {
-                            kept.push(Peak { excess, ..*p });
+                            let (x, y) = (p.x, row.y);
+                            kept.push(Peak {
+                                face: 0,
+                                x,
+                                y,
+                                excess,
+                            });
                         }
                     }
                 }
@@ -110,7 +122,8 @@ impl Peaks {
                 }
             })
             .collect();
-        // No more than twice the rows' bytes at once: the rows, then what is left of them.
+        // The rows (16 bytes a peak) beside the settled peaks (24), then the settled peaks
+        // twice while they are gathered: never more than 48 bytes a peak at once.
         drop(rows);
         let count = |pick: fn(&(Vec<Peak>, Vec<Peak>)) -> usize| settled.iter().map(pick).sum();
         let mut texels = Vec::with_capacity(count(|s| s.0.len()));
