@@ -8,17 +8,18 @@
 //! peaks' ceiling (`PEAK_RATIO` times the mean) is needed before the first row is reduced,
 //! so it is guessed from 16 evenly spaced bands read first (their mean with each value
 //! clamped to their plain mean's ceiling: a sun in the sample weighs 16 times its share
-//! there, and one outside it is missed, so the guess lands below the mean's own). Every
-//! reduced row is clamped to the guess and the full texels above it kept as peaks; once the
-//! pass has the mean, the ceiling is raised to it, what the peaks held between the two goes
-//! back into the reduced texels, and each 2 x 2 block of peak texels whose flux is centred
-//! becomes one peak of the copy's size (`Peaks::settle`: the splat lands it as the four).
-//! A guess above the mean's ceiling, or one so low that more than a texel in 16 would be a
-//! peak, reads the bands again below the mean's own.
-//! The copy is always half the panorama's size: the resampler takes the levels it needs
-//! from its pyramid, as from a whole image's. Cubes of 8 and 16 from it differ from the
-//! whole image's by at most 1.5% of the map's mean texel (esplanade), the flux by under
-//! 0.01% (`tests/it/streamed.rs` prints them).
+//! there, and one outside it is missed; and no more than `SAMPLE_MARGIN` of that plain
+//! ceiling, for a sample with nothing to clamp: so the guess lands below the mean's own).
+//! Every reduced row is clamped to the guess and the full texels above it kept as peaks;
+//! once the pass has the mean, the ceiling is raised to it, what the peaks held between the
+//! two goes back into the reduced texels, and each 2 x 2 block of peak texels whose flux is
+//! centred becomes one peak of the copy's size (`Peaks::settle`: the splat lands it as the
+//! four). A guess above the mean's ceiling, or one so low that more than a texel in 16
+//! would be a peak, reads the bands again below the mean's own. The copy is always half the
+//! panorama's size: the resampler takes the levels it needs from its pyramid, as from a
+//! whole image's. Cubes of 8 and 16 from it differ from the whole image's by at most 1.5%
+//! of the map's mean texel (esplanade), the flux by under 0.01% (`tests/it/streamed.rs`
+//! prints them).
 
 use super::{Loaded, Source};
 use crate::error::Result;
