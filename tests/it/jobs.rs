@@ -200,9 +200,9 @@ fn only_the_output_module_writes_files() {
         if rel.starts_with("io/atomic/") || rel.starts_with("output/") {
             continue;
         }
-        // A test module's own file is test code, as the `#[cfg(test)]` part of a file is
-        // (`library_text` cuts that; `layers.rs` skips these files the same way).
-        if rel.ends_with("/tests.rs") || rel.contains("/tests/") {
+        // `library_text` cuts a file's `#[cfg(test)]` part; a test module's own file is cut
+        // whole.
+        if crate::layers::is_test_file(&rel) {
             continue;
         }
         let text = crate::layers::library_text(&f);

@@ -93,6 +93,12 @@ pub(crate) fn library_text(path: &Path) -> String {
     text
 }
 
+/// Whether the file named `rel` (see [`rel_path`]) is a test module's own file (`tests.rs`,
+/// or under a `tests/` folder): test code, as the `#[cfg(test)]` part of a file is.
+pub(crate) fn is_test_file(rel: &str) -> bool {
+    rel.ends_with("/tests.rs") || rel.contains("/tests/")
+}
+
 /// `file`'s path under `src`, `/`-separated: how the checks' lists name a file.
 pub(crate) fn rel_path(src: &Path, file: &Path) -> String {
     file.strip_prefix(src)
@@ -294,7 +300,7 @@ fn io_is_codecs_and_the_file_edge() {
     let mut found = BTreeSet::new();
     for f in files {
         let rel = rel_path(&src, &f);
-        if rel.ends_with("/tests.rs") || rel.contains("/tests/") {
+        if is_test_file(&rel) {
             continue;
         }
         let text = library_text(&f);
