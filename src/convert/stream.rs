@@ -91,9 +91,8 @@ impl Plan {
     /// [`super::InputPlan::working_bytes`] counts a whole image's), and the peaks (16 bytes
     /// each as rows, and their settled 24 twice while they are gathered, as many as a guessed
     /// ceiling may keep: one texel in `MOST_PEAKS`; 2.2% of the 16K esplanade's are above its
-    /// mean's). The sample the
-    /// ceiling is guessed from (16 x 32 rows) is freed before the copy is made, and is
-    /// smaller.
+    /// mean's). The sample the ceiling is guessed from (16 x 32 rows) is freed before the
+    /// copy is made, and is smaller.
     pub fn working_bytes(&self) -> u64 {
         let (w, h) = (self.shape.width, self.shape.height);
         let reduced = ((w / self.factor) * (h / self.factor)) as u64 * 16;
